@@ -1,0 +1,140 @@
+"""The ``analytic`` backend: drive torque and every joint reaction by the
+member-equilibrium matrix method (:mod:`analytic.equilibrium`), with Coulomb
+friction solved to convergence (:mod:`analytic.friction`).
+
+:func:`solve_poses` is vectorised over an array of θ12; :func:`solve` wraps it
+for one Case and returns a :class:`~analytic.solution.Solution`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from analytic.case import Case, FourBarGeometry
+from analytic.equilibrium import (
+    SINGULAR_CONDITION,
+    Array,
+    known_vector,
+    linear_system,
+    slide_frame,
+)
+from analytic.friction import coulomb_terms, slide_friction_force, solve_with_friction
+from analytic.kinematics import Pose, as_angles, pose_of
+from analytic.solution import Solution
+
+FORCE_QUANTITIES = ("F12_x", "F12_y", "F23_x", "F23_y", "F34_x", "F34_y", "F14_x", "F14_y")
+
+
+def drive_quantity(case: Case) -> str:
+    """``T12`` or ``T14``, after the link the drive acts on."""
+    return f"T1{case.drive_link}"
+
+
+@dataclass(frozen=True)
+class PoseResults:
+    """Vectorised results: each array has one entry per θ12.
+
+    ``values`` holds pose quantities (``theta13``, ``theta14`` or ``s14``)
+    and the forces and drive torque (NaN where ``singular`` or not
+    ``converged``). ``condition`` is the dimensionless condition number.
+    """
+
+    theta12: Array
+    values: dict[str, Array]
+    condition: Array
+    iterations: Array
+    converged: Array
+
+    @property
+    def singular(self) -> Array:
+        return ~(self.condition <= SINGULAR_CONDITION)
+
+
+def pose_values(case: Case, pose: Pose) -> dict[str, Array]:
+    """theta13 and theta14 (four-bar) or s14 (slider-crank)."""
+    out = {"theta13": pose.theta13}
+    if isinstance(case.geometry, FourBarGeometry):
+        out["theta14"] = pose.theta14
+    else:
+        assert pose.s14 is not None
+        out["s14"] = pose.s14
+    return out
+
+
+def unknowns_to_values(case: Case, pose: Pose, x: Array) -> dict[str, Array]:
+    """Name the solved unknowns in CONVENTIONS terms (F14 is assembled for a slider)."""
+    out = {q: x[:, i] for i, q in enumerate(FORCE_QUANTITIES[:6])}
+    if isinstance(case.geometry, FourBarGeometry):
+        out["F14_x"], out["F14_y"] = x[:, 6], x[:, 7]
+    else:
+        u, nrm = slide_frame(case)
+        along = np.zeros(x.shape[0])
+        for t in coulomb_terms(case, pose.theta12):
+            if t.joint == "slide":
+                along = along + slide_friction_force(t, x[:, 6])
+        if case.friction is not None and case.friction.viscous.get("slide", 0.0) > 0.0:
+            assert pose.s14_dot is not None
+            along = along - case.friction.viscous["slide"] * pose.s14_dot
+        out["F14_x"] = x[:, 6] * nrm[0] + along * u[0]
+        out["F14_y"] = x[:, 6] * nrm[1] + along * u[1]
+        out["M14"] = x[:, 7]
+    out[drive_quantity(case)] = x[:, 8]
+    return out
+
+
+def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
+    """Static or dynamic force analysis of ``case`` at each θ12 (rad).
+
+    Poses beyond :data:`~analytic.equilibrium.SINGULAR_CONDITION`, and
+    friction poses whose Newton iteration did not converge, get NaN forces.
+    """
+    angles = as_angles(case.theta12 if theta12 is None else theta12)
+    pose = pose_of(case, angles)
+    system = linear_system(case, pose)
+    b = known_vector(case, pose)
+    x = -np.einsum("nij,nj->ni", system.k_inv, b)
+    iterations = np.zeros(angles.shape[0], dtype=int)
+    converged = np.ones(angles.shape[0], dtype=bool)
+    if case.has_coulomb_friction:
+        x, iterations, converged = solve_with_friction(case, pose, system.k, b, x)
+    withheld = ~(system.condition <= SINGULAR_CONDITION) | ~converged
+    x[withheld] = np.nan
+    values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
+    return PoseResults(angles, values, system.condition, iterations, converged)
+
+
+def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0, *,
+                  method: str, elapsed: float) -> Solution:
+    """A :class:`Solution` for one pose of vectorised results, with its verdict."""
+    cond = float(results.condition[index])
+    diagnostics: dict[str, float | str] = {
+        "method": method, "condition_number": cond, "wall_time_s": elapsed,
+    }
+    if case.has_coulomb_friction:
+        diagnostics["newton_iterations"] = int(results.iterations[index])
+    pose_only = {q: float(v[index]) for q, v in results.values.items()
+                 if q in ("theta13", "theta14", "s14")}
+    if results.singular[index]:
+        return Solution(case.name, backend, pose_only, status="singular",
+                        message=f"condition number {cond:.3g} exceeds {SINGULAR_CONDITION:.0e}: "
+                                "the pose is at or next to a toggle/change point; forces withheld",
+                        diagnostics=diagnostics)
+    if not results.converged[index]:
+        return Solution(case.name, backend, pose_only, status="no_solution",
+                        message="the friction equations have no solution with the assumed "
+                                "senses of motion (the mechanism self-locks)",
+                        diagnostics=diagnostics)
+    values = {q: float(v[index]) for q, v in results.values.items()}
+    return Solution(case.name, backend, values, diagnostics=diagnostics)
+
+
+def solve(case: Case) -> Solution:
+    """The ``analytic`` backend: the full force analysis of one Case."""
+    start = time.perf_counter()
+    results = solve_poses(case)
+    return solution_from(case, "analytic", results, method="member-equilibrium matrix method",
+                         elapsed=time.perf_counter() - start)

@@ -1,0 +1,72 @@
+"""Slider-crank kinematics in closed form, with offset and tilted slide.
+
+With u the slide direction (ground_angle g), n = u turned +90° and φ = θ − g,
+pin B = a2 e2 + a3 e3 = s14 u + e n. Projecting on n fixes the rod angle,
+sin φ13 = (e − a2 sin φ12)/a3; ``right`` takes cos φ13 ≥ 0 (larger s14),
+``left`` cos φ13 ≤ 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from analytic.case import SliderCrankGeometry
+from analytic.kinematics import Array, LinkState, Pose, unit
+
+
+def rod_angle(g: SliderCrankGeometry, phi12: Array, branch: str) -> Array:
+    """φ13 (from the slide axis); NaN where the pose cannot assemble."""
+    s = (g.offset - g.a2 * np.sin(phi12)) / g.a3
+    s = np.where(np.abs(s) <= 1.0 + 1e-12, np.clip(s, -1.0, 1.0), np.nan)
+    c = np.sqrt(1.0 - s**2) * (1.0 if branch == "right" else -1.0)
+    return np.arctan2(s, c)
+
+
+def pose(g: SliderCrankGeometry, theta12: Array, omega: float, alpha: float, *,
+         branch: str, ground_angle: float) -> Pose:
+    """Positions, velocities and accelerations of a slider-crank at each θ12."""
+    n = theta12.shape[0]
+    phi2 = theta12 - ground_angle
+    phi3 = rod_angle(g, phi2, branch)
+    u = unit(np.array(ground_angle))
+    nrm = np.array([-u[1], u[0]])
+    s14 = g.a2 * np.cos(phi2) + g.a3 * np.cos(phi3)
+
+    w2 = np.full(n, float(omega))
+    al2 = np.full(n, float(alpha))
+    w3 = -g.a2 * w2 * np.cos(phi2) / (g.a3 * np.cos(phi3))
+    s_dot = -g.a2 * w2 * np.sin(phi2) - g.a3 * w3 * np.sin(phi3)
+    al3 = (-g.a2 * (al2 * np.cos(phi2) - w2**2 * np.sin(phi2))
+           + g.a3 * w3**2 * np.sin(phi3)) / (g.a3 * np.cos(phi3))
+    s_ddot = (g.a2 * (-al2 * np.sin(phi2) - w2**2 * np.cos(phi2))
+              + g.a3 * (-al3 * np.sin(phi3) - w3**2 * np.cos(phi3)))
+
+    e2 = unit(theta12)
+    a0 = np.zeros((n, 2))
+    a = g.a2 * e2
+    b = s14[:, None] * u + g.offset * nrm
+    zero2 = np.zeros((n, 2))
+    perp_e2 = np.stack([-e2[:, 1], e2[:, 0]], axis=-1)
+    v_a = g.a2 * w2[:, None] * perp_e2
+    acc_a = g.a2 * (al2[:, None] * perp_e2 - (w2**2)[:, None] * e2)
+    zeros = np.zeros(n)
+    links = {
+        2: LinkState(a0, zero2, zero2, theta12.copy(), w2, al2),
+        3: LinkState(a, v_a, acc_a, phi3 + ground_angle, w3, al3),
+        4: LinkState(b, s_dot[:, None] * u, s_ddot[:, None] * u,
+                     np.full(n, float(ground_angle)), zeros, zeros.copy()),
+    }
+    return Pose(theta12=theta12, joints={"A0": a0, "A": a, "B": b}, links=links,
+                s14=s14, s14_dot=s_dot, s14_ddot=s_ddot)
+
+
+def assembly_interval(g: SliderCrankGeometry) -> tuple[float, float] | None:
+    """Range of sin φ12 that assembles, as (lo, hi) ⊂ [−1, 1]; None if none.
+
+    |e − a2 sin φ12| ≤ a3  ⇔  (e − a3)/a2 ≤ sin φ12 ≤ (e + a3)/a2.
+    """
+    lo = (g.offset - g.a3) / g.a2
+    hi = (g.offset + g.a3) / g.a2
+    if lo > 1.0 or hi < -1.0:
+        return None
+    return (max(lo, -1.0), min(hi, 1.0))

@@ -1,0 +1,61 @@
+"""What every backend returns: :class:`Solution`.
+
+Values are SI with angles in radians, keyed by the CONVENTIONS quantity names
+(``T12``/``T14``, ``F12_x`` … ``F14_y``, ``M14``, ``theta13``, ``theta14``,
+``s14``). Unit conversion (radians → degrees) happens only when tables and
+reports are drawn (:data:`QUANTITY_UNITS`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Literal
+
+Status = Literal["ok", "singular", "not_settled", "not_applicable", "no_solution"]
+
+#: Quantity -> (unit in tables, factor from the stored SI/radian value).
+QUANTITY_UNITS: dict[str, tuple[str, float]] = {
+    "T12": ("N*m", 1.0), "T14": ("N*m", 1.0), "M14": ("N*m", 1.0),
+    **{f"F{j}_{c}": ("N", 1.0) for j in ("12", "23", "34", "14") for c in "xy"},
+    "theta13": ("deg", 57.29577951308232), "theta14": ("deg", 57.29577951308232),
+    "s14": ("m", 1.0),
+}
+
+#: The order quantities are written in.
+QUANTITY_ORDER = list(QUANTITY_UNITS)
+
+
+def quantity_kind(quantity: str) -> str:
+    """``torque``, ``force`` or ``pose``: the tolerance policy's quantity kind."""
+    if quantity in ("T12", "T14", "M14"):
+        return "torque"
+    if quantity.startswith("F"):
+        return "force"
+    return "pose"
+
+
+@dataclass(frozen=True)
+class Solution:
+    """One backend's answer for one Case.
+
+    ``status`` is ``ok`` or a verdict that explains why some or all numbers are
+    absent: ``singular`` (ill-conditioned pose; forces withheld),
+    ``not_settled`` (a simulator did not reach equilibrium within its budget),
+    ``not_applicable`` (the method does not apply, e.g. superposition with
+    friction), ``no_solution`` (e.g. the friction equations lock).
+    ``diagnostics`` says how trustworthy the numbers are (condition number,
+    iterations, steps, wall time, residuals …).
+    """
+
+    case: str
+    backend: str
+    values: Mapping[str, float]
+    status: Status = "ok"
+    message: str = ""
+    diagnostics: Mapping[str, float | str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        unknown = set(self.values) - set(QUANTITY_UNITS)
+        if unknown:
+            raise ValueError(f"unknown quantities {sorted(unknown)}")
