@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Literal
 
-Status = Literal["ok", "singular", "not_settled", "not_applicable", "no_solution"]
+Status = Literal["ok", "singular", "not_settled", "not_applicable", "no_solution", "error"]
 
 #: Quantity -> (unit in tables, factor from the stored SI/radian value).
 QUANTITY_UNITS: dict[str, tuple[str, float]] = {

@@ -1,0 +1,50 @@
+"""The ``superposition`` backend: solve each load alone, then add.
+
+Valid only when the equations are linear in the loads, i.e. without Coulomb
+friction (the seed: "conservative systems"). Every external load, each link's
+weight, each link's inertia force and each viscous term counts as one load.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from analytic.case import Case
+from analytic.equilibrium import known_vectors, linear_system
+from analytic.forces import PoseResults, pose_values, solution_from, unknowns_to_values
+from analytic.kinematics import as_angles, pose_of
+from analytic.solution import Solution
+
+REFUSAL = ("superposition applies only to frictionless (linear) systems; this case has "
+           "Coulomb friction, whose moments depend on the total reactions, so the sum of "
+           "single-load solutions would be wrong")
+
+
+def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
+    """Sum of the single-load solutions at each θ12 (rad)."""
+    if case.has_coulomb_friction:
+        raise ValueError(REFUSAL)
+    angles = as_angles(case.theta12 if theta12 is None else theta12)
+    pose = pose_of(case, angles)
+    system = linear_system(case, pose)
+    x = np.zeros((angles.shape[0], 9))
+    for _, b in known_vectors(case, pose):
+        x += -np.einsum("nij,nj->ni", system.k_inv, b)
+    results = PoseResults(angles, {}, system.condition,
+                          np.zeros(angles.shape[0], dtype=int), np.ones(angles.shape[0], bool))
+    x[results.singular] = np.nan
+    values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
+    return PoseResults(angles, values, system.condition, results.iterations, results.converged)
+
+
+def solve(case: Case) -> Solution:
+    """The ``superposition`` backend for one Case (refuses friction cases)."""
+    if case.has_coulomb_friction:
+        return Solution(case.name, "superposition", {}, status="not_applicable", message=REFUSAL)
+    start = time.perf_counter()
+    results = solve_poses(case)
+    return solution_from(case, "superposition", results, method="superposition of single loads",
+                         elapsed=time.perf_counter() - start)

@@ -1,0 +1,112 @@
+"""The ``mechcheck`` command line.
+
+``mechcheck run FILE... [--backend NAME]... [--out DIR]`` writes
+``results.csv``, ``comparison.csv``, ``diagnostics.csv``, ``report.md`` and
+``report.html``. Exit status 0: every comparison within tolerance; 1: any
+not (or a failing verdict); 2: unusable input, with one line on stderr that
+names the file, the case and the key.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from analytic.case import CaseError
+from compare import backends as registry
+from compare.casefile import builtin_case_files, load_specs
+from compare.output import write_all
+from compare.report import render
+from compare.run import DEFAULT_FAIL_ON, VERDICTS, Progress, run
+from compare.tables import COMPARISON_COLUMNS, diagnostics_frame, results_frame
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="Validate planar force analysis against MuJoCo and pymunk.")
+
+
+def fail_input(message: str) -> typer.Exit:
+    """One clear line on stderr, exit status 2."""
+    typer.echo(f"mechcheck: error: {message}", err=True)
+    return typer.Exit(2)
+
+
+def progress_printer(total_hint: int) -> Progress:
+    tty = sys.stderr.isatty()
+
+    def show(done: int, total: int, label: str) -> None:
+        line = f"[{done}/{total}] {label}"
+        if tty:
+            end = "\n" if done == total else ""
+            sys.stderr.write(f"\r\x1b[K{line}{end}")
+            sys.stderr.flush()
+        elif total_hint > 1:
+            sys.stderr.write(line + "\n")
+    return show
+
+
+@app.command("run")
+def run_command(
+    files: Annotated[list[Path] | None, typer.Argument(
+        help="Case files (TOML). None: the built-in suite (seed examples and more).")] = None,
+    backend: Annotated[list[str] | None, typer.Option(
+        "--backend", "-b", help="Backend to check against analytic (repeatable). "
+        f"Default: every available one of {', '.join(registry.REGISTRY)}.")] = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
+        Path("mechcheck-out"),
+    fail_on: Annotated[str, typer.Option(
+        help="Comma-separated backend verdicts that fail the run "
+             f"(from {', '.join(VERDICTS)}; 'none' for none).")] = ",".join(DEFAULT_FAIL_ON),
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
+) -> None:
+    """Run backends over case files and report agreement with the analytic solution."""
+    paths = list(files) if files else builtin_case_files()
+    verdicts = tuple(v for v in fail_on.split(",") if v and v != "none")
+    unknown = [v for v in verdicts if v not in VERDICTS]
+    if unknown:
+        raise fail_input(f"--fail-on: unknown verdict {unknown[0]!r}; choose from "
+                         f"{', '.join(VERDICTS)} or 'none'")
+    try:
+        specs = load_specs(paths)
+    except CaseError as error:
+        raise fail_input(str(error)) from None
+    names = list(backend) if backend else registry.available()
+    try:
+        for name in names:
+            registry.load(name)
+    except registry.BackendUnavailable as error:
+        raise fail_input(str(error)) from None
+    cases = [case for case, _ in specs]
+    progress = None if quiet else progress_printer(len(cases) * len(names))
+    result = run(cases, names, progress=progress, fail_on=verdicts)
+    markdown, page = render(result, {c.name: s for c, s in specs})
+    write_all(out, {
+        "results.csv": results_frame(result.solutions).to_csv(index=False),
+        "comparison.csv": result.detail[COMPARISON_COLUMNS].to_csv(index=False),
+        "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
+        "report.md": markdown,
+        "report.html": page,
+    })
+    failed = len(result.failed_comparisons)
+    typer.echo(f"{len(cases)} cases, {len(result.detail)} comparisons, {failed} outside "
+               f"tolerance, {len(result.failing_verdicts)} failing verdicts "
+               f"-> {out}/report.md ({'PASS' if result.exit_status == 0 else 'FAIL'})")
+    raise typer.Exit(result.exit_status)
+
+
+@app.command("backends")
+def backends_command() -> None:
+    """List the backends and whether each is available here."""
+    for name in registry.REGISTRY:
+        try:
+            registry.load(name)
+            state = "available"
+        except registry.BackendUnavailable as error:
+            state = f"unavailable ({error})"
+        typer.echo(f"{name:15s} {state}")
+
+
+def main() -> None:
+    app()

@@ -1,0 +1,151 @@
+"""The accuracy report: Markdown and one self-contained HTML file.
+
+Built from Jinja2 templates (``compare/templates``) over a small view model;
+every number shown is taken from the same tables that are written to CSV.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import jinja2
+import pandas as pd
+
+from analytic.case import Case
+from analytic.solution import QUANTITY_UNITS, Solution
+from compare.backends import REFERENCE
+from compare.casefile import CaseSpec
+from compare.run import RunResult
+from compare.seeds import SeedRow, derived_value
+from compare.tables import in_table_units, ordered
+from compare.tolerance import policy_table
+
+_ENV = jinja2.Environment(
+    loader=jinja2.PackageLoader("compare", "templates"),
+    autoescape=jinja2.select_autoescape(["html.j2"]),
+    trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
+)
+
+
+def fmt(value: float | None, digits: int = 6) -> str:
+    """Numbers for humans: significant digits, '—' for absent."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "—"
+    if value == 0:
+        return "0"
+    if abs(value) >= 1e5 or abs(value) < 1e-3:
+        return f"{value:.{digits - 1}e}"
+    return f"{value:.{digits}g}"
+
+
+_ENV.filters["fmt"] = fmt
+_ENV.filters["sci"] = lambda v: "—" if v is None else f"{v:.1e}"
+
+
+@dataclass(frozen=True)
+class BackendSummary:
+    backend: str
+    compared: int
+    failed: int
+    worst: dict[str, float]   # quantity kind → worst rel_err
+    verdicts: dict[str, int]
+
+
+def backend_summaries(result: RunResult) -> list[BackendSummary]:
+    """Passes, failures and the worst error of each quantity kind, per backend."""
+    out = []
+    detail = result.detail
+    for backend in dict.fromkeys(s.backend for s in result.solutions):
+        if backend == REFERENCE:
+            continue
+        rows = detail[detail["backend"] == backend]
+        worst: dict[str, float] = {}
+        for q, group in rows.groupby("quantity"):
+            worst[str(q)] = float(group["rel_err"].max())
+        verdicts: dict[str, int] = {}
+        for s in result.solutions:
+            if s.backend == backend and s.status != "ok":
+                verdicts[s.status] = verdicts.get(s.status, 0) + 1
+        out.append(BackendSummary(backend, len(rows), int((~rows["passed"].astype(bool)).sum()),
+                                  {q: worst[q] for q in ordered(worst)}, verdicts))
+    return out
+
+
+def case_view(case: Case, spec: CaseSpec | None, solutions: list[Solution],
+              detail: pd.DataFrame) -> dict[str, Any]:
+    """Values of every backend side by side, with errors, for one case."""
+    backends = [s.backend for s in solutions]
+    quantities = ordered({q for s in solutions for q in s.values})
+    rows = []
+    mine = detail[detail["case"] == case.name]
+    for q in quantities:
+        cells = []
+        for s in solutions:
+            hit = mine[(mine["quantity"] == q) & (mine["backend"] == s.backend)]
+            cells.append({
+                "value": in_table_units(q, s.values[q]) if q in s.values else None,
+                "rel_err": float(hit["rel_err"].iloc[0]) if len(hit) else None,
+                "passed": bool(hit["passed"].iloc[0]) if len(hit) else None,
+                "tolerance": float(hit["tolerance"].iloc[0]) if len(hit) else None,
+                "overridden": bool(hit["overridden"].iloc[0]) if len(hit) else False,
+            })
+        rows.append({"quantity": q, "unit": QUANTITY_UNITS[q][0], "cells": cells})
+    return {
+        "name": case.name, "description": spec.description if spec else "",
+        "mechanism": case.mechanism, "kind": str(mine["case_kind"].iloc[0]) if len(mine)
+        else case.kind, "source": case.source, "backends": backends, "rows": rows,
+        "verdicts": [s for s in solutions if s.status != "ok"],
+        "diagnostics": [(s.backend, s.status, dict(s.diagnostics)) for s in solutions],
+        "overrides": list(case.tolerance),
+    }
+
+
+def seed_rows(result: RunResult, specs: dict[str, CaseSpec]) -> list[SeedRow]:
+    """Printed seed answers beside the reference backend's values."""
+    out = []
+    for case in result.cases:
+        spec = specs.get(case.name)
+        if spec is None or spec.seed is None:
+            continue
+        ref = next(s for s in result.solutions if s.case == case.name and s.backend == REFERENCE)
+        for key, printed in spec.seed.printed.items():
+            out.append(SeedRow(case.name, key, printed, derived_value(case, ref, key),
+                               spec.seed.source, spec.seed.note))
+    return out
+
+
+def view_model(result: RunResult, specs: dict[str, CaseSpec], title: str) -> dict[str, Any]:
+    by_case: dict[str, list[Solution]] = {}
+    for s in result.solutions:
+        by_case.setdefault(s.case, []).append(s)
+    failed = result.failed_comparisons
+    seeds = seed_rows(result, specs)
+    notes = {r.case: r.note for r in seeds}
+    return {
+        "title": title,
+        "passed": result.exit_status == 0,
+        "n_cases": len(result.cases),
+        "n_comparisons": len(result.detail),
+        "n_failed": len(failed),
+        "wall_time_s": result.wall_time_s,
+        "fail_on": ", ".join(result.fail_on),
+        "summaries": backend_summaries(result),
+        "failures": failed.to_dict("records"),
+        "failing_verdicts": result.failing_verdicts,
+        "seeds": seeds,
+        "seed_notes": notes,
+        "cases": [case_view(c, specs.get(c.name), by_case.get(c.name, []), result.detail)
+                  for c in result.cases],
+        "policy": policy_table(),
+    }
+
+
+def render(result: RunResult, specs: dict[str, CaseSpec],
+           title: str = "mechcheck accuracy report") -> tuple[str, str]:
+    """(Markdown, HTML) of a run."""
+    model = view_model(result, specs, title)
+    return (_ENV.get_template("report.md.j2").render(**model),
+            _ENV.get_template("report.html.j2").render(**model, escape=html.escape))

@@ -1,0 +1,76 @@
+"""Run backends over cases and reach a verdict.
+
+Exit statuses (CONVENTIONS.md): 0 every comparison within tolerance, 1 any
+not (or a backend verdict listed in ``fail_on``), 2 unusable input.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+from analytic.case import Case
+from analytic.solution import Solution
+from compare import backends as registry
+from compare.tables import comparison_detail
+
+#: Backend verdicts that turn a run red unless ``--fail-on`` says otherwise:
+#: a simulator that never settled, or a backend that crashed, means the check
+#: did not happen. ``singular`` (an expected outcome at a change point),
+#: ``not_applicable`` and ``no_solution`` (self-locking) are reported only.
+DEFAULT_FAIL_ON = ("not_settled", "error")
+VERDICTS = ("singular", "not_settled", "not_applicable", "no_solution", "error")
+
+Progress = Callable[[int, int, str], None]
+
+
+@dataclass(frozen=True)
+class RunResult:
+    cases: list[Case]
+    solutions: list[Solution]
+    detail: pd.DataFrame = field(repr=False)
+    wall_time_s: float
+    fail_on: tuple[str, ...] = DEFAULT_FAIL_ON
+
+    @property
+    def failed_comparisons(self) -> pd.DataFrame:
+        return self.detail[~self.detail["passed"].astype(bool)]
+
+    @property
+    def failing_verdicts(self) -> list[Solution]:
+        return [s for s in self.solutions if s.status in self.fail_on]
+
+    @property
+    def exit_status(self) -> int:
+        return 1 if len(self.failed_comparisons) or self.failing_verdicts else 0
+
+
+def call_backend(backend: registry.Backend, name: str, case: Case) -> Solution:
+    """Run one backend; a crash becomes an ``error`` verdict, not a lost run."""
+    try:
+        return backend(case)
+    except Exception as error:  # noqa: BLE001 - any backend bug must be reported, not fatal
+        last = traceback.format_exception_only(error)[-1].strip()
+        return Solution(case.name, name, {}, status="error", message=last)
+
+
+def run(cases: Sequence[Case], backend_names: Sequence[str], *,
+        progress: Progress | None = None, fail_on: Sequence[str] = DEFAULT_FAIL_ON) -> RunResult:
+    """Every backend on every case; the reference backend always runs."""
+    names = list(dict.fromkeys([registry.REFERENCE, *backend_names]))
+    functions = {n: registry.load(n) for n in names}
+    start = time.perf_counter()
+    solutions: list[Solution] = []
+    total, done = len(cases) * len(names), 0
+    for case in cases:
+        for name in names:
+            solutions.append(call_backend(functions[name], name, case))
+            done += 1
+            if progress:
+                progress(done, total, f"{case.name} · {name}")
+    detail = comparison_detail(cases, solutions)
+    return RunResult(list(cases), solutions, detail, time.perf_counter() - start, tuple(fail_on))
