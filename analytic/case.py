@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
@@ -240,25 +240,29 @@ class Friction:
         return self.mu if self.slide_mu is None else self.slide_mu
 
 
-class _FrozenDict(dict[str, float]):
-    """A read-only, hashable mapping so that Friction stays immutable and picklable."""
+class _FrozenDict(Mapping[str, float]):
+    """A read-only, hashable, picklable mapping, so that Friction stays immutable."""
 
-    def __hash__(self) -> int:  # type: ignore[override]
-        return hash(tuple(sorted(self.items())))
+    def __init__(self, items: Mapping[str, float]) -> None:
+        self._items = dict(items)
 
-    def _readonly(self, *args: object, **kwargs: object) -> None:
-        raise TypeError("Case values are immutable")
+    def __getitem__(self, key: str) -> float:
+        return self._items[key]
 
-    __setitem__ = _readonly  # type: ignore[assignment]
-    __delitem__ = _readonly  # type: ignore[assignment]
-    update = _readonly  # type: ignore[assignment]
-    pop = _readonly  # type: ignore[assignment]
-    clear = _readonly  # type: ignore[assignment]
-    setdefault = _readonly  # type: ignore[assignment]
-    popitem = _readonly  # type: ignore[assignment]
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._items)
 
-    def __reduce__(self) -> tuple[type, tuple[dict[str, float]]]:
-        return (_FrozenDict, (dict(self),))
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __hash__(self) -> int:
+        return hash(tuple(sorted(self._items.items())))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Mapping) and dict(self._items) == dict(other)
+
+    def __repr__(self) -> str:
+        return repr(self._items)
 
 
 @dataclass(frozen=True)

@@ -18,8 +18,6 @@ friction x = −K⁻¹ b.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from analytic.case import Case, FourBarGeometry, Load, Mass
@@ -31,8 +29,8 @@ PIN_COLUMNS = {"A0": (0, 1), "A": (2, 3), "B": (4, 5), "B0": (6, 7)}
 #: (i, j) of each joint: F_ij is the force by i on j.
 JOINT_LINKS = {"A0": (1, 2), "A": (2, 3), "B": (3, 4), "B0": (1, 4), "slide": (1, 4)}
 
-#: Above this condition number (of the dimensionless system, see
-#: :func:`condition_number`) a pose is reported ``singular`` and its forces
+#: Above this condition number (of the dimensionless 2×2 core, see
+#: :func:`core_condition`) a pose is reported ``singular`` and its forces
 #: withheld. Reason: a relative change of 1e-8 in the geometry (10 nm on a
 #: 1 m link, below any drawing's precision) then changes the forces by order
 #: 100 %, and rounding alone (cond × 2.2e-16 ≈ 2e-8) already exceeds the 1e-9
@@ -179,46 +177,90 @@ def known_vector(case: Case, pose: Pose) -> Array:
     return b
 
 
-def scaling(case: Case) -> tuple[Array, Array]:
-    """Row and column scales that make K dimensionless (moments / L, torques × L)."""
-    length = case.geometry.scale
-    rows = np.ones(N_UNKNOWNS)
-    rows[2::3] = 1.0 / length
-    cols = np.ones(N_UNKNOWNS)
-    cols[8] = length
-    if not isinstance(case.geometry, FourBarGeometry):
-        cols[7] = length
-    return rows, cols
+def _rows(case: Case, pose: Pose) -> tuple[Array, Array]:
+    """The two equations that fix F34 once F23, F14 (or N14) are eliminated.
+
+    Each row r stands for the equation r · F34 = rhs. Always: link 3's moment
+    about A, (A − B)⊥ · F34. Then link 4's moment about B0 (four-bar, drive on
+    2: (B − B0)⊥), link 2's moment about A0 (four-bar, drive on 4:
+    (A0 − A)⊥), or the slider's force along the slide (slider-crank: u).
+    """
+    j = pose.joints
+    first = perp_of(j["A"] - j["B"])
+    if case.mechanism == "slider_crank":
+        u, _ = slide_frame(case)
+        second = np.broadcast_to(u, first.shape)
+    elif case.drive_link == 2:
+        second = perp_of(j["B"] - j["B0"])
+    else:
+        second = perp_of(j["A0"] - j["A"])
+    return first, second
 
 
-def condition_number(case: Case, k: Array, k_inv: Array) -> Array:
-    """1-norm condition number of the dimensionless K, per pose."""
-    rows, cols = scaling(case)
-    ks = rows[:, None] * k * cols[None, :]
-    ks_inv = (1.0 / cols)[:, None] * k_inv * (1.0 / rows)[None, :]
-    norm = lambda m: np.abs(m).sum(axis=-2).max(axis=-1)  # noqa: E731 - 1-norm per pose
-    return norm(ks) * norm(ks_inv)
+def perp_of(v: Array) -> Array:
+    """The row of cross(v, F) = v_x F_y − v_y F_x as a vector acting on F: (−v_y, v_x)."""
+    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
-@dataclass(frozen=True)
-class LinearSystem:
-    """K, its inverse and the condition number at N poses."""
+def core_condition(case: Case, pose: Pose) -> Array:
+    """Condition number (2-norm) of the 2×2 core with rows scaled to unit length.
 
-    k: Array
-    k_inv: Array
-    condition: Array
+    With unit rows at angle γ the singular values are √(1 ± |cos γ|), so the
+    condition number is √((1 + |cos γ|)/(1 − |cos γ|)) ≈ 2/γ near γ = 0: it is
+    large exactly at toggle, change and dead points (coupler and rocker, crank
+    and coupler, or rod and slide normal aligned), and it bounds how much the
+    forces are amplified there.
+    """
+    r1, r2 = _rows(case, pose)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos = np.abs(np.einsum("ij,ij->i", r1, r2)) / (
+            np.linalg.norm(r1, axis=1) * np.linalg.norm(r2, axis=1))
+        cond = np.sqrt((1.0 + cos) / (1.0 - cos))
+    return np.where(np.isfinite(cond), cond, np.inf)
 
 
-def linear_system(case: Case, pose: Pose) -> LinearSystem:
-    """Assemble K and invert it once (superposition reuses the inverse for every load)."""
-    k = coefficient_matrix(case, pose)
-    finite = np.all(np.isfinite(k), axis=(1, 2))
-    k_safe = np.where(finite[:, None, None], k, np.eye(N_UNKNOWNS))
-    with np.errstate(all="ignore"):
-        try:
-            k_inv = np.linalg.inv(k_safe)
-        except np.linalg.LinAlgError:
-            k_inv = np.linalg.pinv(k_safe)  # exactly singular somewhere: cond → inf below
-        cond = condition_number(case, k_safe, k_inv)
-    cond = np.where(finite & np.isfinite(cond), cond, np.inf)
-    return LinearSystem(k, k_inv, cond)
+def eliminate(case: Case, pose: Pose, b: Array) -> Array:
+    """Solve K x + b = 0 without friction by block elimination, elementwise over poses.
+
+    This is the member-equilibrium matrix method solved in the seed's order:
+    link 3's force balance gives F23 = F34 − b3, link 4's gives F14 (or the
+    slide's normal N14), two moment (or slide) equations form a 2×2 system
+    for F34 (:func:`_rows`), and the remaining rows give F12, M14 and the
+    drive torque explicitly. It costs O(1) array operations per pose instead
+    of a 9×9 factorisation; :func:`coefficient_matrix` gives the same
+    equations whole (used with friction, and in tests to cross-check).
+    """
+    j = pose.joints
+    b2f, b2m = b[:, 0:2], b[:, 2]
+    b3f, b3m = b[:, 3:5], b[:, 5]
+    b4f, b4m = b[:, 6:8], b[:, 8]
+    r1, r2 = _rows(case, pose)
+    rhs1 = cross(j["A"], b3f) - b3m
+    if case.mechanism == "slider_crank":
+        u, _ = slide_frame(case)
+        rhs2 = -(b4f @ u)
+    elif case.drive_link == 2:
+        rhs2 = cross(j["B0"], b4f) - b4m
+    else:
+        rhs2 = cross(j["A0"], b2f) - b2m + cross(j["A0"] - j["A"], b3f)
+    det = r1[:, 0] * r2[:, 1] - r1[:, 1] * r2[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f34 = np.stack([(rhs1 * r2[:, 1] - rhs2 * r1[:, 1]) / det,
+                        (r1[:, 0] * rhs2 - r2[:, 0] * rhs1) / det], axis=-1)
+    f23 = f34 - b3f
+    f12 = f23 - b2f
+    x = np.empty((b.shape[0], N_UNKNOWNS))
+    x[:, 0:2], x[:, 2:4], x[:, 4:6] = f12, f23, f34
+    if case.mechanism == "slider_crank":
+        _, nrm = slide_frame(case)
+        normal = -((f34 + b4f) @ nrm)
+        x[:, 6] = normal
+        x[:, 7] = -cross(j["B"], f34) - normal * cross(j["B"], np.broadcast_to(nrm, f34.shape)) \
+            - b4m
+    else:
+        x[:, 6:8] = -f34 - b4f
+    if case.drive_link == 2:
+        x[:, 8] = -(cross(j["A0"], f12) - cross(j["A"], f23) + b2m)
+    else:
+        x[:, 8] = -(cross(j["B"], f34) + cross(j["B0"], x[:, 6:8]) + b4m)
+    return x

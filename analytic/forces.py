@@ -12,14 +12,16 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from analytic.case import Case, FourBarGeometry
 from analytic.equilibrium import (
     SINGULAR_CONDITION,
     Array,
+    coefficient_matrix,
+    core_condition,
+    eliminate,
     known_vector,
-    linear_system,
     slide_frame,
 )
 from analytic.friction import coulomb_terms, slide_friction_force, solve_with_friction
@@ -46,11 +48,11 @@ class PoseResults:
     theta12: Array
     values: dict[str, Array]
     condition: Array
-    iterations: Array
-    converged: Array
+    iterations: NDArray[np.int_]
+    converged: NDArray[np.bool_]
 
     @property
-    def singular(self) -> Array:
+    def singular(self) -> NDArray[np.bool_]:
         return ~(self.condition <= SINGULAR_CONDITION)
 
 
@@ -94,17 +96,18 @@ def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
     """
     angles = as_angles(case.theta12 if theta12 is None else theta12)
     pose = pose_of(case, angles)
-    system = linear_system(case, pose)
+    condition = core_condition(case, pose)
     b = known_vector(case, pose)
-    x = -np.einsum("nij,nj->ni", system.k_inv, b)
+    x = eliminate(case, pose, b)
     iterations = np.zeros(angles.shape[0], dtype=int)
     converged = np.ones(angles.shape[0], dtype=bool)
     if case.has_coulomb_friction:
-        x, iterations, converged = solve_with_friction(case, pose, system.k, b, x)
-    withheld = ~(system.condition <= SINGULAR_CONDITION) | ~converged
+        k = coefficient_matrix(case, pose)
+        x, iterations, converged = solve_with_friction(case, pose, k, b, x)
+    withheld = ~(condition <= SINGULAR_CONDITION) | ~converged
     x[withheld] = np.nan
     values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
-    return PoseResults(angles, values, system.condition, iterations, converged)
+    return PoseResults(angles, values, condition, iterations, converged)
 
 
 def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0, *,

@@ -24,7 +24,8 @@ def rocker_angle(g: FourBarGeometry, phi12: Array, branch: str) -> Array:
     a = -2.0 * g.a1 * g.a4 + 2.0 * g.a2 * g.a4 * np.cos(phi12)
     b = 2.0 * g.a2 * g.a4 * np.sin(phi12)
     f = np.arctan2(b, a)
-    ratio = c / np.hypot(a, b)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a2 = a1 at φ12 = 0: no pose
+        ratio = c / np.hypot(a, b)
     # Rounding can push an exactly-toggling pose to |ratio| = 1 + 1e-16; clip
     # only that, so a truly unassemblable pose still gives NaN.
     ratio = np.where(np.abs(ratio) <= 1.0 + 1e-12, np.clip(ratio, -1.0, 1.0), np.nan)

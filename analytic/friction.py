@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from analytic.case import Case
 from analytic.equilibrium import (
@@ -111,7 +112,7 @@ def residual_terms(case: Case, pose: Pose, terms: list[CoulombTerm],
 
 
 def solve_with_friction(case: Case, pose: Pose, k: Array, b: Array,
-                        x0: Array) -> tuple[Array, Array, Array]:
+                        x0: Array) -> tuple[Array, NDArray[np.int_], NDArray[np.bool_]]:
     """Newton's method for K x + b + φ(x) = 0.
 
     Returns (x, iterations, converged) per pose. Poses whose iteration does
@@ -147,7 +148,7 @@ def solve_with_friction(case: Case, pose: Pose, k: Array, b: Array,
     return x, iterations, converged
 
 
-def _take(pose: Pose, idx: Array) -> Pose:
+def _take(pose: Pose, idx: NDArray[np.intp]) -> Pose:
     """The sub-pose at indices idx (only joints are needed by the residual)."""
     return Pose(theta12=pose.theta12[idx], joints={k: v[idx] for k, v in pose.joints.items()},
                 links=pose.links)

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from analytic.case import Case
-from analytic.equilibrium import known_vectors, linear_system
+from analytic.equilibrium import core_condition, eliminate, known_vectors
 from analytic.forces import PoseResults, pose_values, solution_from, unknowns_to_values
 from analytic.kinematics import as_angles, pose_of
 from analytic.solution import Solution
@@ -29,15 +29,14 @@ def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
         raise ValueError(REFUSAL)
     angles = as_angles(case.theta12 if theta12 is None else theta12)
     pose = pose_of(case, angles)
-    system = linear_system(case, pose)
     x = np.zeros((angles.shape[0], 9))
     for _, b in known_vectors(case, pose):
-        x += -np.einsum("nij,nj->ni", system.k_inv, b)
-    results = PoseResults(angles, {}, system.condition,
+        x += eliminate(case, pose, b)
+    results = PoseResults(angles, {}, core_condition(case, pose),
                           np.zeros(angles.shape[0], dtype=int), np.ones(angles.shape[0], bool))
     x[results.singular] = np.nan
     values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
-    return PoseResults(angles, values, system.condition, results.iterations, results.converged)
+    return PoseResults(angles, values, results.condition, results.iterations, results.converged)
 
 
 def solve(case: Case) -> Solution:

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from analytic.case import Case
-from analytic.equilibrium import SINGULAR_CONDITION, JOINT_LINKS, relative_omega
+from analytic.equilibrium import JOINT_LINKS, SINGULAR_CONDITION, relative_omega
 from analytic.forces import drive_quantity, pose_values
 from analytic.kinematics import Array, Pose, as_angles, pose_of
 from analytic.solution import Solution

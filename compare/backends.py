@@ -40,7 +40,8 @@ def load(name: str) -> Backend:
     module_name, function = REGISTRY[name].split(":")
     try:
         module = importlib.import_module(module_name)
-        return getattr(module, function)  # type: ignore[no-any-return]
+        backend: Backend = getattr(module, function)
+        return backend
     except (ImportError, AttributeError) as error:
         raise BackendUnavailable(f"backend {name!r} is not available: {error}") from None
 

@@ -53,7 +53,7 @@ def call_backend(backend: registry.Backend, name: str, case: Case) -> Solution:
     """Run one backend; a crash becomes an ``error`` verdict, not a lost run."""
     try:
         return backend(case)
-    except Exception as error:  # noqa: BLE001 - any backend bug must be reported, not fatal
+    except Exception as error:
         last = traceback.format_exception_only(error)[-1].strip()
         return Solution(case.name, name, {}, status="error", message=last)
 

@@ -1,0 +1,222 @@
+"""A compiled model with its data, and the three things every method does to it:
+put it in a pose, apply the Case's loads, read the forces back.
+
+Forces are read from MuJoCo's own state only:
+
+- the drive torque is the force of the ``drive`` joint equality (its Jacobian
+  row is +1 on the driven joint, so the force *is* the torque on that link);
+- F34 is the force of the ``loop_B`` connect, whose first site is on link 4;
+- F12, F23 and F14 (and M14 of a slider) come from ``cfrc_int`` after
+  ``mj_rnePostConstraint``: the spatial force of the parent body on the child,
+  whose moment MuJoCo refers to the subtree's centre of mass, shifted here to
+  the joint point.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from analytic.case import Case
+from analytic.kinematics import pose_of
+from sim_models.mujoco.model import STATIC, Layout, Settings, compile_model
+
+Array = NDArray[np.float64]
+
+
+@dataclass
+class LoadTable:
+    """Every external load as arrays: site (point), body, global force, pure moment."""
+
+    sites: NDArray[np.int_]
+    bodies: NDArray[np.int_]
+    forces: Array   # (k, 3)
+    torques: Array  # (k,)
+
+
+def load_table(case: Case, model: mujoco.MjModel, layout: Layout) -> LoadTable:
+    """The Case's loads plus the weights m·g of the real masses (never the fictitious ones)."""
+    sites, bodies, forces, torques = [], [], [], []
+    for i, load in enumerate(case.loads):
+        sites.append(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, f"load{i}"))
+        bodies.append(layout.body[load.link])
+        forces.append((load.force[0], load.force[1], 0.0))
+        torques.append(load.torque)
+    if case.gravity != (0.0, 0.0):
+        for m in case.masses:
+            sites.append(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, f"weight{m.link}"))
+            bodies.append(layout.body[m.link])
+            forces.append((m.mass * case.gravity[0], m.mass * case.gravity[1], 0.0))
+            torques.append(0.0)
+    return LoadTable(np.array(sites, dtype=int), np.array(bodies, dtype=int),
+                     np.array(forces, dtype=float).reshape(-1, 3), np.array(torques, dtype=float))
+
+
+def cross_z(r: Array, f: Array) -> Array:
+    """z-component of r × f for arrays of (.., ≥2) vectors."""
+    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+
+
+class Rig:
+    """One Case's compiled model and data, with loads, pose and force read-out."""
+
+    def __init__(self, case: Case, settings: Settings = STATIC) -> None:
+        self.case = case
+        self.settings = settings
+        self.model, self.layout = compile_model(case, settings)
+        self.data = mujoco.MjData(self.model)
+        self.loads = load_table(case, self.model, self.layout)
+        self.four_bar = case.mechanism == "four_bar"
+        self.output_joint = "B0" if self.four_bar else "slide"
+        self.scale = case.geometry.scale
+        # Body × load incidence: sums each load onto its body in one product.
+        self.incidence = np.zeros((self.model.nbody, self.loads.sites.size))
+        self.incidence[self.loads.bodies, np.arange(self.loads.sites.size)] = 1.0
+        # Extra couples (friction) per body, and extra forces at pin B (slide friction).
+        self.extra_torque = np.zeros(self.model.nbody)
+        self.extra_force = np.zeros((self.model.nbody, 3))
+        self.body_forces = self.incidence @ self.loads.forces
+        self.efc_scale = self._efc_scale()
+
+    # -- pose -------------------------------------------------------------------
+    def qpos_at(self, theta12: float, omega: float | None = None,
+                alpha: float | None = None) -> tuple[Array, Array, Array]:
+        """qpos, qvel, qacc of the mechanism's joints from the analytic kinematics
+        (ω, α of link 2 default to the Case's motion).
+
+        Used only to seed or prescribe the motion; forces are never taken from it.
+        """
+        p = pose_of(self.case, np.array([theta12]), omega=omega, alpha=alpha)
+        l2, l3, l4 = p.links[2], p.links[3], p.links[4]
+        if self.four_bar:
+            out = (l4.angle[0], l4.omega[0], l4.alpha[0])
+        else:
+            assert p.s14 is not None and p.s14_dot is not None and p.s14_ddot is not None
+            out = (p.s14[0], p.s14_dot[0], p.s14_ddot[0])
+        q = np.array([l2.angle[0], l3.angle[0] - l2.angle[0], out[0]])
+        v = np.array([l2.omega[0], l3.omega[0] - l2.omega[0], out[1]])
+        a = np.array([l2.alpha[0], l3.alpha[0] - l2.alpha[0], out[2]])
+        return q, v, a
+
+    def joint_addresses(self) -> list[int]:
+        return [self.layout.qpos["A0"], self.layout.qpos["A"], self.layout.qpos[self.output_joint]]
+
+    def set_state(self, qpos: Array, qvel: Array) -> None:
+        idx = self.joint_addresses()
+        self.data.qpos[idx] = qpos
+        self.data.qvel[idx] = qvel
+
+    def set_lock(self, target: float) -> None:
+        """Hold the driven joint at ``target`` (rad) through the joint equality."""
+        self.model.eq_data[self.layout.drive_eq, 0] = target
+
+    def lock_target(self, theta12: float) -> float:
+        """The held angle of the driven link: θ12, or θ14 at that pose for drive on link 4."""
+        if self.case.drive_link == 2:
+            return theta12
+        return float(self.qpos_at(theta12)[0][2])
+
+    # -- loads ------------------------------------------------------------------
+    def apply_loads(self) -> None:
+        """xfrc_applied from the current pose: each force at its body-fixed point.
+
+        MuJoCo applies xfrc_applied at the body's centre of mass, so a force at
+        p carries the moment (p − x_com) × F. Loads given as qfrc_applied would
+        be invisible to cfrc_int (SIMULATORS.md).
+        """
+        d = self.data
+        xfrc = d.xfrc_applied
+        xfrc[:, 3:] = self.extra_force
+        xfrc[:, 0:3] = self.body_forces
+        xfrc[:, 5] = self.extra_torque
+        t = self.loads
+        if t.sites.size:
+            arm = d.site_xpos[t.sites] - d.xipos[t.bodies]
+            xfrc[:, 5] += self.incidence @ (cross_z(arm, t.forces) + t.torques)
+        # Extra forces (slide friction) act at pin B, the slider's origin.
+        b4 = self.layout.body[4]
+        xfrc[b4, 5] += cross_z(d.xpos[b4] - d.xipos[b4], self.extra_force[b4])
+
+    def set_extra(self, torque: Array, force: Array) -> None:
+        """Extra couples (per body, N·m) and slider forces (per body, N) on top of the loads."""
+        self.extra_torque = torque
+        self.extra_force = force
+        self.body_forces = self.incidence @ self.loads.forces + force[:, 0:3]
+
+    def constraint_forces(self) -> Array:
+        """The equality forces as one vector in N (the drive torque divided by the scale)."""
+        return self.data.efc_force[:self.data.nefc] * self.efc_scale
+
+    # -- read-out ---------------------------------------------------------------
+    def _efc_scale(self) -> Array:
+        """1 for force rows, 1/scale for the drive's torque row (constant row layout)."""
+        mujoco.mj_forward(self.model, self.data)
+        scale = np.ones(self.data.nefc)
+        scale[self.equality_rows(self.layout.drive_eq)] = 1.0 / self.scale
+        return scale
+
+    def equality_rows(self, eq_id: int) -> NDArray[np.int_]:
+        d = self.data
+        return np.flatnonzero((d.efc_type[:d.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+                              & (d.efc_id[:d.nefc] == eq_id))
+
+    def parent_force(self, link: int, point: Array) -> tuple[Array, float]:
+        """(force, moment about ``point``) of the parent body on ``link`` from cfrc_int."""
+        m, d = self.model, self.data
+        b = self.layout.body[link]
+        f = d.cfrc_int[b, 3:5]
+        c = d.subtree_com[m.body_rootid[b], :2]
+        return f.copy(), float(d.cfrc_int[b, 2] + cross_z(c - point, f))
+
+    def read(self) -> dict[str, float]:
+        """Every quantity from the current data (call after a forward pass)."""
+        m, d = self.model, self.data
+        mujoco.mj_rnePostConstraint(m, d)
+        lay = self.layout
+        q = d.qpos
+        values = {"theta13": float(q[lay.qpos["A0"]] + q[lay.qpos["A"]])}
+        f12, _ = self.parent_force(2, d.xpos[lay.body[2], :2])
+        f23, _ = self.parent_force(3, d.xpos[lay.body[3], :2])
+        loop = d.efc_force[self.equality_rows(lay.loop_eq)]
+        f14, m14 = self.parent_force(4, d.xpos[lay.body[4], :2])
+        # Slide friction is applied as an external force, but it is part of the
+        # guide's reaction on the slider (F14 is the guide's whole force).
+        f14 = f14 + self.extra_force[lay.body[4], :2]
+        drive = d.efc_force[self.equality_rows(lay.drive_eq)]
+        values.update({"F12_x": f12[0], "F12_y": f12[1], "F23_x": f23[0], "F23_y": f23[1],
+                       "F34_x": loop[0], "F34_y": loop[1], "F14_x": f14[0], "F14_y": f14[1]})
+        if self.four_bar:
+            values["theta14"] = float(q[lay.qpos["B0"]])
+        else:
+            values["s14"] = float(q[lay.qpos["slide"]])
+            values["M14"] = m14
+        values[f"T1{self.case.drive_link}"] = float(drive[0])
+        return {k: float(v) for k, v in values.items()}
+
+    def loop_violation(self) -> float:
+        """|B on link 3 − B on link 4|, metres."""
+        return float(np.linalg.norm(self.data.efc_pos[self.equality_rows(self.layout.loop_eq)]))
+
+    def joint_velocity(self) -> float:
+        """Largest joint speed, as a point speed (rad/s × scale, m/s) — comparable across joints."""
+        idx = self.joint_addresses()
+        v = np.abs(self.data.qvel[idx])
+        if not self.four_bar:
+            v[2] /= self.scale
+        return float(v.max() * self.scale)
+
+    def pose_drift(self, theta12: float) -> float:
+        """Largest difference of the simulated pose from the analytic one, as a length (m).
+
+        Angles are weighted by the mechanism's scale, the slider coordinate as is.
+        """
+        q, _, _ = self.qpos_at(theta12)
+        sim = self.data.qpos[self.joint_addresses()]
+        diff = np.abs(sim - q)
+        diff[:2] *= self.scale
+        if self.four_bar:
+            diff[2] *= self.scale
+        return float(diff.max())

@@ -1,0 +1,196 @@
+"""Reading force *vectors* out of pymunk's own solver state.
+
+Why the accumulated impulse, read through cffi
+----------------------------------------------
+``Constraint.impulse`` is a magnitude only (|jAcc| for a pivot or groove,
+|jAcc| for a gear or motor), so a sign convention check like "F_ij by i on j"
+cannot be made from it. Two routes give vectors:
+
+1. **Accumulated impulse (chosen).** Chipmunk keeps, per constraint, the
+   impulse it accumulated over the Gauss–Seidel iterations of the last step
+   (``jAcc``; a vector for pivots and grooves, a signed scalar for gears and
+   motors) and applies it as ``−jAcc`` to body a and ``+jAcc`` to body b. That
+   *is* the constraint force pymunk applied, per joint, with its sign, so
+   ``jAcc / dt`` is F_ij when body a is link i and body b is link j.
+2. **Per-body momentum balance.** Δ(m v), Δ(I ω) and the applied loads over
+   a step give each body's *total* constraint force and moment. A link
+   carries two or three joints, so splitting that total into joint reactions
+   means solving the member-equilibrium equations again with the simulated
+   accelerations: the reactions would then come from our own linear algebra,
+   not from pymunk, and any error in it would be shared with the analytic
+   reference we compare against.
+
+The price of route 1 is that the C structs are private. So the offsets used
+here are checked once per process against public, independent values
+(:func:`check_layout`): the base ``cpConstraint`` fields (max force, error
+bias, max bias), each joint's public parameters (pivot anchors, groove
+endpoints, gear phase and ratio, motor rate) and, after a step with load,
+|jAcc| against the public ``impulse`` magnitude. Any mismatch raises
+:class:`LayoutError` — never a silently wrong force. Route 2 is kept as an
+independent check of signs and body assignment in ``tests/test_pymunk_forces.py``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import pymunk
+from pymunk._chipmunk_cffi import ffi
+
+Vec = tuple[float, float]
+
+_DOUBLE = 8
+#: Byte offsets in Chipmunk 7 / Munk2D's private structs (LP64): the base
+#: ``cpConstraint`` is 6 pointers, 3 cpFloat, a cpBool padded to 8 and 3
+#: pointers = 104 bytes; joint fields follow (chipmunk_structs.h).
+BASE_FIELDS = {"maxForce": 48, "errorBias": 56, "maxBias": 64}
+CONSTRAINT_SIZE = 104
+PIVOT_FIELDS = {"anchorA": 104, "anchorB": 120, "jAcc": 200}
+GROOVE_FIELDS = {"grv_a": 120, "grv_b": 136, "anchorB": 152, "jAcc": 256}
+GEAR_FIELDS = {"phase": 104, "ratio": 112, "jAcc": 144}
+MOTOR_FIELDS = {"rate": 104, "jAcc": 120}
+
+#: Relative agreement demanded of the layout check: the fields are copied
+#: doubles, so a right offset matches exactly; a wrong one reads an unrelated
+#: number. The slack only absorbs the rounding of |jAcc| = hypot(x, y).
+LAYOUT_RTOL = 1.0e-12
+
+_checked = False
+
+
+class LayoutError(RuntimeError):
+    """The pymunk build's private struct layout is not the one this module reads."""
+
+
+def _doubles(constraint: pymunk.Constraint) -> object:
+    return ffi.cast("double *", constraint._constraint)
+
+
+def read_double(constraint: pymunk.Constraint, offset: int) -> float:
+    """The cpFloat at byte ``offset`` of the constraint's C struct."""
+    return float(_doubles(constraint)[offset // _DOUBLE])  # type: ignore[index]
+
+
+def read_vect(constraint: pymunk.Constraint, offset: int) -> Vec:
+    """The cpVect at byte ``offset`` of the constraint's C struct."""
+    d = _doubles(constraint)
+    k = offset // _DOUBLE
+    return float(d[k]), float(d[k + 1])  # type: ignore[index]
+
+
+def accumulated_impulse(constraint: pymunk.Constraint) -> Vec | float:
+    """jAcc of the last step: a vector (pivot, groove) or a signed scalar (gear, motor).
+
+    It is the impulse the constraint applied to its body b (−jAcc to body a).
+    """
+    if not _checked:
+        check_layout()
+    if isinstance(constraint, pymunk.PivotJoint):
+        return read_vect(constraint, PIVOT_FIELDS["jAcc"])
+    if isinstance(constraint, pymunk.GrooveJoint):
+        return read_vect(constraint, GROOVE_FIELDS["jAcc"])
+    if isinstance(constraint, pymunk.GearJoint):
+        return read_double(constraint, GEAR_FIELDS["jAcc"])
+    if isinstance(constraint, pymunk.SimpleMotor):
+        return read_double(constraint, MOTOR_FIELDS["jAcc"])
+    raise TypeError(f"no impulse layout known for {type(constraint).__name__}")
+
+
+def force_on_b(constraint: pymunk.Constraint, dt: float) -> Vec:
+    """Force vector (N) a pivot or groove applied to its body b during the last step."""
+    j = accumulated_impulse(constraint)
+    assert isinstance(j, tuple)
+    return j[0] / dt, j[1] / dt
+
+
+def torque_on_b(constraint: pymunk.Constraint, dt: float) -> float:
+    """Torque (N·m, CCW +) a gear or motor applied to its body b during the last step."""
+    j = accumulated_impulse(constraint)
+    assert isinstance(j, float)
+    return j / dt
+
+
+def _close(a: float, b: float) -> bool:
+    return math.isclose(a, b, rel_tol=LAYOUT_RTOL, abs_tol=1e-300)
+
+
+def _expect(what: str, read: float, public: float) -> None:
+    if not _close(read, public):
+        raise LayoutError(
+            f"pymunk {pymunk.version} (Chipmunk {pymunk.chipmunk_version}): the private "
+            f"struct field {what} reads {read!r} but the public API says {public!r}; the "
+            "accumulated-impulse offsets in sim_models/pymunk/forces.py do not match this "
+            "build, so force vectors cannot be read")
+
+
+def _check_base(c: pymunk.Constraint) -> None:
+    c.max_force = 1234.5
+    c.error_bias = 0.321
+    c.max_bias = 98.75
+    for name, public in (("maxForce", c.max_force), ("errorBias", c.error_bias),
+                         ("maxBias", c.max_bias)):
+        _expect(f"cpConstraint.{name}", read_double(c, BASE_FIELDS[name]), public)
+    c.max_force = c.max_bias = math.inf
+
+
+def _check_fields(c: pymunk.Constraint, fields: dict[str, int],
+                  public: dict[str, Callable[[], float | Vec]]) -> None:
+    for name, get in public.items():
+        value = get()
+        if isinstance(value, (int, float)):
+            _expect(f"{type(c).__name__}.{name}", read_double(c, fields[name]), float(value))
+        else:
+            got = read_vect(c, fields[name])
+            _expect(f"{type(c).__name__}.{name}.x", got[0], float(value[0]))
+            _expect(f"{type(c).__name__}.{name}.y", got[1], float(value[1]))
+
+
+def _probe_space() -> tuple[pymunk.Space, list[pymunk.Constraint]]:
+    """A loaded pendulum-on-a-slide with one joint of every kind we read."""
+    space = pymunk.Space()
+    space.gravity = (0.3, -9.0)
+    s = space.static_body
+    crank = pymunk.Body(2.0, 0.1)
+    crank.position = (0.1, 0.2)
+    slider = pymunk.Body(1.5, 0.05)
+    slider.position = (0.7, -0.05)
+    slider.angular_velocity = 3.0  # so the friction motor saturates
+    pivot = pymunk.PivotJoint(s, crank, (0.1, 0.2), (0.0, 0.0))
+    gear = pymunk.GearJoint(s, crank, 0.37, 1.0)
+    groove = pymunk.GrooveJoint(s, slider, (-1.1, -0.05), (2.3, -0.05), (0.0, 0.0))
+    motor = pymunk.SimpleMotor(s, slider, 0.0)
+    link = pymunk.PivotJoint(crank, slider, (0.6, -0.25), (0.0, 0.0))
+    space.add(crank, slider, pivot, gear, groove, motor, link)
+    return space, [pivot, gear, groove, motor, link]
+
+
+def check_layout() -> None:
+    """Verify the private offsets against public values; raise :class:`LayoutError` if not.
+
+    Runs once per process (the first force read calls it).
+    """
+    global _checked
+    space, (pivot, gear, groove, motor, link) = _probe_space()
+    for c in (pivot, gear, groove, motor, link):
+        _check_base(c)
+    _check_fields(pivot, PIVOT_FIELDS, {"anchorA": lambda: pivot.anchor_a,
+                                        "anchorB": lambda: pivot.anchor_b})
+    _check_fields(groove, GROOVE_FIELDS, {"grv_a": lambda: groove.groove_a,
+                                          "grv_b": lambda: groove.groove_b,
+                                          "anchorB": lambda: groove.anchor_b})
+    _check_fields(gear, GEAR_FIELDS, {"phase": lambda: gear.phase, "ratio": lambda: gear.ratio})
+    _check_fields(motor, MOTOR_FIELDS, {"rate": lambda: motor.rate})
+    motor.max_force = 0.7  # a saturated motor: nonzero, known-magnitude jAcc
+    space.step(1e-3)
+    for c, offset in ((pivot, PIVOT_FIELDS["jAcc"]), (link, PIVOT_FIELDS["jAcc"]),
+                      (groove, GROOVE_FIELDS["jAcc"])):
+        jx, jy = read_vect(c, offset)
+        if c.impulse <= 0.0:
+            raise LayoutError(f"layout probe: {type(c).__name__} carried no impulse")
+        _expect(f"{type(c).__name__}.|jAcc|", math.hypot(jx, jy), c.impulse)
+    for c, offset in ((gear, GEAR_FIELDS["jAcc"]), (motor, MOTOR_FIELDS["jAcc"])):
+        if c.impulse <= 0.0:
+            raise LayoutError(f"layout probe: {type(c).__name__} carried no impulse")
+        _expect(f"{type(c).__name__}.|jAcc|", abs(read_double(c, offset)), c.impulse)
+    _checked = True

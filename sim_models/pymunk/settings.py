@@ -1,0 +1,95 @@
+"""Solver settings and stopping thresholds of the pymunk backends, in one place.
+
+Every number a pymunk run depends on lives here, with the reason it has
+that value, so that the solver-setting study (:mod:`sim_models.pymunk.study`)
+can vary them and a reader can see what "settled" means.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Integration, solver and stopping settings of one pymunk run.
+
+    Parameters
+    ----------
+    dt : time step, s. Constant for the whole run: ``impulse / dt`` is only a
+        force if the step that produced the impulse had this length, and
+        Chipmunk rescales its warm-start impulses by the step ratio. At rest
+        the integration error vanishes, so statics can use a long step
+        (0.1 s with 1 t links); driven runs use their own (see
+        :data:`sim_models.pymunk.dynamics.DRIVEN`).
+    iterations : Gauss–Seidel iterations per step (``Space.iterations``).
+        Warm starting carries the accumulated impulses from step to step, so
+        the solver keeps converging over steps; more iterations per step
+        shorten the settling, they do not change what it settles to.
+    error_bias : fraction of a joint error left uncorrected after one second
+        (``Constraint.error_bias``); per step 1 − error_bias^dt is corrected.
+        Chipmunk's default 0.9⁶⁰ corrects only 1 % per 0.1 s step; 1e-6
+        corrects 75 % per step, which removes the start-up drift in a few
+        steps (studied in :mod:`sim_models.pymunk.study`).
+    damping : fraction of velocity kept after one second (``Space.damping``).
+        It removes the kinetic energy of the settling transient and has no
+        effect on a body at rest, so it cannot bias a settled force. Strong
+        damping (0.01, i.e. 37 % kept per 0.1 s step) is needed next to a
+        change point, where the mechanism is soft and a weakly damped run
+        with strong error correction keeps oscillating (seen at 5° from the
+        E1 change point with damping 0.5).
+    fictitious_mass : kg, the mass given to every link in a *static* run (and
+        to massless links in a driven run, see ``driven_fictitious_mass``).
+        Pymunk cannot integrate a massless dynamic body. At rest the
+        inertia terms vanish, so any positive mass gives the same static
+        reactions, provided gravity is applied only to the real masses (it
+        is applied as explicit forces m·g at the real centres of mass, never
+        through ``Space.gravity``). Equal heavy masses keep the iterative
+        solver well conditioned (no mass ratios) and the transient drift,
+        which scales as F·dt²/m, tiny.
+    driven_fictitious_mass : kg, the mass of a massless link in a driven
+        (dynamic or friction) run, as a uniform bar between its pins. There
+        its inertia force m·a does enter the reactions, so it is chosen small
+        against the loads; the error it causes is measured, not hidden (see
+        :mod:`sim_models.pymunk.dynamics`).
+    settle_speed : 1/s, settled when every body's largest point speed
+        (|v| + |ω|·L), divided by the mechanism's length scale L, is below
+        this. Relative, so that a case in metres and one of centimetre links
+        are judged alike. The joint-error correction removes a remaining
+        drift d at a rate of about d/τ (τ a few steps), so this bounds the
+        pose error still to be corrected to about settle_speed·τ·L.
+    settle_force_change : settled when no reported force (or torque / L)
+        changes by more than this fraction of the largest one between steps.
+        Warm-started Gauss–Seidel converges geometrically, so the error still
+        left is about this change divided by (1 − contraction per step); with
+        the contraction seen here (≤ 0.9) that is ≤ 10× the threshold.
+    settle_patience : consecutive steps both criteria must hold, so a
+        momentary crossing during an oscillation is not taken as rest.
+    max_steps : the budget; past it the run reports ``not_settled``.
+    """
+
+    dt: float = 0.1
+    iterations: int = 100
+    error_bias: float = 1.0e-6
+    damping: float = 0.01
+    fictitious_mass: float = 1000.0
+    driven_fictitious_mass: float = 1.0e-4
+    settle_speed: float = 1.0e-9
+    settle_force_change: float = 1.0e-10
+    settle_patience: int = 3
+    max_steps: int = 20000
+
+    def with_(self, **changes: float) -> SolverSettings:
+        """A copy with some settings changed."""
+        return replace(self, **changes)  # type: ignore[arg-type]
+
+
+#: Settings of the ``pymunk`` (settle) backend.
+SETTLE = SolverSettings()
+
+#: Settings of the ``pymunk_solve`` backend: the bodies are put back on the
+#: analytic pose before every step, so only the impulse convergence matters.
+#: The stopping rule is the same force-change criterion, tighter because
+#: nothing moves.
+SOLVE = SolverSettings(settle_force_change=1.0e-14, settle_speed=float("inf"),
+                       settle_patience=2, max_steps=2000)

@@ -1,0 +1,122 @@
+"""The ``pymunk`` backend for static cases: hold the mechanism by simulation until it settles.
+
+The drive link is locked to the ground by a GearJoint at its analytic angle,
+the loads and weights are applied every step, and the space is stepped with
+a constant dt and some damping until it is at rest and its constraint forces
+have stopped changing (thresholds in :mod:`sim_models.pymunk.settings`).
+The forces are then pymunk's accumulated impulses / dt.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+from analytic.case import Case
+from analytic.solution import Solution
+from sim_models.pymunk.loads import apply_loads
+from sim_models.pymunk.model import Model, build_model
+from sim_models.pymunk.readout import (
+    Values,
+    crank_angle,
+    joint_separation,
+    pose_drift,
+    pose_values,
+    reactions,
+    residual_velocity,
+)
+from sim_models.pymunk.settings import SETTLE, SolverSettings
+from sim_models.pymunk.verdict import singular_solution, unsettled_solution
+
+BACKEND = "pymunk"
+
+
+@dataclass(frozen=True)
+class Run:
+    """How a run ended: the last reading, the steps taken, and whether it settled."""
+
+    values: Values
+    steps: int
+    settled: bool
+    residual_velocity: float
+    force_change: float
+
+
+def force_scale(values: Values, length: float) -> float:
+    """The largest force, or torque / length, in a reading (N); the unit of 'change'."""
+    sizes = [abs(v) / length if q.startswith(("T", "M")) else abs(v) for q, v in values.items()]
+    return max(max(sizes, default=0.0), 1e-300)
+
+
+def relative_change(new: Values, old: Values, length: float) -> float:
+    """Largest change between two readings as a fraction of the new reading's force scale."""
+    scale = force_scale(new, length)
+    diffs = [abs(new[q] - old[q]) / (length if q.startswith(("T", "M")) else 1.0) for q in new]
+    return max(diffs) / scale
+
+
+def step_until_settled(model: Model, settings: SolverSettings | None = None) -> Run:
+    """Step the loaded model until it is at rest and its forces stop changing.
+
+    Settled means: residual velocity below ``settle_velocity`` *and* relative
+    force change below ``settle_force_change`` for ``settle_patience``
+    consecutive steps. Never a fixed step count; ``max_steps`` is only a budget.
+    """
+    s = settings or model.settings
+    length = model.case.geometry.scale
+    previous: Values | None = None
+    calm = 0
+    values: Values = {}
+    velocity = change = float("inf")
+    for step in range(1, s.max_steps + 1):
+        apply_loads(model)
+        model.space.step(s.dt)
+        values = reactions(model)
+        velocity = residual_velocity(model)
+        change = relative_change(values, previous, length) if previous else float("inf")
+        previous = values
+        calm = calm + 1 if velocity <= s.settle_speed * length and change <= s.settle_force_change else 0
+        if calm >= s.settle_patience:
+            return Run(values, step, True, velocity, change)
+    return Run(values, s.max_steps, False, velocity, change)
+
+
+def diagnostics(model: Model, run: Run, method: str, elapsed: float) -> dict[str, float | str]:
+    """The simulator diagnostics every pymunk Solution carries."""
+    return {
+        "method": method,
+        "steps": run.steps,
+        "wall_time_s": elapsed,
+        "residual_velocity": run.residual_velocity,
+        "force_change": run.force_change,
+        "joint_separation": joint_separation(model),
+        "pose_drift": pose_drift(model, crank_angle(model)),
+        "dt": model.settings.dt,
+        "iterations": model.settings.iterations,
+    }
+
+
+def solution_of(model: Model, run: Run, backend: str, method: str, elapsed: float) -> Solution:
+    """The Solution of a finished run: forces only if it settled."""
+    diag = diagnostics(model, run, method, elapsed)
+    if not run.settled:
+        return unsettled_solution(model, backend, diag)
+    return Solution(model.case.name, backend, pose_values(model) | run.values, diagnostics=diag)
+
+
+def settle(case: Case, settings: SolverSettings = SETTLE) -> Solution:
+    """The ``pymunk`` backend: static equilibrium by simulation (driven motion if dynamic).
+
+    Dynamic and friction cases are dispatched to :func:`sim_models.pymunk.dynamics.drive`.
+    """
+    if case.kind != "static":
+        from sim_models.pymunk.dynamics import drive
+
+        return drive(case)
+    start = time.perf_counter()
+    singular = singular_solution(case, BACKEND)
+    if singular is not None:
+        return singular
+    model = build_model(case, settings)
+    run = step_until_settled(model)
+    return solution_of(model, run, BACKEND, "settle", time.perf_counter() - start)

@@ -1,0 +1,105 @@
+"""Full-cycle sweeps over θ12 with continuation: one Space, re-posed from pose to pose.
+
+For statics the model is built once. At each θ12 the bodies are re-posed on
+the closed-form pose (a seed), the drive lock's held angle is changed, and
+the run settles (``pymunk``) or iterates at the fixed pose (``pymunk_solve``)
+starting from the previous pose's accumulated impulses — pymunk's warm start
+carries them over, which is what makes a neighbouring pose cheap.
+Driven (dynamic or friction) cases are run pose by pose.
+
+Poses at or next to a toggle are marked ``singular`` (the condition number of
+the equilibrium matrix is a property of the pose, not of any force) and not
+simulated; poses that cannot be assembled are ``no_solution``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from analytic.case import Case
+from analytic.equilibrium import SINGULAR_CONDITION
+from analytic.kinematics import pose_of
+from analytic.solution import Solution
+from sim_models.pymunk.model import build_model, place
+from sim_models.pymunk.settings import SETTLE, SOLVE
+from sim_models.pymunk.settle import solution_of, step_until_settled
+from sim_models.pymunk.solve import iterate_at_pose
+from sim_models.pymunk.verdict import singular_mask
+
+BACKENDS = ("pymunk", "pymunk_solve")
+
+
+def _unassemblable(case: Case, backend: str, theta: float) -> Solution:
+    return Solution(case.name, backend, {}, status="no_solution",
+                    message=f"the {case.mechanism} cannot be assembled at θ12 = "
+                            f"{np.degrees(theta):.4g}° ({case.branch} branch)",
+                    diagnostics={"theta12": theta})
+
+
+def _singular(case: Case, backend: str, theta: float, condition: float) -> Solution:
+    return Solution(case.name, backend, {}, status="singular",
+                    message=f"condition number {condition:.3g} exceeds {SINGULAR_CONDITION:.0e} "
+                            "at a toggle/change point; forces withheld",
+                    diagnostics={"theta12": theta, "condition_number": condition})
+
+
+def sweep(case: Case, theta12: ArrayLike, backend: str = "pymunk") -> list[Solution]:
+    """One Solution per θ12 (rad), in order, for backend ``pymunk`` or ``pymunk_solve``."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    angles = np.atleast_1d(np.asarray(theta12, dtype=float))
+    if case.kind != "static":
+        return _driven_sweep(case, angles, backend)
+    poses = pose_of(case, angles, omega=0.0, alpha=0.0)
+    singular, condition = singular_mask(case, angles)
+    settings = SETTLE if backend == "pymunk" else SOLVE
+    model = None
+    out = []
+    for k, theta in enumerate(angles):
+        if not (np.isfinite(poses.theta13[k]) and np.isfinite(poses.theta14[k])):
+            out.append(_unassemblable(case, backend, float(theta)))
+            continue
+        if singular[k]:
+            out.append(_singular(case, backend, float(theta), float(condition[k])))
+            continue
+        start = time.perf_counter()
+        at = case.with_(theta12=float(theta))
+        if model is None:
+            model = build_model(at, settings)
+        model.case = at
+        place(model, poses, k)
+        if backend == "pymunk":
+            run = step_until_settled(model)
+            method = "settle"
+        else:
+            run = iterate_at_pose(model, poses, k)
+            method = "constraint_solve"
+        sol = solution_of(model, run, backend, method, time.perf_counter() - start)
+        out.append(Solution(sol.case, sol.backend, sol.values, sol.status, sol.message,
+                            {**sol.diagnostics, "theta12": float(theta)}))
+    return out
+
+
+def _driven_sweep(case: Case, angles: np.ndarray, backend: str) -> list[Solution]:
+    """Dynamic/friction cases: an independent driven run per pose (``pymunk`` only)."""
+    from sim_models.pymunk.dynamics import drive
+    from sim_models.pymunk.solve import not_applicable
+
+    out = []
+    for theta in angles:
+        at = case.with_(theta12=float(theta)) if _assembles(case, float(theta)) else None
+        if at is None:
+            out.append(_unassemblable(case, backend, float(theta)))
+        elif backend == "pymunk_solve":
+            out.append(not_applicable(at))
+        else:
+            out.append(drive(at))
+    return out
+
+
+def _assembles(case: Case, theta: float) -> bool:
+    pose = pose_of(case, np.array([theta]), omega=0.0, alpha=0.0)
+    return bool(np.isfinite(pose.theta13[0]) and np.isfinite(pose.theta14[0]))

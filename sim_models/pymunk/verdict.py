@@ -1,0 +1,42 @@
+"""Verdicts that withhold forces: singular poses and runs that did not settle."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from analytic.case import Case
+from analytic.forces import solve_poses
+from analytic.solution import Solution
+from sim_models.pymunk.model import Model
+from sim_models.pymunk.readout import pose_values
+
+
+def singular_mask(case: Case, theta12: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(singular?, condition number) per θ12: a property of the pose, not of any force.
+
+    Uses the analytic backend's condition number of the equilibrium matrix,
+    which depends on the geometry only; none of its forces are used.
+    """
+    results = solve_poses(case.with_(friction=None, loads=(), masses=(),
+                                     motion=type(case.motion)()), theta12)
+    return results.singular, results.condition
+
+
+def singular_solution(case: Case, backend: str) -> Solution | None:
+    """A ``singular`` Solution if the case's pose is at or next to a toggle, else None."""
+    singular, condition = singular_mask(case, np.array([case.theta12]))
+    if not singular[0]:
+        return None
+    return Solution(case.name, backend, {}, status="singular",
+                    message=f"condition number {condition[0]:.3g}: the pose is at or next to a "
+                            "toggle/change point; statics there is meaningless in any simulator",
+                    diagnostics={"condition_number": float(condition[0])})
+
+
+def unsettled_solution(model: Model, backend: str, diag: dict[str, float | str]) -> Solution:
+    """``not_settled``: the budget ran out; the pose is reported, no forces."""
+    return Solution(model.case.name, backend, pose_values(model), status="not_settled",
+                    message=f"did not settle within {diag['steps']} steps "
+                            f"(residual velocity {diag['residual_velocity']:.3g} m/s, "
+                            f"force change {diag['force_change']:.3g})",
+                    diagnostics=diag)

@@ -1,0 +1,84 @@
+"""Closed-form kinematics against finite differences of the closed-form positions, and the loop."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from strategies import cases
+
+from analytic.case import Case
+from analytic.kinematics import pose_of
+
+#: First derivatives by central differences with h = 1e-5 rad: truncation ~h²·|q'''|
+#: ≈ 1e-10 and rounding ~eps·|q|/h ≈ 1e-10; 1e-7 leaves margin for steep poses.
+FD_RTOL = 1e-7
+H = 1e-5
+#: Second derivatives need a larger step, h = 2e-3 rad with Richardson extrapolation
+#: to h/2: rounding ~eps·|q|/(h/2)² ≈ 1e-9, truncation O(h⁴·|q⁽⁶⁾|) ≈ 1e-9 even where
+#: the higher derivatives reach 1e3 (steep slider-cranks).
+FD2_RTOL = 1e-6
+H2 = 2e-3
+
+
+def positions(case: Case, theta12: np.ndarray) -> np.ndarray:
+    p = pose_of(case, theta12, omega=0.0, alpha=0.0)
+    rows = [p.theta13, p.theta14 if p.s14 is None else p.s14 / case.geometry.scale]
+    rows += [p.point(k, (0.03, -0.02))[0][:, i] / case.geometry.scale for k in (2, 3, 4)
+             for i in (0, 1)]
+    return np.stack(rows, axis=1)
+
+
+def second_difference(case: Case, h: float) -> np.ndarray:
+    """d²q/dθ12² by the central second difference with step h."""
+    q = np.unwrap(positions(case, np.array([case.theta12 - h, case.theta12, case.theta12 + h])),
+                  axis=0)
+    return (q[2] - 2 * q[1] + q[0]) / h**2
+
+
+@settings(max_examples=60, deadline=None)
+@given(cases(friction=False, dynamic=True))
+def test_velocities_and_accelerations_are_derivatives_of_positions(case: Case) -> None:
+    """ω, α of links 3 and 4, slider ṡ, s̈ and any body point's v, a equal d/dt of the positions."""
+    w, a = case.motion.omega, case.motion.alpha
+    t = np.array([case.theta12 - H, case.theta12, case.theta12 + H])
+    q = np.unwrap(positions(case, t), axis=0)
+    dq = (q[2] - q[0]) / (2 * H)          # dq/dθ12
+    d2q = (4 * second_difference(case, H2 / 2) - second_difference(case, H2)) / 3
+    p = pose_of(case)
+    rate = [p.links[3].omega, p.links[4].omega if p.s14 is None else p.s14_dot / case.geometry.scale]
+    rate += [p.point(k, (0.03, -0.02))[1][:, i] / case.geometry.scale for k in (2, 3, 4)
+             for i in (0, 1)]
+    acc = [p.links[3].alpha, p.links[4].alpha if p.s14 is None else p.s14_ddot / case.geometry.scale]
+    acc += [p.point(k, (0.03, -0.02))[2][:, i] / case.geometry.scale for k in (2, 3, 4)
+            for i in (0, 1)]
+    expected_rate = dq * w
+    expected_acc = d2q * w**2 + dq * a
+    scale_v = max(1.0, np.abs(dq).max()) * max(abs(w), 1.0)
+    scale_a = max(1.0, np.abs(d2q).max()) * max(w * w + abs(a), 1.0)
+    assert np.allclose(np.concatenate(rate), expected_rate, atol=FD_RTOL * scale_v, rtol=0)
+    assert np.allclose(np.concatenate(acc), expected_acc, atol=FD2_RTOL * scale_a, rtol=0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(cases(friction=False))
+def test_pose_closes_the_loop_with_the_right_lengths(case: Case) -> None:
+    """|AB| = a3, |B0B| = a4 (or B on the slide line at the offset), on the stated branch."""
+    p = pose_of(case)
+    g = case.geometry
+    a, b = p.joints["A"][0], p.joints["B"][0]
+    assert np.isclose(np.linalg.norm(b - a), g.a3, rtol=1e-12)
+    assert np.isclose(np.linalg.norm(a), g.a2, rtol=1e-12)
+    if case.mechanism == "four_bar":
+        assert np.isclose(np.linalg.norm(b - p.joints["B0"][0]), g.a4, rtol=1e-12)
+        # The branches are mirror images across the line AB0; the seed's "f − acos"
+        # (open) puts B to the left of A→B0, as in seed E1 (B above the line there).
+        b0 = p.joints["B0"][0]
+        d, e = b0 - a, b - a
+        side = d[0] * e[1] - d[1] * e[0]
+        assert (side >= 0) if case.branch == "open" else (side <= 0)
+    else:
+        u = np.array([np.cos(case.ground_angle), np.sin(case.ground_angle)])
+        n = np.array([-u[1], u[0]])
+        assert np.isclose(b @ n, g.offset, atol=1e-12 * g.scale)
+        along = (b - a) @ u
+        assert (along >= 0) if case.branch == "right" else (along <= 0)

@@ -1,0 +1,200 @@
+"""Cross-checks of the pymunk backends against the analytic backend (an independent method).
+
+Relative error measure: |sim − ref| / max(|ref|, scale), scale = the largest
+|ref| among the case's quantities of the same kind (forces, or torques).
+Expected values always come from ``analytic.forces``, never from pymunk.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from analytic.case import Case, Friction, Load, Mass, Motion, SliderCrankGeometry
+from analytic.forces import solve, solve_poses
+from analytic.solution import Solution
+from sim_models.pymunk import settle, solve_at_pose, sweep
+from sim_models.pymunk.seeds import e1, e2
+from sim_models.pymunk.study import relative_errors
+
+#: The settled static target. Settling stops on thresholds that leave ~1e-9;
+#: measured ~1e-11, so 1e-6 leaves room for other platforms' rounding.
+STATIC_RTOL = 1e-6
+#: The re-posed constraint solve converges to rounding (measured ~1e-13).
+SOLVE_RTOL = 1e-9
+#: Driven runs carry an O(ω·dt) integration error and the friction limits lag
+#: one step; measured 1e-7 … 3e-6 at dt = 1e-4.
+DRIVEN_RTOL = 1e-3
+
+MASSES = (Mass(2, 1.0, (0.04, 0.0), 1e-3), Mass(3, 2.0, (0.05, 0.01), 2e-3),
+          Mass(4, 1.5, (0.06, 0.0), 2e-3))
+
+
+def assert_agrees(sol: Solution, case: Case, rtol: float) -> None:
+    """Every force and torque of ``sol`` within rtol of the analytic backend, named on failure."""
+    ref = solve(case)
+    assert sol.status == "ok", f"{case.name}: {sol.status}: {sol.message}"
+    missing = {q for q in ref.values if q[0] in "FTM"} - set(sol.values)
+    assert not missing, f"{case.name}: {sol.backend} gave no {sorted(missing)}"
+    errors = relative_errors(sol.values, ref.values)
+    worst = max(errors, key=lambda q: errors[q])
+    assert errors[worst] <= rtol, (
+        f"{case.name}/{sol.backend}: {worst} = {sol.values[worst]!r}, analytic "
+        f"{ref.values[worst]!r}, rel. error {errors[worst]:.2e} > {rtol:g}")
+
+
+def slider_offset_tilted() -> Case:
+    return Case(name="slider-offset-tilted", geometry=SliderCrankGeometry(0.1, 0.35, offset=0.04),
+                theta12=2.0, ground_angle=0.3,
+                loads=(Load(4, force=(-80.0, 10.0)), Load(3, at=(0.1, 0.02), force=(5.0, -30.0),
+                                                         torque=1.5)))
+
+
+STATIC_CASES = {
+    "E1-fourbar": e1,
+    "E1-crossed": lambda: e1().with_(name="E1-crossed", branch="crossed"),
+    "E1-tilted-ground": lambda: e1().with_(name="E1-tilted", ground_angle=0.4, theta12=1.5),
+    "slider-offset-tilted": slider_offset_tilted,
+    "slider-left": lambda: slider_offset_tilted().with_(name="slider-left", branch="left"),
+    "E2-frictionless": lambda: e2().with_(name="E2-frictionless", friction=None),
+    "gravity-masses": lambda: e1().with_(name="E1-gravity", gravity=(0.0, -9.81), masses=MASSES),
+    "drive-on-link-4": lambda: e1().with_(name="E1-T14", drive_link=4),
+}
+
+
+@pytest.mark.parametrize("make", STATIC_CASES.values(), ids=STATIC_CASES.keys())
+def test_settled_statics_match_analytic(make: object) -> None:
+    """A mechanism held by simulation until settled carries the analytic reactions and drive torque."""
+    case = make()  # type: ignore[operator]
+    sol = settle(case)
+    assert_agrees(sol, case, STATIC_RTOL)
+    assert sol.diagnostics["method"] == "settle"
+    assert float(sol.diagnostics["pose_drift"]) < 1e-9 * case.geometry.scale
+
+
+@pytest.mark.parametrize("make", STATIC_CASES.values(), ids=STATIC_CASES.keys())
+def test_constraint_solve_at_pose_matches_analytic(make: object) -> None:
+    """pymunk's own constraint solver at the exact pose reproduces the statics to rounding."""
+    case = make()  # type: ignore[operator]
+    sol = solve_at_pose(case)
+    assert_agrees(sol, case, SOLVE_RTOL)
+    assert sol.backend == "pymunk_solve"
+
+
+def test_seed_e1_drive_torque_is_ccw_2_901() -> None:
+    """The settled E1 needs the seed's +2.90133 N·m (CCW) on the crank: the sign convention holds."""
+    assert settle(e1()).values["T12"] == pytest.approx(2.90133, rel=1e-5)
+
+
+DRIVEN_CASES = {
+    "fourbar-masses-omega": lambda: e1().with_(name="dyn", masses=MASSES, motion=Motion(-10.0)),
+    "fourbar-accel-gravity": lambda: e1().with_(name="dyn-acc", masses=MASSES, gravity=(0, -9.81),
+                                                motion=Motion(-10.0, 50.0)),
+    "fourbar-drive-link-4": lambda: e1().with_(name="dyn-T14", masses=MASSES, drive_link=4,
+                                               motion=Motion(-10.0, 50.0)),
+    "fourbar-massless-crank": lambda: e1().with_(name="dyn-massless", masses=MASSES[1:],
+                                                 motion=Motion(-10.0)),
+    "slider-masses": lambda: e2().with_(name="sc-dyn", friction=None, motion=Motion(20.0),
+                                        masses=(Mass(2, 2.0, (0.1, 0.0), 0.01),
+                                                Mass(3, 4.0, (0.3, 0.0), 0.2), Mass(4, 3.0))),
+}
+
+
+@pytest.mark.parametrize("make", DRIVEN_CASES.values(), ids=DRIVEN_CASES.keys())
+def test_driven_dynamics_match_analytic(make: object) -> None:
+    """Driving the input through θ12 with the prescribed ω, α gives the D'Alembert reactions and torque."""
+    case = make()  # type: ignore[operator]
+    sol = settle(case)
+    assert_agrees(sol, case, DRIVEN_RTOL)
+    assert sol.diagnostics["method"] == "driven"
+
+
+FRICTION_CASES = {
+    "E2-pins-and-slide": e2,
+    "fourbar-pins-ccw": lambda: e1().with_(
+        name="E1-friction", friction=Friction(mu=0.2, direction=1,
+                                              pin_radius={"A0": 0.01, "A": 0.01, "B": 0.01,
+                                                          "B0": 0.01})),
+    "slider-tilted-pin-and-slide": lambda: slider_offset_tilted().with_(
+        name="sc-friction", friction=Friction(mu=0.15, pin_radius={"A": 0.02}, slide_mu=0.3,
+                                              direction=1)),
+    "fourbar-viscous-dynamic": lambda: e1().with_(
+        name="E1-viscous", masses=MASSES, motion=Motion(-10.0),
+        friction=Friction(viscous={"A0": 0.05, "A": 0.02, "B0": 0.03})),
+    "E2-coulomb-dynamic": lambda: e2().with_(
+        name="E2-dynamic", motion=Motion(-3.0),
+        masses=(Mass(3, 1.0, (0.4, 0.0), 0.05), Mass(4, 2.0))),
+}
+
+
+@pytest.mark.parametrize("make", FRICTION_CASES.values(), ids=FRICTION_CASES.keys())
+def test_friction_drive_torque_matches_friction_circle(make: object) -> None:
+    """Driving slowly with μ·r·|F| pin motors and μ·|N| on the slide gives the friction-circle torque."""
+    case = make()  # type: ignore[operator]
+    assert_agrees(settle(case), case, DRIVEN_RTOL)
+
+
+def test_e2_friction_raises_torque_from_frictionless() -> None:
+    """Friction makes E2's clockwise drive torque larger in magnitude (−22.90 vs −18.78 N·m)."""
+    with_friction = settle(e2()).values["T12"]
+    assert with_friction == pytest.approx(-22.897, rel=1e-4)
+    assert settle(e2().with_(friction=None)).values["T12"] == pytest.approx(-18.783, rel=1e-4)
+
+
+def test_sweep_marks_change_point_singular_and_agrees_elsewhere() -> None:
+    """A continuation sweep withholds the E1 change point (θ12 = 180°) and matches everywhere else."""
+    theta = np.radians(np.arange(0.0, 360.0, 10.0))
+    ref = solve_poses(e1(), theta)
+    sols = sweep(e1(), theta)
+    assert [s.status for s in sols].count("singular") == 1
+    assert sols[18].status == "singular"
+    for k, sol in enumerate(sols):
+        if k == 18:
+            continue
+        ref_k = {q: float(v[k]) for q, v in ref.values.items()}
+        errors = relative_errors(sol.values, ref_k)
+        assert max(errors.values()) <= STATIC_RTOL, f"θ12 = {math.degrees(theta[k]):.0f}°"
+
+
+def test_sweep_with_constraint_solve_backend() -> None:
+    """The re-posed constraint solve keeps rounding-level agreement along a continuation sweep."""
+    theta = np.radians(np.arange(5.0, 360.0, 30.0))
+    ref = solve_poses(e1(), theta)
+    for k, sol in enumerate(sweep(e1(), theta, backend="pymunk_solve")):
+        ref_k = {q: float(v[k]) for q, v in ref.values.items()}
+        assert max(relative_errors(sol.values, ref_k).values()) <= SOLVE_RTOL
+
+
+def test_budget_exhausted_reports_not_settled_without_forces() -> None:
+    """A run stopped by its step budget says not_settled and withholds every force."""
+    from sim_models.pymunk.settings import SETTLE
+
+    sol = settle(e1(), SETTLE.with_(max_steps=3))
+    assert sol.status == "not_settled"
+    assert not any(q[0] in "FTM" for q in sol.values)
+
+
+def test_singular_pose_is_withheld() -> None:
+    """At the E1 change point statics is singular, so no force is reported."""
+    sol = settle(e1().with_(theta12=math.pi))
+    assert sol.status == "singular" and not sol.values
+
+
+def test_constraint_solve_declines_motion() -> None:
+    """The fixed-pose solve cannot represent velocities, so a dynamic case is not_applicable."""
+    assert solve_at_pose(e1().with_(masses=MASSES, motion=Motion(5.0))).status == "not_applicable"
+
+
+@pytest.mark.slow
+def test_full_cycle_sweep_of_e1() -> None:
+    """Over a 360-pose continuation sweep every regular pose settles within the static target."""
+    theta = np.radians(np.arange(360.0))
+    ref = solve_poses(e1(), theta)
+    for k, sol in enumerate(sweep(e1(), theta)):
+        if ref.singular[k]:
+            assert sol.status == "singular"
+            continue
+        ref_k = {q: float(v[k]) for q, v in ref.values.items()}
+        assert max(relative_errors(sol.values, ref_k).values()) <= STATIC_RTOL
