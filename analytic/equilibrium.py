@@ -202,21 +202,50 @@ def perp_of(v: Array) -> Array:
     return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
-def core_condition(case: Case, pose: Pose) -> Array:
-    """Condition number (2-norm) of the 2×2 core with rows scaled to unit length.
+def row_condition(r1: Array, r2: Array) -> Array:
+    """2-norm condition number of 2×2 matrices [r1; r2] with rows scaled to unit length.
 
     With unit rows at angle γ the singular values are √(1 ± |cos γ|), so the
-    condition number is √((1 + |cos γ|)/(1 − |cos γ|)) ≈ 2/γ near γ = 0: it is
-    large exactly at toggle, change and dead points (coupler and rocker, crank
-    and coupler, or rod and slide normal aligned), and it bounds how much the
-    forces are amplified there.
+    condition number is √((1 + |cos γ|)/(1 − |cos γ|)) ≈ 2/γ near γ = 0.
     """
-    r1, r2 = _rows(case, pose)
     with np.errstate(divide="ignore", invalid="ignore"):
         cos = np.abs(np.einsum("ij,ij->i", r1, r2)) / (
             np.linalg.norm(r1, axis=1) * np.linalg.norm(r2, axis=1))
         cond = np.sqrt((1.0 + cos) / (1.0 - cos))
     return np.where(np.isfinite(cond), cond, np.inf)
+
+
+def core_condition(case: Case, pose: Pose) -> Array:
+    """Condition number of the force core (:func:`_rows`): large exactly at toggle,
+    change and dead points (coupler and rocker, crank and coupler, or rod and
+    slide normal aligned), where it bounds how much the forces are amplified."""
+    return row_condition(*_rows(case, pose))
+
+
+def kinematic_condition(case: Case, pose: Pose) -> Array:
+    """Condition number of the velocity equations, which fix ω3, ω4 (or ṡ) from ω2.
+
+    Their columns are e3⊥ and e4⊥ (four-bar) or e3⊥ and the slide direction u
+    (slider-crank): singular when coupler and rocker align, or the rod stands
+    perpendicular to the slide. (A 2×2 matrix and its transpose share their
+    condition number, so the columns are passed as rows.) With the drive on
+    link 4 the force core stays regular there, but the velocities, and with
+    them inertia forces and friction senses, do not.
+    """
+    e3 = unit(pose.theta13)
+    if case.mechanism == "four_bar":
+        return row_condition(perp_of(e3), perp_of(unit(pose.theta14)))
+    u, _ = slide_frame(case)
+    return row_condition(perp_of(e3), np.broadcast_to(u, e3.shape))
+
+
+def condition(case: Case, pose: Pose) -> Array:
+    """The condition number a force analysis reports: the force core's, and the
+    velocity equations' too when velocities enter (motion or friction)."""
+    cond = core_condition(case, pose)
+    if not case.motion.is_static or case.has_friction:
+        cond = np.maximum(cond, kinematic_condition(case, pose))
+    return cond
 
 
 def eliminate(case: Case, pose: Pose, b: Array) -> Array:

@@ -19,7 +19,7 @@ from analytic.equilibrium import (
     SINGULAR_CONDITION,
     Array,
     coefficient_matrix,
-    core_condition,
+    condition,
     eliminate,
     known_vector,
     slide_frame,
@@ -56,11 +56,16 @@ class PoseResults:
         return ~(self.condition <= SINGULAR_CONDITION)
 
 
+def wrap_angle(angle: Array) -> Array:
+    """Angles reported in [−π, π), so tables never show 370°."""
+    return np.remainder(angle + np.pi, 2.0 * np.pi) - np.pi
+
+
 def pose_values(case: Case, pose: Pose) -> dict[str, Array]:
     """theta13 and theta14 (four-bar) or s14 (slider-crank)."""
-    out = {"theta13": pose.theta13}
+    out = {"theta13": wrap_angle(pose.theta13)}
     if isinstance(case.geometry, FourBarGeometry):
-        out["theta14"] = pose.theta14
+        out["theta14"] = wrap_angle(pose.theta14)
     else:
         assert pose.s14 is not None
         out["s14"] = pose.s14
@@ -96,7 +101,7 @@ def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
     """
     angles = as_angles(case.theta12 if theta12 is None else theta12)
     pose = pose_of(case, angles)
-    condition = core_condition(case, pose)
+    cond = condition(case, pose)
     b = known_vector(case, pose)
     x = eliminate(case, pose, b)
     iterations = np.zeros(angles.shape[0], dtype=int)
@@ -104,10 +109,10 @@ def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
     if case.has_coulomb_friction:
         k = coefficient_matrix(case, pose)
         x, iterations, converged = solve_with_friction(case, pose, k, b, x)
-    withheld = ~(condition <= SINGULAR_CONDITION) | ~converged
+    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged
     x[withheld] = np.nan
     values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
-    return PoseResults(angles, values, condition, iterations, converged)
+    return PoseResults(angles, values, cond, iterations, converged)
 
 
 def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0, *,

@@ -58,20 +58,33 @@ def sense_pose(case: Case, theta12: Array) -> Pose:
     return pose_of(case, theta12, omega=float(case.input_sense), alpha=0.0)
 
 
+#: Relative speeds below this fraction of the input speed count as zero: at an
+#: exact dead centre the closed forms give ±1e-17, and rounding must not decide
+#: which way a Coulomb force points (sign(0) = 0: no friction moment there).
+ZERO_SPEED = 1e-12
+
+
+def sense(speed: Array, reference: float) -> Array:
+    """sign(speed), with speeds within rounding of zero taken as zero."""
+    return np.where(np.abs(speed) <= ZERO_SPEED * abs(reference), 0.0, np.sign(speed))
+
+
 def coulomb_terms(case: Case, theta12: Array) -> list[CoulombTerm]:
     """The active Coulomb terms with the sense each opposes."""
     f = case.friction
     if f is None or not case.has_coulomb_friction:
         return []
     pose = sense_pose(case, theta12)
+    w2 = float(pose.links[2].omega[0])
     terms = []
     for joint in PIN_COLUMNS:
         arm = f.pin_moment_arm(joint)
         if arm > 0.0:
-            terms.append(CoulombTerm(joint, arm, np.sign(relative_omega(pose, joint))))
+            terms.append(CoulombTerm(joint, arm, sense(relative_omega(pose, joint), w2)))
     if case.mechanism == "slider_crank" and f.slide_coefficient() > 0.0:
         assert pose.s14_dot is not None
-        terms.append(CoulombTerm("slide", f.slide_coefficient(), np.sign(pose.s14_dot)))
+        terms.append(CoulombTerm("slide", f.slide_coefficient(),
+                                 sense(pose.s14_dot, w2 * case.geometry.scale)))
     return terms
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from analytic.case import Case
-from analytic.equilibrium import core_condition, eliminate, known_vectors
+from analytic.equilibrium import condition, eliminate, known_vectors
 from analytic.forces import PoseResults, pose_values, solution_from, unknowns_to_values
 from analytic.kinematics import as_angles, pose_of
 from analytic.solution import Solution
@@ -32,7 +32,7 @@ def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
     x = np.zeros((angles.shape[0], 9))
     for _, b in known_vectors(case, pose):
         x += eliminate(case, pose, b)
-    results = PoseResults(angles, {}, core_condition(case, pose),
+    results = PoseResults(angles, {}, condition(case, pose),
                           np.zeros(angles.shape[0], dtype=int), np.ones(angles.shape[0], bool))
     x[results.singular] = np.nan
     values = pose_values(case, pose) | unknowns_to_values(case, pose, x)

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 
 from analytic.case import Case
 from analytic.equilibrium import JOINT_LINKS, SINGULAR_CONDITION, relative_omega
-from analytic.forces import drive_quantity, pose_values
+from analytic.forces import PoseResults, drive_quantity, pose_values
 from analytic.kinematics import Array, Pose, as_angles, pose_of
 from analytic.solution import Solution
 
@@ -60,11 +60,38 @@ def drive_torque(case: Case, theta12: ArrayLike | None = None) -> tuple[Array, A
         return -load_power(case, actual, virtual) / omega_d, omega_d
 
 
-def transmission_sine(case: Case, pose: Pose) -> float:
-    """|sin μ|: coupler–rocker angle (four-bar) or rod–slide normal (slider-crank)."""
+def transmission_sine(case: Case, pose: Pose) -> Array:
+    """|sin μ| per pose: coupler–rocker angle (four-bar) or rod–slide normal (slider-crank)."""
     if pose.s14 is None:
-        return abs(float(np.sin(pose.theta13[0] - pose.theta14[0])))
-    return abs(float(np.cos(pose.theta13[0] - case.ground_angle)))
+        return np.abs(np.sin(pose.theta13 - pose.theta14))
+    return np.abs(np.cos(pose.theta13 - case.ground_angle))
+
+
+def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
+    """The drive torque at each θ12 (rad); NaN where the power equation is singular.
+
+    The power method's own measures of singularity: velocity ratios exist only
+    while the loop's velocity equations are regular (sine of the transmission
+    angle), and the torque only while the driven link moves (its speed ratio
+    to the fastest link). ``condition`` holds the reciprocal of the smaller.
+    """
+    if case.has_coulomb_friction:
+        raise ValueError(REFUSAL)
+    angles = as_angles(case.theta12 if theta12 is None else theta12)
+    torque, omega_d = drive_torque(case, angles)
+    pose = pose_of(case, angles, omega=0.0, alpha=0.0)
+    virtual = pose_of(case, angles, omega=1.0, alpha=0.0)
+    speeds = [np.abs(virtual.links[k].omega) for k in (2, 3, 4)]
+    if virtual.s14_dot is not None:
+        speeds.append(np.abs(virtual.s14_dot) / case.geometry.scale)
+    ratio = np.abs(omega_d) / np.max(speeds, axis=0)
+    with np.errstate(divide="ignore"):
+        condition = 1.0 / np.minimum(ratio, transmission_sine(case, pose))
+    condition = np.where(np.isfinite(condition) & np.isfinite(torque), condition, np.inf)
+    torque = np.where(condition <= SINGULAR_CONDITION, torque, np.nan)
+    values = pose_values(case, pose) | {drive_quantity(case): torque}
+    n = angles.shape[0]
+    return PoseResults(angles, values, condition, np.zeros(n, dtype=int), np.ones(n, dtype=bool))
 
 
 def solve(case: Case) -> Solution:
@@ -72,28 +99,16 @@ def solve(case: Case) -> Solution:
     if case.has_coulomb_friction:
         return Solution(case.name, "virtual_work", {}, status="not_applicable", message=REFUSAL)
     start = time.perf_counter()
-    torque, omega_d = drive_torque(case)
-    pose = pose_of(case, omega=0.0, alpha=0.0)
-    values = {q: float(v[0]) for q, v in pose_values(case, pose).items()}
-    # The power method's own measures of singularity: the velocity ratios exist
-    # only while the loop's velocity equations are regular (sine of the
-    # transmission angle), and the torque only while the driven link moves.
-    virtual = pose_of(case, omega=1.0, alpha=0.0)
-    transmission = transmission_sine(case, pose)
-    ratios = [abs(float(virtual.links[k].omega[0])) for k in (2, 3, 4)]
-    if virtual.s14_dot is not None:
-        ratios.append(abs(float(virtual.s14_dot[0])) / case.geometry.scale)
-    ratio = abs(float(omega_d[0])) / max(ratios)
+    results = solve_poses(case)
+    values = {q: float(v[0]) for q, v in results.values.items()}
     diagnostics: dict[str, float | str] = {
-        "method": "power equation", "drive_speed_ratio": ratio,
-        "transmission_sine": transmission,
+        "method": "power equation", "condition_number": float(results.condition[0]),
         "wall_time_s": time.perf_counter() - start,
     }
-    if (not np.isfinite(torque[0]) or ratio < 1.0 / SINGULAR_CONDITION
-            or transmission < 1.0 / SINGULAR_CONDITION):
+    if results.singular[0]:
+        del values[drive_quantity(case)]
         return Solution(case.name, "virtual_work", values, status="singular",
                         message="toggle, change or dead point: the velocity ratios or the driven "
-                        "link's speed vanish, so the power equation cannot fix the torque",
+                                "link's speed vanish, so the power equation cannot fix the torque",
                         diagnostics=diagnostics)
-    values[drive_quantity(case)] = float(torque[0])
     return Solution(case.name, "virtual_work", values, diagnostics=diagnostics)

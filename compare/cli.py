@@ -18,6 +18,7 @@ import typer
 from analytic.case import CaseError
 from compare import backends as registry
 from compare.casefile import builtin_case_files, load_specs
+from compare.junit import junit_xml
 from compare.output import write_all
 from compare.report import render
 from compare.run import DEFAULT_FAIL_ON, VERDICTS, Progress, run
@@ -59,6 +60,8 @@ def run_command(
     fail_on: Annotated[str, typer.Option(
         help="Comma-separated backend verdicts that fail the run "
              f"(from {', '.join(VERDICTS)}; 'none' for none).")] = ",".join(DEFAULT_FAIL_ON),
+    junit: Annotated[Path | None, typer.Option(
+        help="Also write a JUnit XML file: one test case per comparison.")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
 ) -> None:
     """Run backends over case files and report agreement with the analytic solution."""
@@ -89,6 +92,9 @@ def run_command(
         "report.md": markdown,
         "report.html": page,
     })
+    if junit is not None:
+        write_all(junit.parent if str(junit.parent) else Path("."),
+                  {junit.name: junit_xml(result)})
     failed = len(result.failed_comparisons)
     typer.echo(f"{len(cases)} cases, {len(result.detail)} comparisons, {failed} outside "
                f"tolerance, {len(result.failing_verdicts)} failing verdicts "

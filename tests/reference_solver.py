@@ -24,7 +24,9 @@ different from the backend's member-equilibrium matrix method:
   λ = (N, M14), the driver's λ = T12 (or T14). The system Φ_qᵀ λ = Q − E is
   square, so links may be massless.
 * Coulomb friction makes Q depend on |λ|; Newton's method on
-  R(λ) = Φ_qᵀ λ − Q(λ) + E solves it to a relative step of 1e-15.
+  R(λ) = Φ_qᵀ λ − Q(λ) + E (Jacobian from ∂|F|/∂F = F/|F|), started from the
+  frictionless λ, runs until a step is below 1e-12 of |λ| and then takes one
+  more step, which leaves an error at the rounding floor (< 1e-14).
 
 Friction semantics (from the contract): a pin (i, j) of radius r puts the
 moment −μ·r·|F_ij|·sign(ω_j − ω_i) on j and the opposite on i; the slide puts
@@ -415,7 +417,7 @@ def solve(case: Case) -> Reference:
     jt = jac.T
     fr = friction_terms(model, q, qd, qd_sense)
     known = applied_forces(case, q) + fr.viscous - inertia_terms(case, q, qd, qdd)
-    lam = np.linalg.solve(jt, known)
+    lam: Vector = np.asarray(np.linalg.solve(jt, known), dtype=np.float64)
     iterations = 0
     if fr.pins or fr.slide:
         polished = False
@@ -426,11 +428,12 @@ def solve(case: Case) -> Reference:
             qc, dqc = coulomb(model, fr, lam)
             residual = jt @ lam - known - qc
             step = np.linalg.solve(jt - dqc, residual)
-            lam = lam - step
+            lam = np.asarray(lam - step, dtype=np.float64)
             small = np.max(np.abs(step)) <= NEWTON_RTOL * max(np.max(np.abs(lam)), 1e-300)
             if small:  # one polishing step, then stop
                 qc, dqc = coulomb(model, fr, lam)
-                lam = lam - np.linalg.solve(jt - dqc, jt @ lam - known - qc)
+                lam = np.asarray(lam - np.linalg.solve(jt - dqc, jt @ lam - known - qc),
+                                 dtype=np.float64)
                 iterations += 1
                 polished = True
 

@@ -13,11 +13,11 @@ from analytic.kinematics import pose_of
 #: ≈ 1e-10 and rounding ~eps·|q|/h ≈ 1e-10; 1e-7 leaves margin for steep poses.
 FD_RTOL = 1e-7
 H = 1e-5
-#: Second derivatives need a larger step, h = 2e-3 rad with Richardson extrapolation
-#: to h/2: rounding ~eps·|q|/(h/2)² ≈ 1e-9, truncation O(h⁴·|q⁽⁶⁾|) ≈ 1e-9 even where
-#: the higher derivatives reach 1e3 (steep slider-cranks).
+#: Second derivatives: h = 2e-4 rad with Richardson extrapolation to h/2. Rounding
+#: ~(16/3)·eps·|q|/h² ≈ 1e-7·|q| (|q| ≤ π here), truncation O(h⁴·|q⁽⁶⁾|) ≈ 1e-9 even
+#: where d²θ13/dθ12² reaches 400 (a slider-crank with a2 = 4·a3; h = 2e-3 left 1.4e-5).
 FD2_RTOL = 1e-6
-H2 = 2e-3
+H2 = 2e-4
 
 
 def positions(case: Case, theta12: np.ndarray) -> np.ndarray:

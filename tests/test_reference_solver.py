@@ -244,11 +244,11 @@ def generic_cases() -> list[Case]:
               "motion": Motion(omega=-7.0, alpha=35.0)}
     return [
         Case(name="fb", geometry=FourBarGeometry(0.13, 0.05, 0.11, 0.09),
-             theta12=1.1, ground_angle=0.3, **common),  # type: ignore[arg-type]
+             theta12=1.1, ground_angle=0.3, **common),
         Case(name="fb4", geometry=FourBarGeometry(0.13, 0.05, 0.11, 0.09), branch="crossed",
-             theta12=2.3, drive_link=4, **common),  # type: ignore[arg-type]
+             theta12=2.3, drive_link=4, **common),
         Case(name="sc", geometry=SliderCrankGeometry(0.05, 0.16, 0.02), branch="left",
-             theta12=-0.7, ground_angle=-0.4, **common),  # type: ignore[arg-type]
+             theta12=-0.7, ground_angle=-0.4, **common),
     ]
 
 

@@ -109,6 +109,7 @@ def start_run(rig: Rig, drive: Drive) -> None:
     """Seed the analytic state at θ12(−T) and set the clock going."""
     m, d = rig.model, rig.data
     mujoco.mj_resetData(m, d)
+    rig.set_extra(np.zeros(m.nbody), np.zeros((m.nbody, 3)))  # no friction left from a last run
     m.eq_data[rig.layout.drive_eq, :5] = coupling_polynomial(rig.case, drive)
     phi0 = drive.start_offset()
     qpos, qvel, _ = rig.qpos_at(drive.theta12 + phi0, drive.start_speed(), drive.alpha)
@@ -174,11 +175,15 @@ def drive_motion(case: Case) -> tuple[Settings, float, float]:
     return DYNAMIC, case.motion.omega, case.motion.alpha
 
 
-def driven(case: Case) -> Solution:
-    """The ``mujoco`` backend for a moving or friction case (method ``driven``)."""
+def driven(case: Case, rig: Rig | None = None) -> Solution:
+    """The ``mujoco`` backend for a moving or friction case (method ``driven``).
+
+    ``rig`` (built with :func:`drive_motion`'s settings for a case differing
+    only in θ12) is reused by sweeps.
+    """
     start = time.perf_counter()
     settings, omega, alpha = drive_motion(case)
-    rig = Rig(case, settings)
+    rig = rig or Rig(case, settings)
     steps = LEAD_STEPS
     total = steps
     previous = run_drive(rig, Drive(case.theta12, omega, alpha, steps, settings.timestep),

@@ -89,16 +89,22 @@ class Rig:
 
         Used only to seed or prescribe the motion; forces are never taken from it.
         """
-        p = pose_of(self.case, np.array([theta12]), omega=omega, alpha=alpha)
+        q, v, a = self.states(np.array([theta12]), omega, alpha)
+        return q[0], v[0], a[0]
+
+    def states(self, theta12: Array, omega: float | None = None,
+               alpha: float | None = None) -> tuple[Array, Array, Array]:
+        """:meth:`qpos_at` vectorised over θ12: arrays of shape (N, 3)."""
+        p = pose_of(self.case, theta12, omega=omega, alpha=alpha)
         l2, l3, l4 = p.links[2], p.links[3], p.links[4]
         if self.four_bar:
-            out = (l4.angle[0], l4.omega[0], l4.alpha[0])
+            out = (l4.angle, l4.omega, l4.alpha)
         else:
             assert p.s14 is not None and p.s14_dot is not None and p.s14_ddot is not None
-            out = (p.s14[0], p.s14_dot[0], p.s14_ddot[0])
-        q = np.array([l2.angle[0], l3.angle[0] - l2.angle[0], out[0]])
-        v = np.array([l2.omega[0], l3.omega[0] - l2.omega[0], out[1]])
-        a = np.array([l2.alpha[0], l3.alpha[0] - l2.alpha[0], out[2]])
+            out = (p.s14, p.s14_dot, p.s14_ddot)
+        q = np.stack([l2.angle, l3.angle - l2.angle, out[0]], axis=1)
+        v = np.stack([l2.omega, l3.omega - l2.omega, out[1]], axis=1)
+        a = np.stack([l2.alpha, l3.alpha - l2.alpha, out[2]], axis=1)
         return q, v, a
 
     def joint_addresses(self) -> list[int]:

@@ -46,8 +46,10 @@ class Settled:
     loop_violation: float
 
 
-def run_until_settled(rig: Rig, max_steps: int = MAX_STEPS) -> Settled:
-    """Step ``rig`` from its current state until settled or out of budget."""
+def run_until_settled(rig: Rig, max_steps: int | None = None) -> Settled:
+    """Step ``rig`` from its current state until settled or out of budget
+    (``max_steps``, default :data:`MAX_STEPS`)."""
+    max_steps = MAX_STEPS if max_steps is None else max_steps
     m, d = rig.model, rig.data
     mujoco.mj_kinematics(m, d)
     mujoco.mj_comPos(m, d)

@@ -39,7 +39,8 @@ FRICTION_MAX_PASSES = 200
 def constraint_solve(rig: Rig, qacc: np.ndarray) -> dict[str, float]:
     """Solve Jᵀ f = M·qacc − qfrc_smooth at the current qpos/qvel and read the forces."""
     m, d = rig.model, rig.data
-    mujoco.mj_forward(m, d)
+    mujoco.mj_kinematics(m, d)  # load points and centres of mass for the loads
+    mujoco.mj_comPos(m, d)
     rig.apply_loads()
     mujoco.mj_forward(m, d)
     full_qacc = np.zeros(m.nv)
@@ -81,14 +82,30 @@ def solve_with_friction(rig: Rig, qvel: np.ndarray,
     return values, FRICTION_MAX_PASSES
 
 
-def solve_at_pose(case: Case) -> Solution:
-    """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose."""
-    start = time.perf_counter()
+def exact_rig(case: Case) -> Rig:
+    """A rig for the exact solve: the Case's own masses, massless links massless."""
     rig = Rig(case, EXACT)
     zero_fictitious_masses(case, rig.model, rig.layout)
+    return rig
+
+
+def solve_at_pose(case: Case, rig: Rig | None = None) -> Solution:
+    """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose.
+
+    ``rig`` (from :func:`exact_rig` of a case differing only in θ12) is reused by sweeps.
+    """
+    start = time.perf_counter()
+    rig = rig or exact_rig(case)
     qpos, qvel, qacc = rig.qpos_at(case.theta12)
+    return solve_state(case, rig, qpos, qvel, qacc, start)
+
+
+def solve_state(case: Case, rig: Rig, qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray,
+                start: float) -> Solution:
+    """The exact solve at a given (analytic) joint state; ``start`` times it."""
+    rig.set_extra(np.zeros(rig.model.nbody), np.zeros((rig.model.nbody, 3)))
     rig.set_state(qpos, qvel)
-    rig.set_lock(rig.lock_target(case.theta12))
+    rig.set_lock(qpos[0] if case.drive_link == 2 else qpos[2])
     passes = 0
     if case.has_friction:
         values, passes = solve_with_friction(rig, qvel, qacc)

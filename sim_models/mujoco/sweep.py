@@ -1,0 +1,101 @@
+"""Full-cycle sweeps over θ12 with either MuJoCo backend.
+
+One model is compiled per sweep and reused for every pose (only θ12 changes).
+Poses whose force analysis is singular — at or next to a change/toggle point —
+are not simulated: they are marked ``singular`` with the condition number of
+the pose (a property of the geometry, from the analytic pose analysis), since a
+simulator there returns finite but meaningless numbers (SIMULATORS.md).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from analytic.case import Case, CaseError
+from analytic.forces import solve_poses
+from analytic.solution import Solution
+from sim_models.mujoco.dynamics import drive_motion, driven
+from sim_models.mujoco.rig import Rig
+from sim_models.mujoco.settle import settle_static
+from sim_models.mujoco.solve import exact_rig, solve_at_pose, solve_state
+
+BACKENDS = ("mujoco", "mujoco_solve")
+
+
+def singular_solution(case: Case, backend: str, condition: float) -> Solution:
+    return Solution(case.name, backend, {}, status="singular",
+                    message=f"condition number {condition:.3g}: the pose is at or next to a "
+                            "change/toggle point; not simulated",
+                    diagnostics={"condition_number": condition})
+
+
+def pose_case(case: Case, theta12: float) -> Case | None:
+    """The Case at another θ12, or None where it cannot be assembled."""
+    try:
+        return case.with_(theta12=float(theta12))
+    except CaseError:
+        return None
+
+
+def sweep(case: Case, theta12: ArrayLike, backend: str = "mujoco") -> list[Solution]:
+    """Solutions of ``case`` at every θ12 (rad), in order.
+
+    Parameters
+    ----------
+    backend : ``"mujoco"`` (settled statics, driven dynamics/friction) or
+        ``"mujoco_solve"`` (exact constraint solve at each analytic pose).
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown MuJoCo backend {backend!r}; use one of {BACKENDS}")
+    angles = np.atleast_1d(np.asarray(theta12, dtype=float))
+    condition = solve_poses(case, angles).condition
+    rig = sweep_rig(case, backend)
+    if backend == "mujoco_solve" and not case.has_friction:
+        return exact_sweep(case, angles, condition, rig)
+    out = []
+    for t, cond in zip(angles, condition, strict=True):
+        at = pose_case(case, t)
+        if at is None or not cond <= SWEEP_SINGULAR_CONDITION:
+            out.append(singular_solution(case, backend, float(cond)))
+            continue
+        out.append(solve_one(at, backend, rig))
+    return out
+
+
+#: The analytic backend withholds forces above 1e8 (analytic.equilibrium); the
+#: simulators are held to the same line so that every sweep compares like with like.
+SWEEP_SINGULAR_CONDITION = 1e8
+
+
+def exact_sweep(case: Case, angles: np.ndarray, condition: np.ndarray,
+                rig: Rig) -> list[Solution]:
+    """``mujoco_solve`` over many poses with the analytic states computed at once."""
+    qpos, qvel, qacc = rig.states(angles)
+    out = []
+    for i, cond in enumerate(condition):
+        if not cond <= SWEEP_SINGULAR_CONDITION or not np.all(np.isfinite(qpos[i])):
+            out.append(singular_solution(case, "mujoco_solve", float(cond)))
+            continue
+        out.append(solve_state(case, rig, qpos[i], qvel[i], qacc[i], time.perf_counter()))
+    return out
+
+
+def sweep_rig(case: Case, backend: str) -> Rig:
+    """The one compiled model a sweep reuses."""
+    if backend == "mujoco_solve":
+        return exact_rig(case)
+    if case.kind == "static":
+        return Rig(case)
+    settings, _, _ = drive_motion(case)
+    return Rig(case, settings)
+
+
+def solve_one(case: Case, backend: str, rig: Rig) -> Solution:
+    if backend == "mujoco_solve":
+        return solve_at_pose(case, rig)
+    if case.kind == "static":
+        return settle_static(case, rig)
+    return driven(case, rig)

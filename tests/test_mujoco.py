@@ -1,0 +1,161 @@
+"""Cross-checks of the MuJoCo backends against the analytic backend.
+
+Expected values always come from :func:`analytic.forces.solve` (the
+member-equilibrium matrix method), an independent method; never from MuJoCo.
+
+Error measure (``relative_errors``): |sim − ref| / max(|ref|, scale), where
+scale is the largest |ref| among the case's quantities of the same kind
+(forces F.., or torques T12/T14/M14).
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
+from analytic.solution import Solution
+from compare.testing import assert_solution_close
+from sim_models.mujoco import settle, solve_at_pose, sweep
+from sim_models.mujoco.model import model_xml
+from sim_models.mujoco.seeds import fourbar_e1, seed_cases, slidercrank_e2
+
+GOLDEN = Path(__file__).parent / "golden" / "mujoco"
+
+
+def assert_close(sim: Solution) -> None:
+    """The solution agrees with the analytic backend under the one tolerance policy."""
+    assert_solution_close(case_of[sim.case], sim, complete=True)
+
+
+MASSES_4 = (Mass(2, 0.5, (0.04, 0.0), 3e-4), Mass(3, 0.8, (0.05, 0.01), 7e-4),
+            Mass(4, 1.2, (0.06, 0.0), 1.5e-3))
+MASSES_SC = (Mass(2, 0.4, (0.02, 0.0), 2e-4), Mass(3, 0.6, (0.1, 0.0), 2e-3), Mass(4, 0.9))
+
+
+def tilted_slider(name: str, **changes: object) -> Case:
+    """An offset slider-crank on a slide tilted 15°, loaded on the slider and the rod."""
+    base = Case(name=name, geometry=SliderCrankGeometry(0.05, 0.2, 0.02),
+                theta12=math.radians(40.0), ground_angle=math.radians(15.0),
+                loads=(Load(4, (0.0, 0.0), (-200.0, 30.0)), Load(3, (0.1, 0.01), (5.0, -20.0))))
+    return base.with_(**changes)
+
+
+STATIC_CASES = [
+    fourbar_e1(),
+    slidercrank_e2(with_friction=False),
+    tilted_slider("slider-offset-tilted"),
+    tilted_slider("slider-left-branch", branch="left"),
+    fourbar_e1().with_(name="fourbar-crossed", branch="crossed"),
+    fourbar_e1().with_(name="fourbar-gravity", gravity=(0.0, -9.81), masses=MASSES_4,
+                       ground_angle=math.radians(10.0)),
+    fourbar_e1().with_(name="fourbar-drive-on-4", drive_link=4),
+]
+DYNAMIC_CASES = [
+    fourbar_e1().with_(name="fourbar-dynamic", masses=MASSES_4, gravity=(0.0, -9.81),
+                       motion=Motion(-10.0, 5.0)),
+    fourbar_e1().with_(name="fourbar-dynamic-drive-4", masses=MASSES_4, drive_link=4,
+                       motion=Motion(-10.0, 5.0)),
+    fourbar_e1().with_(name="fourbar-dynamic-crossed", masses=MASSES_4, branch="crossed",
+                       motion=Motion(8.0, -20.0)),
+    tilted_slider("slider-dynamic", masses=MASSES_SC, gravity=(0.0, -9.81),
+                  motion=Motion(-30.0, 10.0)),
+]
+FRICTION_CASES = [
+    slidercrank_e2(),
+    fourbar_e1().with_(name="fourbar-friction", friction=Friction(
+        mu=0.15, pin_radius={"A0": 0.01, "A": 0.012, "B": 0.008, "B0": 0.01}, direction=1)),
+    tilted_slider("slider-friction-slide", friction=Friction(
+        mu=0.1, pin_radius={"A0": 0.01, "A": 0.01, "B": 0.01}, slide_mu=0.12, direction=-1)),
+    tilted_slider("slider-friction-moving", masses=MASSES_SC, motion=Motion(-3.0, 1.0),
+                  friction=Friction(mu=0.1, pin_radius={"A": 0.01, "B": 0.01}, slide_mu=0.12,
+                                    viscous={"A0": 0.02, "slide": 0.5})),
+]
+case_of = {c.name: c for c in STATIC_CASES + DYNAMIC_CASES + FRICTION_CASES}
+ids = lambda cases: [c.name for c in cases]  # noqa: E731
+
+
+@pytest.mark.parametrize("case", STATIC_CASES, ids=ids(STATIC_CASES))
+def test_settled_statics_match_analytic(case: Case) -> None:
+    """A mechanism held by MuJoCo's joint lock settles to the analytic static reactions and drive torque."""
+    sim = settle(case)
+    assert sim.diagnostics["method"] == "settle"
+    assert_close(sim)
+
+
+@pytest.mark.parametrize("case", STATIC_CASES + DYNAMIC_CASES + FRICTION_CASES,
+                         ids=ids(STATIC_CASES + DYNAMIC_CASES + FRICTION_CASES))
+def test_constraint_solve_is_exact(case: Case) -> None:
+    """MuJoCo's constraint Jacobian at the analytic pose gives the rigid-body forces to rounding."""
+    assert_close(solve_at_pose(case))
+
+
+@pytest.mark.parametrize("case", DYNAMIC_CASES, ids=ids(DYNAMIC_CASES))
+def test_driven_dynamics_match_dalembert(case: Case) -> None:
+    """Driving the input through the prescribed motion gives the D'Alembert torque and reactions."""
+    sim = settle(case)
+    assert sim.diagnostics["method"] == "driven"
+    assert_close(sim)
+
+
+@pytest.mark.parametrize("case", FRICTION_CASES, ids=ids(FRICTION_CASES))
+def test_driven_friction_matches_friction_circle(case: Case) -> None:
+    """Friction emulated from MuJoCo's own reactions while driving gives the friction-circle drive torque."""
+    assert_close(settle(case))
+
+
+def test_seed_e1_drive_torque() -> None:
+    """Seed E1 (Söylemez 6.3) settles to T12 = +2.90133 N·m CCW (SEEDS.md)."""
+    assert settle(fourbar_e1()).values["T12"] == pytest.approx(2.90133, abs=1e-5)
+
+
+def test_seed_e2_drive_torque() -> None:
+    """Seed E2 driven clockwise with pin and slide friction needs T12 = −22.897 N·m (SEEDS.md)."""
+    assert settle(slidercrank_e2()).values["T12"] == pytest.approx(-22.897, abs=1e-3)
+
+
+def test_sweep_marks_change_point_singular() -> None:
+    """A sweep through E1's change point (θ12 = 180°) withholds forces there and matches elsewhere."""
+    case = fourbar_e1()
+    theta = np.radians([30.0, 120.0, 180.0, 250.0])
+    for backend in ("mujoco", "mujoco_solve"):
+        sols = sweep(case, theta, backend)
+        assert [s.status for s in sols] == ["ok", "ok", "singular", "ok"]
+        for i in (0, 1, 3):
+            assert_solution_close(case.with_(theta12=float(theta[i])), sols[i], complete=True)
+
+
+def test_unsettled_run_reports_no_forces(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With a step budget too small to settle, the backend says not_settled and reports no forces."""
+    # The package exports the function ``settle``, which hides the module's name.
+    settle_module = importlib.import_module("sim_models.mujoco.settle")
+    monkeypatch.setattr(settle_module, "MAX_STEPS", 3)
+    sim = settle_module.settle_static(fourbar_e1())
+    assert sim.status == "not_settled"
+    assert not any(q.startswith(("F", "T")) for q in sim.values)
+
+
+@pytest.mark.parametrize("case", seed_cases(), ids=ids(seed_cases()))
+def test_golden_xml_is_reproduced(case: Case) -> None:
+    """The committed MJCF of each seed case is exactly what the builder produces today."""
+    assert model_xml(case) == (GOLDEN / f"{case.name}.xml").read_text()
+
+
+def test_model_is_planar_fourbar() -> None:
+    """The four-bar model has three z-hinges and one loop connect, and no contacts."""
+    from sim_models.mujoco.model import compile_model
+
+    model, layout = compile_model(fourbar_e1())
+    assert model.nv == 3 and model.neq == 2
+    assert np.allclose(model.jnt_axis, [0.0, 0.0, 1.0])
+    assert layout.drive_joint == "A0"
+
+
+def test_geometry_types_unchanged() -> None:
+    """The seed cases use the shared Case geometry types (no private copies)."""
+    assert isinstance(fourbar_e1().geometry, FourBarGeometry)
+    assert isinstance(slidercrank_e2().geometry, SliderCrankGeometry)
