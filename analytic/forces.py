@@ -24,7 +24,12 @@ from analytic.equilibrium import (
     known_vector,
     slide_frame,
 )
-from analytic.friction import coulomb_terms, slide_friction_force, solve_with_friction
+from analytic.friction import (
+    coulomb_terms,
+    reversing_joints,
+    slide_friction_force,
+    solve_with_friction,
+)
 from analytic.kinematics import Pose, as_angles, pose_of
 from analytic.solution import Solution
 
@@ -41,8 +46,10 @@ class PoseResults:
     """Vectorised results: each array has one entry per θ12.
 
     ``values`` holds pose quantities (``theta13``, ``theta14`` or ``s14``)
-    and the forces and drive torque (NaN where ``singular`` or not
-    ``converged``). ``condition`` is the dimensionless condition number.
+    and the forces and drive torque (NaN where ``singular``, ``indeterminate``
+    or not ``converged``). ``condition`` is the dimensionless condition number.
+    ``reversing`` names, per pose, the joints whose Coulomb friction reverses
+    there ("" where none).
     """
 
     theta12: Array
@@ -50,6 +57,13 @@ class PoseResults:
     condition: Array
     iterations: NDArray[np.int_]
     converged: NDArray[np.bool_]
+    reversing: NDArray[np.str_] | None = None
+
+    @property
+    def indeterminate(self) -> NDArray[np.bool_]:
+        if self.reversing is None:
+            return np.zeros(self.theta12.shape, dtype=bool)
+        return self.reversing != ""
 
     @property
     def singular(self) -> NDArray[np.bool_]:
@@ -106,13 +120,18 @@ def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
     x = eliminate(case, pose, b)
     iterations = np.zeros(angles.shape[0], dtype=int)
     converged = np.ones(angles.shape[0], dtype=bool)
+    reversing = np.full(angles.shape[0], "", dtype=object)
     if case.has_coulomb_friction:
         k = coefficient_matrix(case, pose)
         x, iterations, converged = solve_with_friction(case, pose, k, b, x)
-    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged
+        for joint, where in reversing_joints(coulomb_terms(case, angles)):
+            reversing[where] = np.where(reversing[where] == "", joint,
+                                        reversing[where] + ", " + joint)
+    reversing = reversing.astype(str)
+    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "")
     x[withheld] = np.nan
     values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
-    return PoseResults(angles, values, cond, iterations, converged)
+    return PoseResults(angles, values, cond, iterations, converged, reversing)
 
 
 def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0, *,
@@ -130,6 +149,14 @@ def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0
         return Solution(case.name, backend, pose_only, status="singular",
                         message=f"condition number {cond:.3g} exceeds {SINGULAR_CONDITION:.0e}: "
                                 "the pose is at or next to a toggle/change point; forces withheld",
+                        diagnostics=diagnostics)
+    if results.indeterminate[index]:
+        assert results.reversing is not None
+        return Solution(case.name, backend, pose_only, status="indeterminate",
+                        message=f"the relative motion at {results.reversing[index]} reverses at this "
+                                "pose: Coulomb friction there may take any value within ±μ·r·|F| "
+                                "(±μ·|N| on the slide), so the drive torque and reactions are not "
+                                "unique; forces withheld",
                         diagnostics=diagnostics)
     if not results.converged[index]:
         return Solution(case.name, backend, pose_only, status="no_solution",

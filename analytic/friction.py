@@ -124,6 +124,11 @@ def residual_terms(case: Case, pose: Pose, terms: list[CoulombTerm],
     return phi, dphi
 
 
+def reversing_joints(terms: list[CoulombTerm]) -> list[tuple[str, NDArray[np.bool_]]]:
+    """Joints whose Coulomb term reverses (zero relative speed) at each pose."""
+    return [(t.joint, t.sense == 0.0) for t in terms if np.any(t.sense == 0.0)]
+
+
 def solve_with_friction(case: Case, pose: Pose, k: Array, b: Array,
                         x0: Array) -> tuple[Array, NDArray[np.int_], NDArray[np.bool_]]:
     """Newton's method for K x + b + φ(x) = 0.

@@ -12,7 +12,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Literal
 
-Status = Literal["ok", "singular", "not_settled", "not_applicable", "no_solution", "error"]
+Status = Literal["ok", "singular", "indeterminate", "not_settled", "not_applicable", "no_solution",
+                 "error"]
 
 #: Quantity -> (unit in tables, factor from the stored SI/radian value).
 QUANTITY_UNITS: dict[str, tuple[str, float]] = {
@@ -41,6 +42,8 @@ class Solution:
 
     ``status`` is ``ok`` or a verdict that explains why some or all numbers are
     absent: ``singular`` (ill-conditioned pose; forces withheld),
+    ``indeterminate`` (a Coulomb friction term reverses at this very pose: its
+    value anywhere in ±μ·r·|F| is consistent, so the forces are not unique),
     ``not_settled`` (a simulator did not reach equilibrium within its budget),
     ``not_applicable`` (the method does not apply, e.g. superposition with
     friction), ``no_solution`` (e.g. the friction equations lock).

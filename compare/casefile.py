@@ -256,3 +256,8 @@ def load_cases(*paths: str | Path) -> list[Case]:
 def builtin_case_files() -> list[Path]:
     """The case files shipped with the package (the seed examples and the suite)."""
     return sorted((Path(__file__).parent / "cases").glob("*.toml"))
+
+
+def builtin_sweep_files() -> list[Path]:
+    """The sweeps shipped with the package: the seed four-bar and slider-crank."""
+    return sorted((Path(__file__).parent / "sweeps").glob("*.toml"))

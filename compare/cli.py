@@ -17,11 +17,12 @@ import typer
 
 from analytic.case import CaseError
 from compare import backends as registry
-from compare.casefile import builtin_case_files, load_specs
+from compare.casefile import builtin_case_files, builtin_sweep_files, load_specs
 from compare.junit import junit_xml
 from compare.output import write_all
 from compare.report import render
 from compare.run import DEFAULT_FAIL_ON, VERDICTS, Progress, run
+from compare.sweep import parse_range, plan
 from compare.tables import COMPARISON_COLUMNS, diagnostics_frame, results_frame
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -66,11 +67,7 @@ def run_command(
 ) -> None:
     """Run backends over case files and report agreement with the analytic solution."""
     paths = list(files) if files else builtin_case_files()
-    verdicts = tuple(v for v in fail_on.split(",") if v and v != "none")
-    unknown = [v for v in verdicts if v not in VERDICTS]
-    if unknown:
-        raise fail_input(f"--fail-on: unknown verdict {unknown[0]!r}; choose from "
-                         f"{', '.join(VERDICTS)} or 'none'")
+    verdicts = parse_fail_on(fail_on)
     try:
         specs = load_specs(paths)
     except CaseError as error:
@@ -93,13 +90,60 @@ def run_command(
         "report.html": page,
     })
     if junit is not None:
-        write_all(junit.parent if str(junit.parent) else Path("."),
-                  {junit.name: junit_xml(result)})
+        write_all(junit.parent, {junit.name: junit_xml(result)})
     failed = len(result.failed_comparisons)
     typer.echo(f"{len(cases)} cases, {len(result.detail)} comparisons, {failed} outside "
                f"tolerance, {len(result.failing_verdicts)} failing verdicts "
                f"-> {out}/report.md ({'PASS' if result.exit_status == 0 else 'FAIL'})")
     raise typer.Exit(result.exit_status)
+
+
+@app.command("sweep")
+def sweep_command(
+    files: Annotated[list[Path] | None, typer.Argument(
+        help="Case files (TOML); each case's own θ12 is replaced by the sweep's. "
+             "None: the built-in sweeps of the seed four-bar and slider-crank.")] = None,
+    theta12: Annotated[str, typer.Option(
+        help="Input angles START:STOP:STEP in degrees, STOP excluded.")] = "0:360:1",
+    backend: Annotated[list[str] | None, typer.Option(
+        "--backend", "-b", help="Backend to sweep besides analytic (repeatable). "
+        "Default: every available one.")] = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
+        Path("mechcheck-sweep"),
+    workers: Annotated[int | None, typer.Option(
+        help="Local worker processes (default: one per core; 0: in this process).")] = None,
+    dask: Annotated[str | None, typer.Option(
+        help="Address of an existing Dask scheduler to run the sweep on.")] = None,
+    fail_on: Annotated[str, typer.Option(
+        help="Comma-separated verdicts that fail the run ('none' for none).")] =
+        ",".join(DEFAULT_FAIL_ON),
+    junit: Annotated[Path | None, typer.Option(help="Also write a JUnit XML file.")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+) -> None:
+    """Sweep θ12 over a range for every case and backend; resumable, Parquet output."""
+    from compare.sweep_run import run_sweep_command
+
+    verdicts = parse_fail_on(fail_on)
+    paths = list(files) if files else builtin_sweep_files()
+    try:
+        specs = load_specs(paths)
+        grid = parse_range(theta12)
+        names = list(backend) if backend else registry.available()
+        tasks = plan([c for c, _ in specs], names, grid)
+    except (CaseError, ValueError, registry.BackendUnavailable) as error:
+        raise fail_input(str(error)) from None
+    status = run_sweep_command(specs, tasks, len(grid), out, workers=workers, dask=dask,
+                               fail_on=verdicts, junit=junit, quiet=quiet)
+    raise typer.Exit(status)
+
+
+def parse_fail_on(text: str) -> tuple[str, ...]:
+    verdicts = tuple(v for v in text.split(",") if v and v != "none")
+    unknown = [v for v in verdicts if v not in VERDICTS]
+    if unknown:
+        raise fail_input(f"--fail-on: unknown verdict {unknown[0]!r}; choose from "
+                         f"{', '.join(VERDICTS)} or 'none'")
+    return verdicts
 
 
 @app.command("backends")

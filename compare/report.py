@@ -6,6 +6,7 @@ every number shown is taken from the same tables that are written to CSV.
 
 from __future__ import annotations
 
+import base64
 import html
 import math
 from dataclasses import dataclass
@@ -149,3 +150,65 @@ def render(result: RunResult, specs: dict[str, CaseSpec],
     model = view_model(result, specs, title)
     return (_ENV.get_template("report.md.j2").render(**model),
             _ENV.get_template("report.html.j2").render(**model, escape=html.escape))
+
+
+def _pose_list(values: pd.Series, limit: int = 20) -> str:
+    items = [fmt(float(v), 5) + "°" for v in values.to_numpy()[:limit]]
+    more = len(values) - limit
+    return ", ".join(items) + (f" … ({more} more)" if more > 0 else "")
+
+
+def sweep_view_model(cases: list[Case], specs: dict[str, CaseSpec], statuses: pd.DataFrame,
+                     comparison: pd.DataFrame, figures: dict[str, bytes], *, title: str,
+                     n_poses: int, wall_time_s: float, executed: int, reused: int,
+                     fail_on: tuple[str, ...]) -> dict[str, Any]:
+    """The sweep report's view model (verdict first, then one section per case)."""
+    failed = comparison[~comparison["passed"].astype(bool)] if len(comparison) else comparison
+    failing = statuses[statuses["status"].isin(fail_on)] if len(statuses) else statuses
+    summaries = []
+    for backend in dict.fromkeys(statuses["backend"].astype(str)):
+        if backend == REFERENCE:
+            continue
+        rows = comparison[comparison["backend"] == backend] if len(comparison) else comparison
+        worst = {str(q): float(e) for q, e in rows.groupby("quantity")["rel_err"].max().items()} \
+            if len(rows) else {}
+        counts = statuses[(statuses["backend"] == backend) & (statuses["status"] != "ok")]
+        summaries.append(BackendSummary(
+            backend, len(rows), int((~rows["passed"].astype(bool)).sum()) if len(rows) else 0,
+            {q: float(worst[q]) for q in ordered(worst)},
+            {str(k): int(v) for k, v in counts["status"].value_counts().items() if v}))
+    case_views = []
+    for case in cases:
+        st = statuses[statuses["case"] == case.name]
+        ref = st[st["backend"] == REFERENCE]
+        others = {}
+        unusual = st[(st["backend"] != REFERENCE) & ~st["status"].isin(["ok", "singular"])]
+        for key, group in unusual.groupby(["backend", "status"], observed=True):
+            others[" ".join(map(str, key))] = _pose_list(group["theta12"])
+        spec = specs.get(case.name)
+        mine = failed[failed["case"] == case.name] if len(failed) else failed
+        case_views.append({
+            "name": case.name, "description": spec.description if spec else "",
+            "mechanism": case.mechanism, "kind": case.kind,
+            "figure": f"{case.name}.png",
+            "figure_b64": base64.b64encode(figures[case.name]).decode(),
+            "singular": _pose_list(ref.loc[ref["status"] == "singular", "theta12"]),
+            "near_singular": _pose_list(ref.loc[(ref["condition_number"] > 1e4)
+                                                & (ref["status"] == "ok"), "theta12"]),
+            "other_verdicts": others,
+            "failures": mine.head(30).to_dict("records"),
+        })
+    return {
+        "title": title, "passed": not len(failed) and not len(failing),
+        "n_cases": len(cases), "n_poses": n_poses, "n_comparisons": len(comparison),
+        "n_failed": len(failed), "n_failing_verdicts": len(failing),
+        "fail_on": ", ".join(fail_on), "wall_time_s": wall_time_s,
+        "executed": executed, "reused": reused, "summaries": summaries, "cases": case_views,
+        "policy": policy_table(),
+    }
+
+
+def render_sweep(model: dict[str, Any]) -> tuple[str, str]:
+    """(Markdown, HTML) of a sweep."""
+    return (_ENV.get_template("sweep.md.j2").render(**model),
+            _ENV.get_template("sweep.html.j2").render(**model))

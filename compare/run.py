@@ -21,9 +21,10 @@ from compare.tables import comparison_detail
 #: Backend verdicts that turn a run red unless ``--fail-on`` says otherwise:
 #: a simulator that never settled, or a backend that crashed, means the check
 #: did not happen. ``singular`` (an expected outcome at a change point),
-#: ``not_applicable`` and ``no_solution`` (self-locking) are reported only.
+#: ``indeterminate`` (friction reversing at the pose), ``not_applicable`` and
+#: ``no_solution`` (self-locking) are reported only.
 DEFAULT_FAIL_ON = ("not_settled", "error")
-VERDICTS = ("singular", "not_settled", "not_applicable", "no_solution", "error")
+VERDICTS = ("singular", "indeterminate", "not_settled", "not_applicable", "no_solution", "error")
 
 Progress = Callable[[int, int, str], None]
 

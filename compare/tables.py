@@ -8,12 +8,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 
+import numpy as np
 import pandas as pd
 
 from analytic.case import Case
 from analytic.solution import QUANTITY_ORDER, QUANTITY_UNITS, Solution, quantity_kind
 from compare.backends import REFERENCE
-from compare.tolerance import case_kind, tolerance_for
+from compare.tolerance import NEAR_SINGULAR_CONDITION, case_kind, tolerance_for
 
 RESULT_COLUMNS = ["case", "backend", "quantity", "value", "unit"]
 COMPARISON_COLUMNS = ["case", "quantity", "backend", "value", "reference", "abs_err",
@@ -41,13 +42,20 @@ def results_frame(solutions: Sequence[Solution]) -> pd.DataFrame:
 
 
 def kind_scales(case: Case, reference: Solution) -> dict[str, float]:
-    """Scale of each quantity kind in a case: the largest reference magnitude of that kind."""
+    """Scale of each quantity kind in a case.
+
+    Forces: the largest reference reaction. Torques: the largest reference
+    torque, or the largest reaction times the longest link if that is larger
+    (a drive torque that happens to vanish at a dead centre is still made of
+    forces with lever arms of that size). Angles: 1 rad. s14: the longest link.
+    """
     scales = {"force": SCALE_FLOOR, "torque": SCALE_FLOOR, "angle": 1.0,
               "length": case.geometry.scale}
     for q, v in reference.values.items():
         kind = quantity_kind(q)
         if kind in ("force", "torque"):
             scales[kind] = max(scales[kind], abs(v))
+    scales["torque"] = max(scales["torque"], scales["force"] * case.geometry.scale)
     return scales
 
 
@@ -109,3 +117,51 @@ def diagnostics_frame(solutions: Sequence[Solution]) -> pd.DataFrame:
         rows.append((s.case, s.backend, s.status, "message", s.message))
         rows += [(s.case, s.backend, s.status, k, str(v)) for k, v in s.diagnostics.items()]
     return pd.DataFrame(rows, columns=DIAGNOSTIC_COLUMNS)
+
+
+def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.DataFrame,
+                     other: pd.DataFrame) -> pd.DataFrame:
+    """Per-pose comparisons of one backend's sweep against the reference, vectorised.
+
+    Same measure and policy as :func:`comparison_rows`, with the case kind taken
+    per pose (``near_singular`` where the reference's condition number says so).
+    Columns: the comparison columns of CONVENTIONS.md plus ``theta12``.
+    """
+    keys = ["theta12", "quantity"]
+    ref = reference[[*keys, "value"]].rename(columns={"value": "reference"})
+    ref = ref.assign(quantity=ref["quantity"].astype(str))
+    merged = other.assign(quantity=other["quantity"].astype(str)).merge(ref, on=keys)
+    if merged.empty:
+        return pd.DataFrame(columns=["case", "theta12", *COMPARISON_COLUMNS[1:]])
+    quantity = merged["quantity"]
+    factor = quantity.map(lambda q: QUANTITY_UNITS[q][1]).to_numpy()
+    kind = quantity.map(quantity_kind)
+    # Scale of each force/torque kind at each pose: the largest reference magnitude.
+    ref_kind = ref.assign(kind=ref["quantity"].map(quantity_kind), mag=ref["reference"].abs())
+    scale_table = ref_kind.groupby(["theta12", "kind"], observed=True)["mag"].max()
+    scale = pd.Series(list(zip(merged["theta12"], kind, strict=True))).map(scale_table).to_numpy()
+    scale = np.maximum(np.nan_to_num(scale, nan=SCALE_FLOOR), SCALE_FLOOR)
+    # Torques: at least the largest reaction times the longest link (see kind_scales).
+    force_at = merged["theta12"].map(scale_table.xs("force", level="kind")).to_numpy()
+    force_at = np.nan_to_num(force_at, nan=SCALE_FLOOR) * case.geometry.scale
+    scale = np.where(kind == "torque", np.maximum(scale, force_at), scale)
+    is_angle = quantity.isin(["theta13", "theta14"]).to_numpy()
+    scale = np.where(kind == "pose", np.where(is_angle, factor, case.geometry.scale), scale)
+    diff = merged["value"].to_numpy() - merged["reference"].to_numpy()
+    diff = np.where(is_angle, (diff + 180.0) % 360.0 - 180.0, diff)
+    abs_err = np.abs(diff)
+    rel_err = abs_err / scale
+    cond = merged["theta12"].map(reference_status.set_index("theta12")["condition_number"])
+    pose_kind = np.where(cond.to_numpy() > NEAR_SINGULAR_CONDITION, "near_singular", case.kind)
+    rules = {(q, k): tolerance_for(case, str(merged["backend"].iloc[0]), q, k)
+             for q, k in set(zip(quantity, pose_kind, strict=True))}
+    pairs = list(zip(quantity, pose_kind, strict=True))
+    rtol = np.array([rules[p].rtol for p in pairs])
+    atol = np.array([rules[p].atol for p in pairs])
+    passed = (rel_err <= rtol) | (abs_err / factor <= atol)
+    return pd.DataFrame({
+        "case": case.name, "theta12": merged["theta12"], "quantity": quantity,
+        "backend": merged["backend"].astype(str), "value": merged["value"],
+        "reference": merged["reference"], "abs_err": abs_err, "rel_err": rel_err,
+        "tolerance": rtol, "passed": passed, "case_kind": pose_kind,
+    })

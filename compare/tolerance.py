@@ -7,8 +7,9 @@ case kinds are ``static``, ``dynamic``, ``friction`` and ``near_singular``
 
 The relative error of a value is measured against the *scale* of its kind in
 that case (:func:`compare.tables.kind_scales`): a reaction component that
-happens to be near zero is judged against the case's largest reaction, not
-against its own tiny magnitude.
+happens to be near zero is judged against the case's largest reaction, and a
+torque against the largest reaction times the longest link, not against its
+own tiny magnitude.
 
 A case file may tighten or loosen a tolerance for one case with
 ``[[case.tolerance]]`` (``backend``, ``quantity`` — a quantity name or kind —,

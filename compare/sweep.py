@@ -1,0 +1,287 @@
+"""Whole-cycle sweeps: every pose of every case through each backend, on any
+``concurrent.futures`` executor, written to Parquet as it goes, resumable.
+
+The work is split into tasks (case × backend × chunk of θ12). A task's
+results are written as one Parquet part, atomically, the moment it finishes;
+its file name carries a digest of the case, the backend and the θ12 values,
+so a re-run skips every task whose part exists and recomputes only the rest
+(and a changed case never reuses stale parts).
+
+Vector backends (``analytic``, ``superposition``, ``virtual_work``) solve a
+chunk in one vectorised call; simulator backends run their own ``sweep``
+(warm starts, continuation) over the chunk.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import io
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor, Future, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+
+from analytic.case import Case
+from analytic.solution import QUANTITY_UNITS, Solution
+from compare.backends import REFERENCE, REGISTRY, BackendUnavailable
+from compare.output import write_all
+
+#: Bump when the part format or a backend's meaning changes: old parts are then ignored.
+PART_FORMAT = 1
+#: Poses per task. Vector backends: large chunks keep numpy efficient while
+#: parts stay small enough to resume from (≈ 0.2 s of work each). Simulators:
+#: a chunk is one continuation run; 60 poses of 1° let two workers share a turn.
+VECTOR_CHUNK = 200_000
+SIMULATOR_CHUNK = 60
+
+#: Vectorised solvers, name → "module:function" taking (case, theta12_rad) → PoseResults.
+VECTOR_BACKENDS = {
+    "analytic": "analytic.forces:solve_poses",
+    "superposition": "analytic.superposition:solve_poses",
+    "virtual_work": "analytic.virtual_work:solve_poses",
+}
+#: Simulator sweeps, name → "module:function" taking (case, theta12_rad, backend) → [Solution].
+SIMULATOR_SWEEPS = {
+    "mujoco": "sim_models.mujoco:sweep", "mujoco_solve": "sim_models.mujoco:sweep",
+    "pymunk": "sim_models.pymunk:sweep", "pymunk_solve": "sim_models.pymunk:sweep",
+}
+
+RESULT_COLUMNS = ["case", "backend", "theta12", "quantity", "value", "unit"]
+STATUS_COLUMNS = ["case", "backend", "theta12", "status", "condition_number"]
+
+
+@dataclass(frozen=True, eq=False)
+class SweepTask:
+    """One unit of work: a backend over a chunk of input angles (degrees) of one case.
+
+    ``digest`` identifies the work (format, case, backend, angles): a part
+    written under another digest is never mistaken for this task's.
+    """
+
+    case: Case
+    backend: str
+    theta12_deg: np.ndarray
+    chunk: int
+    digest: str
+
+    @property
+    def part_name(self) -> str:
+        return f"{self.case.name}__{self.backend}__{self.chunk:05d}__{self.digest}"
+
+
+def task_digest(case: Case, backend: str, theta12_deg: np.ndarray) -> str:
+    h = hashlib.sha256(repr((PART_FORMAT, case, backend)).encode())
+    h.update(np.ascontiguousarray(theta12_deg, dtype=np.float64).tobytes())
+    return h.hexdigest()[:16]
+
+
+def parse_range(text: str) -> np.ndarray:
+    """``START:STOP:STEP`` in degrees, STOP excluded (``0:360:1`` → 360 poses)."""
+    try:
+        start, stop, step = (float(p) for p in text.split(":"))
+    except ValueError:
+        raise ValueError(f"--theta12 must be START:STOP:STEP in degrees, got {text!r}") from None
+    if step <= 0 or stop <= start:
+        raise ValueError(f"--theta12 {text!r}: need STOP > START and STEP > 0")
+    count = int(np.floor((stop - start) / step + 1e-9))
+    values: np.ndarray = start + step * np.arange(max(count, 1))
+    values = values[values < stop - 1e-12 * max(1.0, abs(stop))]
+    return values
+
+
+def _resolve(target: str) -> Callable[..., Any]:
+    module, function = target.split(":")
+    try:
+        found: Callable[..., Any] = getattr(importlib.import_module(module), function)
+        return found
+    except (ImportError, AttributeError) as error:
+        raise BackendUnavailable(f"backend sweep {target!r} is not available: {error}") from None
+
+
+def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray) -> list[SweepTask]:
+    """The tasks of a sweep; the reference backend is always included."""
+    names = list(dict.fromkeys([REFERENCE, *backends]))
+    for name in names:
+        if name not in REGISTRY:
+            raise BackendUnavailable(f"unknown backend {name!r}; known backends: {', '.join(REGISTRY)}")
+        if name not in VECTOR_BACKENDS and name not in SIMULATOR_SWEEPS:
+            raise BackendUnavailable(f"backend {name!r} has no sweep")
+    tasks = []
+    for case in cases:
+        for name in names:
+            size = VECTOR_CHUNK if name in VECTOR_BACKENDS else SIMULATOR_CHUNK
+            for chunk, start in enumerate(range(0, len(theta12_deg), size)):
+                part = np.array(theta12_deg[start:start + size], dtype=float)
+                tasks.append(SweepTask(case, name, part, chunk, task_digest(case, name, part)))
+    return tasks
+
+
+QUANTITIES = list(QUANTITY_UNITS)
+UNITS = sorted({u for u, _ in QUANTITY_UNITS.values()})
+
+
+def _long_frame(case: str, backend: str, theta_deg: np.ndarray,
+                values: dict[str, np.ndarray]) -> pd.DataFrame:
+    """Long rows from per-quantity arrays (table units), dropping absent (NaN) values.
+
+    Text columns are categorical: a 10⁶-pose sweep has 10⁷ rows.
+    """
+    thetas, vals, q_codes, u_codes = [], [], [], []
+    for quantity, array in values.items():
+        unit, factor = QUANTITY_UNITS[quantity]
+        ok = np.isfinite(array)
+        thetas.append(theta_deg[ok])
+        vals.append(array[ok] * factor)
+        q_codes.append(np.full(int(ok.sum()), QUANTITIES.index(quantity), dtype=np.int8))
+        u_codes.append(np.full(int(ok.sum()), UNITS.index(unit), dtype=np.int8))
+    if not thetas:
+        return pd.DataFrame(columns=RESULT_COLUMNS)
+    theta = np.concatenate(thetas)
+    n = theta.shape[0]
+    return pd.DataFrame({
+        "case": _categorical(np.zeros(n, dtype=np.int8), [case]),
+        "backend": _categorical(np.zeros(n, dtype=np.int8), [backend]),
+        "theta12": theta,
+        "quantity": _categorical(np.concatenate(q_codes), QUANTITIES),
+        "value": np.concatenate(vals),
+        "unit": _categorical(np.concatenate(u_codes), UNITS),
+    })
+
+
+def _categorical(codes: np.ndarray, categories: list[str]) -> pd.Categorical[Any]:
+    return pd.Categorical.from_codes(codes, dtype=pd.CategoricalDtype(categories))
+
+
+def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
+    theta_deg = np.asarray(task.theta12_deg)
+    solver = _resolve(VECTOR_BACKENDS[task.backend])
+    try:
+        results = solver(task.case, np.radians(theta_deg))
+    except ValueError:  # the method refuses this case (Coulomb friction)
+        status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
+                               "theta12": theta_deg, "status": "not_applicable",
+                               "condition_number": np.nan})
+        return pd.DataFrame(columns=RESULT_COLUMNS), status
+    pose_ok = np.isfinite(results.values["theta13"])
+    status_values = np.select(
+        [~pose_ok, results.singular, results.indeterminate, ~results.converged],
+        ["no_solution", "singular", "indeterminate", "no_solution"], default="ok")
+    status = pd.DataFrame({"case": task.case.name, "backend": task.backend, "theta12": theta_deg,
+                           "status": status_values, "condition_number": results.condition})
+    return _long_frame(task.case.name, task.backend, theta_deg, results.values), status
+
+
+def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
+    theta_deg = np.asarray(task.theta12_deg)
+    sweep_fn = _resolve(SIMULATOR_SWEEPS[task.backend])
+    solutions: list[Solution] = sweep_fn(task.case, np.radians(theta_deg), task.backend)
+    values = {q: np.full(len(theta_deg), np.nan) for q in QUANTITY_UNITS}
+    for i, s in enumerate(solutions):
+        for q, v in s.values.items():
+            values[q][i] = v
+    present = {q: v for q, v in values.items() if np.isfinite(v).any()}
+    status = pd.DataFrame({
+        "case": task.case.name, "backend": task.backend, "theta12": theta_deg,
+        "status": [s.status for s in solutions],
+        "condition_number": [float(s.diagnostics.get("condition_number", np.nan))
+                             for s in solutions],
+    })
+    return _long_frame(task.case.name, task.backend, theta_deg, present), status
+
+
+def run_task(task: SweepTask) -> tuple[bytes, bytes]:
+    """Execute one task; returns its results and statuses as Parquet bytes.
+
+    Bytes rather than frames keep what crosses a process or Dask boundary small
+    and make the worker, not the client, pay for encoding.
+    """
+    runner = _run_vector if task.backend in VECTOR_BACKENDS else _run_simulator
+    results, status = runner(task)
+    return _parquet(results), _parquet(status)
+
+
+def _parquet(frame: pd.DataFrame) -> bytes:
+    buffer = io.BytesIO()
+    frame.to_parquet(buffer, index=False)
+    return buffer.getvalue()
+
+
+class LocalExecutor(Executor):
+    """Runs each task in the calling process, at submit time (``--workers 0``)."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future[Any]:
+        future: Future[Any] = Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as error:
+            future.set_exception(error)
+        return future
+
+
+@dataclass(frozen=True)
+class SweepOutcome:
+    """What a sweep did: the parts it wrote now, and those an earlier run had left."""
+
+    tasks: list[SweepTask]
+    parts_dir: Path
+    executed: int
+    reused: int
+
+    def read(self, *, case: str | None = None, backends: Sequence[str] | None = None,
+             kind: str = "results") -> pd.DataFrame:
+        """The long results (or statuses) of some cases and backends, from the parts."""
+        chosen = [t for t in self.tasks if (case is None or t.case.name == case)
+                  and (backends is None or t.backend in backends)]
+        index = 0 if kind == "results" else 1
+        columns = RESULT_COLUMNS if kind == "results" else STATUS_COLUMNS
+        paths = [str(part_paths(self.parts_dir, t)[index]) for t in chosen]
+        if not paths:
+            return pd.DataFrame(columns=columns)
+        table = pq.ParquetDataset(paths).read()
+        return table.unify_dictionaries().to_pandas() if table.num_rows else pd.DataFrame(
+            columns=columns)
+
+
+def part_paths(out_dir: Path, task: SweepTask) -> tuple[Path, Path]:
+    """The task's results part and status part: ``results/`` and ``status/`` are each a
+    Parquet dataset (``pandas.read_parquet("DIR/results")`` reads them all)."""
+    return (out_dir / "results" / f"{task.part_name}.parquet",
+            out_dir / "status" / f"{task.part_name}.parquet")
+
+
+def is_done(parts_dir: Path, task: SweepTask) -> bool:
+    """A task is done when its status part exists: it is renamed into place last."""
+    return part_paths(parts_dir, task)[1].exists()
+
+
+def run_sweep(tasks: Sequence[SweepTask], parts_dir: Path, executor: Executor, *,
+              progress: Callable[[int, int], None] | None = None) -> SweepOutcome:
+    """Run the tasks not yet done, writing each part the moment it arrives.
+
+    An interrupted sweep keeps every part already written; running the same
+    sweep again executes only the missing tasks.
+    """
+    todo = [t for t in tasks if not is_done(parts_dir, t)]
+    total_poses = sum(len(t.theta12_deg) for t in tasks)
+    done_poses = total_poses - sum(len(t.theta12_deg) for t in todo)
+    if progress:
+        progress(done_poses, total_poses)
+    futures = {executor.submit(run_task, t): t for t in todo}
+    for future in as_completed(futures):
+        task = futures[future]
+        results, status = future.result()
+        # Results first, status last: the status part marks the task complete.
+        results_path, status_path = part_paths(parts_dir, task)
+        write_all(results_path.parent, {results_path.name: results})
+        write_all(status_path.parent, {status_path.name: status})
+        done_poses += len(task.theta12_deg)
+        if progress:
+            progress(done_poses, total_poses)
+    return SweepOutcome(list(tasks), parts_dir, len(todo), len(tasks) - len(todo))
+

@@ -1,0 +1,84 @@
+"""``mechcheck sweep``: run the planned tasks, compare, draw and report."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+from tqdm import tqdm
+
+from analytic.case import Case
+from compare.backends import REFERENCE
+from compare.casefile import CaseSpec
+from compare.executors import executor_for
+from compare.figures import sweep_figure
+from compare.junit import junit_sweep_xml
+from compare.output import write_all
+from compare.report import render_sweep, sweep_view_model
+from compare.sweep import SweepOutcome, SweepTask, run_sweep
+from compare.tables import sweep_comparison
+
+
+def compare_sweep(cases: list[Case], outcome: SweepOutcome) -> pd.DataFrame:
+    """Every non-reference backend's poses against the reference, all cases."""
+    frames = []
+    for case in cases:
+        backends = {t.backend for t in outcome.tasks if t.case.name == case.name} - {REFERENCE}
+        if not backends:
+            continue
+        ref = outcome.read(case=case.name, backends=[REFERENCE])
+        ref_status = outcome.read(case=case.name, backends=[REFERENCE], kind="status")
+        for backend in sorted(backends):
+            other = outcome.read(case=case.name, backends=[backend])
+            if len(other):
+                frames.append(sweep_comparison(case, ref, ref_status, other))
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
+        columns=["case", "theta12", "quantity", "backend", "value", "reference", "abs_err",
+                 "rel_err", "tolerance", "passed", "case_kind"])
+
+
+def run_sweep_command(specs: list[tuple[Case, CaseSpec]], tasks: list[SweepTask], n_poses: int,
+                      out: Path, *, workers: int | None, dask: str | None,
+                      fail_on: tuple[str, ...], junit: Path | None, quiet: bool) -> int:
+    """Run, compare and report a sweep; returns the exit status."""
+    cases = [c for c, _ in specs]
+    start = time.perf_counter()
+    bar = None if quiet else tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True)
+
+    def progress(done: int, total: int) -> None:
+        if bar is not None:
+            bar.total = total
+            bar.n = done
+            bar.refresh()
+
+    with executor_for(workers, dask) as executor:
+        outcome = run_sweep(tasks, out, executor, progress=progress)
+    if bar is not None:
+        bar.close()
+    wall = time.perf_counter() - start
+    comparison = compare_sweep(cases, outcome)
+    statuses = outcome.read(kind="status")
+    figures = {c.name: sweep_figure(c, outcome.read(case=c.name), statuses[statuses["case"] == c.name],
+                                    comparison[comparison["case"] == c.name]) for c in cases}
+    model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, figures,
+                             title="mechcheck sweep report", n_poses=n_poses, wall_time_s=wall,
+                             executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)
+    markdown, page = render_sweep(model)
+    files: dict[str, str | bytes] = {"report.md": markdown, "report.html": page}
+    write_all(out / "figures", {f"{name}.png": png for name, png in figures.items()})
+    comparison_buffer = comparison.to_parquet(index=False)
+    assert comparison_buffer is not None
+    files["comparison.parquet"] = comparison_buffer
+    write_all(out, files)
+    if junit is not None:
+        write_all(junit.parent, {junit.name: junit_sweep_xml(comparison, statuses, fail_on, wall)})
+    failed = int((~comparison["passed"].astype(bool)).sum()) if len(comparison) else 0
+    failing = int(statuses["status"].isin(fail_on).sum()) if len(statuses) else 0
+    status = 1 if failed or failing else 0
+    print(f"{len(cases)} cases x {n_poses} poses, {len(comparison)} comparisons, {failed} outside "
+          f"tolerance, {failing} poses with a failing verdict; {outcome.executed} tasks run, "
+          f"{outcome.reused} reused, {wall:.1f} s -> {out}/report.md "
+          f"({'PASS' if status == 0 else 'FAIL'})")
+    return status
