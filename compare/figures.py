@@ -80,8 +80,10 @@ def sweep_figure(case: Case, results: pd.DataFrame, status: pd.DataFrame,
         ax_e.plot(tol.index, tol.to_numpy(), "-", lw=0.8, color=line.get_color(), alpha=0.6)
     ax_e.set_yscale("log")
     ax_e.set_ylabel("worst relative error (dots) / tolerance (line)")
-    ax_e.set_title("Error against the tolerance")
-    ax_e.legend(fontsize=7, ncol=2)
+    ax_e.set_title("Error against the tolerance" if len(comparison)
+                   else "Error against the tolerance (nothing to compare)")
+    if len(comparison):
+        ax_e.legend(fontsize=7, ncol=2)
     theta = np.sort(results.loc[results["backend"] == REFERENCE, "theta12"].unique())
     theta = theta[:: max(1, len(theta) // MAX_POINTS)]
     ax_mu.plot(theta, np.degrees(transmission_angle(case, np.radians(theta))), color="k")

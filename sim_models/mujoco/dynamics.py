@@ -4,18 +4,30 @@ prescribed motion by forward simulation and read the forces at θ12.
 A heavy "clock" hinge (armature :data:`~.model.CLOCK_ARMATURE`) carries the
 prescribed motion φ(t) = θ12(t) − θ12*; a joint equality ties the driven link
 to it — the crank as θ12 = θ12* + φ, or for ``drive_link = 4`` the rocker as
-θ14 = p(φ), a quartic fitted to the analytic θ14(θ12) over the run (the
-motion is still prescribed through θ12). The equality's force is then the
-drive torque on that link, and the reactions come from cfrc_int as in statics.
+θ14 = p(φ), the analytic θ14(θ12* + φ) expanded to second order about the
+clock's angle at every step (:func:`coupling_table`; the motion is still
+prescribed through θ12). The equality's force is then the drive torque on that
+link (less the driven hinge's armature torque, see
+:data:`~.model.DRIVE_ARMATURE_INERTIA`), and the reactions come from cfrc_int
+as in statics.
 
 The run starts T before the instant with the analytic pose and velocities of
-θ12(−T) (a consistent seed) and ends exactly at t = 0. Only the soft
-constraints' start-up transient (a few time constants 2·dt) separates the
-answer from the steady motion, so the run is repeated with twice the lead
-time; it is accepted when the two answers agree within
-:data:`LEAD_AGREEMENT_RTOL` (the transient has died), else the lead keeps
-doubling up to :data:`MAX_LEAD_STEPS`. Leads stay short (0.1 rad at
-ω = 10 rad/s) so that a run never sweeps through a change point.
+θ12(−T) (a consistent seed) and ends exactly at t = 0. Two numerical errors
+separate the answer from the rigid motion, and each is driven below its
+threshold by a convergence check, never by a fixed setting:
+
+- the soft constraints' start-up transient: the run is repeated with twice
+  the lead time until two answers agree within :data:`LEAD_AGREEMENT_RTOL`.
+  The lead-in may not pass a pose whose condition number exceeds
+  :data:`LEAD_CONDITION_GROWTH` times the instant's — a change point, or for a
+  rocker drive a rocker dead point, where the driven link cannot move the
+  crank and the crank's sense is undetermined;
+- the time discretisation: a soft constraint holds its force with a violation
+  ∝ R·f·(2·dt)², and semi-implicit Euler puts velocities half a step behind
+  the positions. Both are O(dt²) and are magnified by the inverse transmission
+  ratio near a dead point (exam Q3: 1/|dθ14/dθ12| = 16, 3.6e-3 at
+  dt = 2.5e-5). The run is repeated with the same lead time and half the step
+  until two answers agree within :data:`TIMESTEP_AGREEMENT_RTOL`.
 
 Friction (:mod:`.friction`) is emulated from the current reactions every step
 with the senses of the simulator's own joint velocities. A static friction case
@@ -39,10 +51,11 @@ from sim_models.mujoco.friction import friction_loads, relative_speeds
 from sim_models.mujoco.model import Settings
 from sim_models.mujoco.rig import Rig
 
-#: Dynamics: 1e-4 s. With dt = 1e-3 the clock-driven torque was 2–4e-2 off
-#: (SIMULATORS.md): the soft constraint's time constant 2·dt must be short
-#: against the motion.
-DYNAMIC = Settings(timestep=2.5e-5, masses="real", clock=True)
+#: Dynamics: first time step 2.5e-5 s (refined by halving, see the module doc).
+#: With dt = 1e-3 the clock-driven torque was 2–4e-2 off (SIMULATORS.md): the
+#: soft constraint's time constant 2·dt must be short against the motion. The
+#: driven hinge gets an armature (model.DRIVE_ARMATURE_INERTIA).
+DYNAMIC = Settings(timestep=2.5e-5, masses="real", clock=True, drive_armature=True)
 #: Quasi-static friction runs use the heavy settling masses (see model.SETTLE_MASS).
 QUASI_STATIC = Settings(timestep=1e-3, masses="settle", clock=True)
 #: Input speed of a quasi-static run, rad/s: the inertia forces of the 1 t
@@ -55,13 +68,25 @@ MAX_LEAD_STEPS = 1600
 #: Runs with lead N and 2N agree to this fraction of the largest force (or
 #: torque/scale): the start-up transient has died. 100× below the 1e-3 target.
 LEAD_AGREEMENT_RTOL = 1e-5
+#: The lead-in may pass no pose whose condition number is more than this many
+#: times the instant's. The condition number of a rocker-driven four-bar grows
+#: without bound at a rocker dead point (crank and coupler aligned), that of any
+#: drive at a change point; doubling the lead-in through one (exam Q3 with
+#: 6400 steps of 2.5e-5 s passes the rocker dead point at θ12 = 36.7°) would
+#: make the crank's sense there a matter of chance. A factor 2 keeps the whole
+#: lead-in at least half as well conditioned as the instant.
+LEAD_CONDITION_GROWTH = 2.0
+#: Runs with time steps dt and dt/2 (same lead time) agree to this fraction of
+#: the largest force (or torque/scale). The error is O(dt²) (measured: 3.6e-3,
+#: 6.1e-4, 1.5e-4 at 2.5e-5, 1e-5, 5e-6 s on exam Q3), so the finer run is
+#: within a third of the difference of the converged answer: 1e-4 keeps it
+#: ≥ 30× below the 1e-3 dynamic target.
+TIMESTEP_AGREEMENT_RTOL = 1e-4
+#: The time step may be halved this many times (2.5e-5 s → 1.6e-6 s).
+MAX_TIMESTEP_HALVINGS = 4
 #: Fixed-point passes at the final instant so that the friction couples match
 #: the reactions they were computed from.
 FINAL_FRICTION_PASSES = 5
-#: Forward passes at the seeded state that carry its constraint forces before
-#: the first step: the soft constraints hold 1 − R/(A + R) ≈ 0.9999 of a force
-#: at zero violation, so each pass leaves 1e-4 of the last; three reach rounding.
-WARM_START_PASSES = 3
 
 
 @dataclass(frozen=True)
@@ -129,11 +154,11 @@ def lead_in_condition(case: Case, drive: Drive) -> tuple[float, float]:
     return float(cond[worst]), float(theta[worst])
 
 
-def start_run(rig: Rig, drive: Drive, coupling: np.ndarray) -> None:
-    """Seed the analytic state at θ12(−T), set the clock going, and carry the
-    constraint forces of that state (:data:`WARM_START_PASSES`)."""
+def start_run(rig: Rig, drive: Drive) -> None:
+    """Seed the analytic state at θ12(−T) and set the clock going."""
     m, d = rig.model, rig.data
     mujoco.mj_resetData(m, d)
+    rig.set_timestep(drive.dt)
     rig.set_extra(np.zeros(m.nbody), np.zeros((m.nbody, 3)))  # no friction left from a last run
     phi0 = drive.start_offset()
     qpos, qvel, _ = rig.qpos_at(drive.theta12 + phi0, drive.start_speed(), drive.alpha)
@@ -142,16 +167,13 @@ def start_run(rig: Rig, drive: Drive, coupling: np.ndarray) -> None:
     d.qpos[clock] = phi0
     d.qvel[clock] = drive.start_speed()
     # The clock's own inertia times α keeps it on the prescribed acceleration.
-    rig.clock_force = m.dof_armature[clock] * drive.alpha
-    rig.reset_carried()
-    for _ in range(WARM_START_PASSES):
-        forward(rig, coupling)
-        rig.carry()
+    d.qfrc_applied[clock] = m.dof_armature[clock] * drive.alpha
 
 
 def forward(rig: Rig, coupling: np.ndarray) -> None:
     """A forward pass at the current state with the drive polynomial ``coupling``;
-    the loads (and carried forces) are placed at the current positions."""
+    the loads are placed at the current positions (mj_kinematics first: after
+    mj_Euler the positions in mjData are still those before the step)."""
     m, d = rig.model, rig.data
     m.eq_data[rig.layout.drive_eq, :5] = coupling
     mujoco.mj_kinematics(m, d)
@@ -177,7 +199,7 @@ def run_drive(rig: Rig, drive: Drive, friction: bool) -> dict[str, float]:
     """Simulate to the instant and return the values there."""
     m, d = rig.model, rig.data
     coupling = coupling_table(rig.case, drive)
-    start_run(rig, drive, coupling[0])
+    start_run(rig, drive)
     values: dict[str, float] = {}
     for k in range(drive.steps):
         forward(rig, coupling[k])
@@ -185,7 +207,6 @@ def run_drive(rig: Rig, drive: Drive, friction: bool) -> dict[str, float]:
             values = rig.read()
             apply_friction(rig, values)
         mujoco.mj_Euler(m, d)
-        rig.carry()
     for _ in range(FINAL_FRICTION_PASSES if friction else 1):
         forward(rig, coupling[-1])
         values = rig.read()
@@ -211,6 +232,81 @@ def drive_motion(case: Case) -> tuple[Settings, float, float]:
     return DYNAMIC, case.motion.omega, case.motion.alpha
 
 
+@dataclass
+class Convergence:
+    """Where a driven run's convergence checks ended."""
+
+    values: dict[str, float]
+    lead_steps: int
+    dt: float
+    total_steps: int = 0
+    lead_disagreement: float = np.inf
+    timestep_disagreement: float = np.inf
+    lead_limit: str = ""
+
+    @property
+    def converged(self) -> bool:
+        return (self.lead_disagreement <= LEAD_AGREEMENT_RTOL
+                and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL)
+
+    def verdict(self) -> str:
+        """Why the run is not converged (empty when it is)."""
+        if not self.lead_disagreement <= LEAD_AGREEMENT_RTOL:
+            limit = f"; {self.lead_limit}" if self.lead_limit else ""
+            return (f"start-up transient still {self.lead_disagreement:.1e} of the forces after "
+                    f"{self.lead_steps} lead steps of {self.dt:.3g} s{limit}")
+        if not self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL:
+            return (f"time step not converged: runs with dt = {2.0 * self.dt:.3g} s and "
+                    f"{self.dt:.3g} s still differ by {self.timestep_disagreement:.1e} "
+                    "of the forces")
+        return ""
+
+
+def converge_lead(rig: Rig, case: Case, omega: float, alpha: float, dt: float) -> Convergence:
+    """Double the lead time until the start-up transient has died (or may not grow)."""
+    friction = case.has_friction
+    instant = float(condition(case, pose_of(case, np.array([case.theta12])))[0])
+    steps = LEAD_STEPS
+    out = Convergence(run_drive(rig, Drive(case.theta12, omega, alpha, steps, dt), friction),
+                      steps, dt, total_steps=steps)
+    while not out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
+        steps *= 2
+        drive = Drive(case.theta12, omega, alpha, steps, dt)
+        if steps > MAX_LEAD_STEPS:
+            out.lead_limit = f"step budget {MAX_LEAD_STEPS} reached"
+            break
+        worst, where = lead_in_condition(case, drive)
+        if not worst <= LEAD_CONDITION_GROWTH * instant:
+            out.lead_limit = (f"a longer lead-in would pass θ12 = {np.degrees(where):.2f}°, "
+                              f"condition number {worst:.3g} against {instant:.3g} at the instant "
+                              "(a change point, or the rocker dead point of a rocker drive)")
+            break
+        values = run_drive(rig, drive, friction)
+        residual = disagreement(values, out.values, rig.scale)
+        out.values, out.lead_steps, out.total_steps = values, steps, out.total_steps + steps
+        out.lead_disagreement = residual if np.isfinite(residual) else np.inf
+        if not np.isfinite(residual):
+            break
+    return out
+
+
+def refine_timestep(rig: Rig, case: Case, omega: float, alpha: float,
+                    out: Convergence) -> Convergence:
+    """Halve the time step (same lead time) until two runs agree."""
+    lead_time = out.lead_steps * out.dt
+    for _ in range(MAX_TIMESTEP_HALVINGS):
+        dt = 0.5 * out.dt
+        steps = int(round(lead_time / dt))
+        values = run_drive(rig, Drive(case.theta12, omega, alpha, steps, dt), case.has_friction)
+        residual = disagreement(values, out.values, rig.scale)
+        out.values, out.lead_steps, out.dt = values, steps, dt
+        out.total_steps += steps
+        out.timestep_disagreement = residual if np.isfinite(residual) else np.inf
+        if not residual > TIMESTEP_AGREEMENT_RTOL:  # converged, or NaN: stop either way
+            break
+    return out
+
+
 def driven(case: Case, rig: Rig | None = None) -> Solution:
     """The ``mujoco`` backend for a moving or friction case (method ``driven``).
 
@@ -220,31 +316,20 @@ def driven(case: Case, rig: Rig | None = None) -> Solution:
     start = time.perf_counter()
     settings, omega, alpha = drive_motion(case)
     rig = rig or Rig(case, settings)
-    steps = LEAD_STEPS
-    total = steps
-    previous = run_drive(rig, Drive(case.theta12, omega, alpha, steps, settings.timestep),
-                         case.has_friction)
-    while True:
-        steps *= 2
-        total += steps
-        values = run_drive(rig, Drive(case.theta12, omega, alpha, steps, settings.timestep),
-                           case.has_friction)
-        residual = disagreement(values, previous, rig.scale)
-        previous = values
-        if not np.isfinite(residual):
-            residual = np.inf
-            break
-        if residual <= LEAD_AGREEMENT_RTOL or steps >= MAX_LEAD_STEPS:
-            break
+    out = converge_lead(rig, case, omega, alpha, settings.timestep)
+    if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
+        out = refine_timestep(rig, case, omega, alpha, out)
+    values = out.values
     diagnostics: dict[str, float | str] = {
-        "method": "driven", "steps": total, "wall_time_s": time.perf_counter() - start,
+        "method": "driven", "steps": out.total_steps,
+        "wall_time_s": time.perf_counter() - start,
         "residual_velocity": abs(float(rig.data.qvel[rig.layout.qpos["clock"]]) - omega),
         "loop_violation": rig.loop_violation(), "pose_drift": rig.pose_drift(case.theta12),
-        "lead_disagreement": residual, "lead_steps": steps, "timestep": settings.timestep,
+        "lead_disagreement": out.lead_disagreement, "lead_steps": out.lead_steps,
+        "timestep": out.dt, "timestep_disagreement": out.timestep_disagreement,
     }
-    if residual > LEAD_AGREEMENT_RTOL:
+    if not out.converged:
         pose = {q: v for q, v in values.items() if quantity_kind(q) == "pose"}
         return Solution(case.name, "mujoco", pose, status="not_settled",
-                        message=f"start-up transient still {residual:.1e} of the forces after "
-                                f"{steps} lead steps", diagnostics=diagnostics)
+                        message=out.verdict(), diagnostics=diagnostics)
     return Solution(case.name, "mujoco", values, diagnostics=diagnostics)

@@ -45,6 +45,22 @@ FICTITIOUS_MASS_FRACTION = 1e-5
 #: (order 10 N·m) changes the clock's speed by ~1e-8 rad/s² — a prescribed motion.
 CLOCK_ARMATURE = 1e9
 
+#: Armature of the driven hinge in a driven run, as a multiple of (heaviest real
+#: mass) × (mechanism scale)², i.e. of the order of the real links' inertias.
+#: A massless driven link gets only a fictitious inertia (1e-5 of the real ones),
+#: and MuJoCo's regulariser R of the drive equality is proportional to the
+#: inverse inertia it sees (body_invweight0), so the drive held its torque with
+#: a violation of ~1e-4 rad — magnified 1/|dθ14/dθ12| times in the crank next
+#: to a rocker dead point — and the crank sat on a spring of that compliance,
+#: a mode with ~5 % damping that rang for ~700 steps (exam Q3). A grounded
+#: hinge's armature is a pure couple between ground and the driven link, just
+#: like the drive itself: it changes no reaction, and its torque I_a·q̈ is
+#: subtracted exactly from the drive torque with MuJoCo's own q̈
+#: (:meth:`.rig.Rig.read`). Of the order of the real inertias it neither
+#: dominates the drive torque (I_a·α ~ the real inertia torques) nor leaves
+#: the drive softer than the rest of the mechanism.
+DRIVE_ARMATURE_INERTIA = 1.0
+
 #: solimp at the maximum MuJoCo allows: the impedance d = 0.9999 whatever the
 #: violation, so the constraint regulariser R = (1 − d)/d · A is 1e-4 of the
 #: constraint's own inverse inertia (MuJoCo's default is d = 0.9 → 0.95).
@@ -75,6 +91,14 @@ class Settings:
     fictitious_fraction: float = FICTITIOUS_MASS_FRACTION
     armature: float = 0.0
     clock: bool = False
+    drive_armature: bool = False
+
+    def drive_armature_of(self, case: Case) -> float:
+        """The extra armature of the driven hinge, kg·m² (see :data:`DRIVE_ARMATURE_INERTIA`)."""
+        if not self.drive_armature:
+            return 0.0
+        reference = max((m.mass for m in case.masses), default=1.0)
+        return DRIVE_ARMATURE_INERTIA * reference * case.geometry.scale**2
 
     @property
     def solref(self) -> tuple[float, float]:
@@ -195,6 +219,9 @@ def build_spec(case: Case, settings: Settings = STATIC) -> mujoco.MjSpec:
                       objtype=mujoco.mjtObj.mjOBJ_SITE, name1="B_on_4", name2="B_on_3",
                       solref=list(settings.solref), solimp=list(settings.solimp))
     drive_joint = "A0" if case.drive_link == 2 else "B0"
+    if settings.drive_armature:
+        joint = spec.joint(drive_joint)
+        joint.armature = joint.armature + settings.drive_armature_of(case)
     spec.add_equality(name="drive", type=mujoco.mjtEq.mjEQ_JOINT, name1=drive_joint,
                       name2="clock" if settings.clock else "",
                       data=[0.0, 1.0, 0.0, 0.0, 0.0] + [0.0] * 7,

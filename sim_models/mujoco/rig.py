@@ -11,18 +11,9 @@ Forces are read from MuJoCo's own state only:
   whose moment MuJoCo refers to the subtree's centre of mass, shifted here to
   the joint point.
 
-Carried constraint forces (driven runs, :mod:`.dynamics`). A soft constraint
-holds a force f only with a violation r ≈ R·f/k (R its regulariser, k its
-stiffness). On a nearly massless link R is large, and near a dead point of the
-drive the violation is magnified many times in the pose (see
-:mod:`.dynamics`). So a driven run moves the constraint forces MuJoCo has
-produced so far out of the constraints and applies them explicitly — the loop
-force as an equal and opposite pair at the two B sites (``xfrc_applied``, so
-``cfrc_int`` sees it), the drive torque on the driven hinge (a joint torque,
-which is what a drive is) with its reaction on the clock. Each soft constraint
-then carries only the change since the last step, and its violation shrinks
-accordingly. The reported forces are always the carried part plus MuJoCo's
-current ``efc_force``: MuJoCo's own numbers.
+A driven run may give the driven hinge an armature (:data:`.model.Settings`
+``drive_armature``); its torque I_a·q̈ is then part of the equality's force
+and is subtracted, with MuJoCo's own q̈, from the drive torque read here.
 """
 
 from __future__ import annotations
@@ -92,16 +83,8 @@ class Rig:
         self.extra_torque = np.zeros(self.model.nbody)
         self.extra_force = np.zeros((self.model.nbody, 3))
         self.body_forces = self.incidence @ self.loads.forces
-        self.loop_sites = (mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "B_on_4"),
-                           mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "B_on_3"))
-        # Carried constraint forces (see the module doc): the loop force on link 4
-        # (global x, y, z) and the drive torque; the clock's own applied force.
-        self.carried_loop = np.zeros(3)
-        self.carried_drive = 0.0
-        self.clock_force = 0.0
         self.efc_scale = self._efc_scale()
-        self.loop_rows = self.equality_rows(self.layout.loop_eq)
-        self.drive_rows = self.equality_rows(self.layout.drive_eq)
+        self.drive_armature = settings.drive_armature_of(case)
 
     # -- pose -------------------------------------------------------------------
     def qpos_at(self, theta12: float, omega: float | None = None,
@@ -137,6 +120,13 @@ class Rig:
         self.data.qpos[idx] = qpos
         self.data.qvel[idx] = qvel
 
+    def set_timestep(self, dt: float) -> None:
+        """Change the time step at run time, with the constraints' time constant
+        (2·dt unless the settings fix it; MuJoCo reads solref at every step)."""
+        self.model.opt.timestep = dt
+        if self.settings.solref_timeconst is None:
+            self.model.eq_solref[:, 0] = 2.0 * dt
+
     def set_lock(self, target: float) -> None:
         """Hold the driven joint at ``target`` (rad) through the joint equality."""
         self.model.eq_data[self.layout.drive_eq, 0] = target
@@ -167,45 +157,6 @@ class Rig:
         # Extra forces (slide friction) act at pin B, the slider's origin.
         b4 = self.layout.body[4]
         xfrc[b4, 5] += cross_z(d.xpos[b4] - d.xipos[b4], self.extra_force[b4])
-        self.apply_carried()
-
-    # -- carried constraint forces ------------------------------------------------
-    def reset_carried(self) -> None:
-        """Nothing carried: the constraints hold every force themselves."""
-        self.carried_loop = np.zeros(3)
-        self.carried_drive = 0.0
-        self.data.qfrc_applied[:] = 0.0
-        if self.layout.clock:
-            self.data.qfrc_applied[self.layout.qpos["clock"]] = self.clock_force
-
-    def carry(self) -> None:
-        """Move the constraint forces of the last forward pass into the carried ones."""
-        f = self.data.efc_force
-        self.carried_loop = self.carried_loop + f[self.loop_rows]
-        self.carried_drive += float(f[self.drive_rows[0]])
-
-    def coupling_slope(self) -> float:
-        """dq/dφ of the drive equality's polynomial at the clock's current angle."""
-        c = self.model.eq_data[self.layout.drive_eq, 1:5]
-        phi = float(self.data.qpos[self.layout.qpos["clock"]])
-        return float(c[0] + phi * (2.0 * c[1] + phi * (3.0 * c[2] + phi * 4.0 * c[3])))
-
-    def apply_carried(self) -> None:
-        """The carried forces as loads: the loop pair at the B sites (its moment
-        about each centre of mass from the current positions) and the drive torque
-        on the driven hinge, with the equal and opposite reaction on the clock."""
-        if not (self.carried_drive or self.carried_loop.any()):
-            return
-        d, body = self.data, self.layout.body
-        f = self.carried_loop
-        for b, site, sign in ((body[4], self.loop_sites[0], 1.0),
-                              (body[3], self.loop_sites[1], -1.0)):
-            d.xfrc_applied[b, 0:3] += sign * f
-            d.xfrc_applied[b, 5] += sign * cross_z(d.site_xpos[site] - d.xipos[b], f)
-        d.qfrc_applied[self.layout.drive_dof] = self.carried_drive
-        if self.layout.clock:
-            d.qfrc_applied[self.layout.qpos["clock"]] = (
-                self.clock_force - self.coupling_slope() * self.carried_drive)
 
     def set_extra(self, torque: Array, force: Array) -> None:
         """Extra couples (per body, N·m) and slider forces (per body, N) on top of the loads."""
@@ -247,12 +198,12 @@ class Rig:
         values = {"theta13": float(q[lay.qpos["A0"]] + q[lay.qpos["A"]])}
         f12, _ = self.parent_force(2, d.xpos[lay.body[2], :2])
         f23, _ = self.parent_force(3, d.xpos[lay.body[3], :2])
-        loop = d.efc_force[self.loop_rows] + self.carried_loop
+        loop = d.efc_force[self.equality_rows(lay.loop_eq)]
         f14, m14 = self.parent_force(4, d.xpos[lay.body[4], :2])
         # Slide friction is applied as an external force, but it is part of the
         # guide's reaction on the slider (F14 is the guide's whole force).
         f14 = f14 + self.extra_force[lay.body[4], :2]
-        drive = d.efc_force[self.drive_rows] + self.carried_drive
+        drive = d.efc_force[self.equality_rows(lay.drive_eq)]
         values.update({"F12_x": f12[0], "F12_y": f12[1], "F23_x": f23[0], "F23_y": f23[1],
                        "F34_x": loop[0], "F34_y": loop[1], "F14_x": f14[0], "F14_y": f14[1]})
         if self.four_bar:
@@ -260,7 +211,8 @@ class Rig:
         else:
             values["s14"] = float(q[lay.qpos["slide"]])
             values["M14"] = m14
-        values[f"T1{self.case.drive_link}"] = float(drive[0])
+        dof = lay.drive_dof
+        values[f"T1{self.case.drive_link}"] = float(drive[0] - self.drive_armature * d.qacc[dof])
         return {k: float(v) for k, v in values.items()}
 
     def loop_violation(self) -> float:

@@ -9,6 +9,12 @@ Error measure (also used by the tests): for each quantity,
 |sim − ref| / max(|ref|, scale), scale being the largest |ref| among that
 case's quantities of the same kind (forces, or torques); the row reports the
 largest over all quantities.
+
+The driven rows vary the *starting* settings: the driven backend raises the
+iterations (with the lead-in) until its readings are smooth and checks every
+reading against one at dt/2, reporting the finer one (see
+:mod:`sim_models.pymunk.dynamics`), so ``iterations`` and ``dt`` there are the
+first rung and the coarse step, and the error is that of the accepted reading.
 """
 
 from __future__ import annotations
