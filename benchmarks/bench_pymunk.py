@@ -17,8 +17,8 @@ import pymunk
 
 from analytic.forces import solve_poses
 from analytic.solution import Solution
+from compare.casefile import builtin_case_files, load_cases
 from sim_models.pymunk import sweep
-from sim_models.pymunk.seeds import e1
 
 
 def worst_error(solutions: list[Solution], reference: dict[str, np.ndarray]) -> float:
@@ -36,7 +36,7 @@ def worst_error(solutions: list[Solution], reference: dict[str, np.ndarray]) -> 
 
 
 def main() -> None:
-    case = e1()
+    case = next(c for c in load_cases(*builtin_case_files()) if c.name == "seed-E1-as-stated")
     theta = np.radians(np.arange(360.0))
     reference = solve_poses(case, theta).values
     print(f"pymunk {pymunk.version}, Python {platform.python_version()}, {platform.machine()}\n")

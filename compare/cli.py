@@ -158,5 +158,14 @@ def backends_command() -> None:
         typer.echo(f"{name:15s} {state}")
 
 
+def _add_theory() -> None:
+    from compare.theory_cli import app as theory_app
+
+    app.add_typer(theory_app, name="theory")
+
+
+_add_theory()
+
+
 def main() -> None:
     app()

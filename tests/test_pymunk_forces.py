@@ -4,17 +4,28 @@ from __future__ import annotations
 
 import pymunk
 import pytest
+from builtin import builtin
 
+from analytic.case import Case
 from sim_models.pymunk import forces
 from sim_models.pymunk.loads import apply_loads
 from sim_models.pymunk.model import build_model
 from sim_models.pymunk.readout import reactions
-from sim_models.pymunk.seeds import e1, e2
 from sim_models.pymunk.settings import SETTLE
 
 #: Momentum balance over one step is exact arithmetic on the same doubles;
 #: the slack covers rounding of products of ~1e3 kg masses and ~1e2 N forces.
 BALANCE_RTOL = 1e-9
+
+
+def e1() -> Case:
+    """Seed E1 (SEEDS.md, Söylemez 6.3), loads as stated: T12 = +2.90133 N·m."""
+    return builtin("seed-E1-as-stated")
+
+
+def e2() -> Case:
+    """Seed E2 slider-crank with friction, crank clockwise: T12 = −22.897 N·m."""
+    return builtin("seed-E2-friction")
 
 
 def test_layout_check_passes_on_this_build() -> None:

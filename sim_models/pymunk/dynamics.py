@@ -19,11 +19,12 @@ crank actually passes θ12* next to t* (:func:`reading_at`).
 
 Nothing about a run is a fixed step count (see :data:`LEAD_MIN`): the
 lead-in and the solver iterations grow until the readings are free of
-start-up noise (:func:`lead_ladder`), and the answer is then checked against
-a run at half the time step (:func:`drive_once`). Both are judged on
-pymunk's own readings only; the analytic side supplies the prescribed motion,
-the seed, and the geometry's condition number that keeps the lead-in clear
-of dead points (:func:`lead_window`).
+start-up noise (:func:`lead_ladder`), and the time step halves until two
+successive readings agree (:func:`drive_once`). Both are judged on pymunk's
+own readings only; the analytic side supplies the prescribed motion, the
+seed, and the geometry's condition number that keeps the lead-in clear of
+dead points (:func:`lead_window`). What cannot be met within the budgets is
+reported ``not_settled`` with the reason, never as forces.
 
 Why the drive-on-link-4 cases need this. With the torque on the rocker, the
 rocker cannot move the crank where crank and coupler are in line
@@ -32,11 +33,14 @@ the loop is ill-conditioned: the crank is barely held, warm-started
 Gauss–Seidel at 100 iterations no longer keeps up with the motion, and the
 forces of a run that crosses the point, or starts near it, oscillate by
 O(100 %) from step to step. fourbar-dynamic-drive4's old 400-step lead-in
-started 5.7° on the far side of such a point (θ12 ≈ 223.7°, 326 steps
-before t*). seed-exam-Q3 reads 8.6° from one (θ13 − θ12 = 8.6°), where the
+started 5.6° on the far side of such a point (θ12 ≈ 223.7°, 327 steps
+before t*). seed-exam-Q3 reads 6.8° of crank rotation short of one
+(θ12 ≈ 36.8°; at θ12* crank and coupler are 8.6° from in line), where the
 forces vary so fast (by 100 % within ~200 steps) that their genuine second
 difference per step, 1.4e-4, failed the old smoothness test, which took it
-for noise; its answer was 7e-5 off.
+for noise (the reading itself was 8e-5 off). A third defect showed on the
+way: the closed-form θ14 jumps by 2π at θ12 = 180°, and the clock followed
+the jump (see :meth:`Drive.link_angles`).
 """
 
 from __future__ import annotations
@@ -130,7 +134,7 @@ WINDOW_CONDITION = 2.0
 #: step-to-step noise of amplitude σ (a start-up transient, a solver that does
 #: not keep up) gives ~2^k·σ. The 4th difference separates the two by far:
 #: on the fast-varying seed-exam-Q3 reading the 2nd difference is 1.4e-4 but
-#: the 4th is 1.4e-7; the other driven cases give ≤ 2e-8 and runs that have
+#: the 4th is 1.4e-7; the other driven cases give ≤ 1e-7 and runs that have
 #: not settled 7e-4 … 1. The limit bounds the noise left in a reading to
 #: ~1e-6 of the force scale, 1000× below the 1e-3 dynamic target.
 SMOOTHNESS = 1.0e-5
@@ -149,7 +153,7 @@ NOISE_SPAN = SMOOTH_READINGS + 4
 TRACKING_LIMIT = 1.0e-4
 
 #: Step-size check. The integration error of a driven reading falls as dt²
-#: (measured 4–5× per halving next to rocker dead points), so a reading is
+#: (measured 4–6× per halving next to rocker dead points), so a reading is
 #: repeated at dt/2 and accepted when the two differ by at most this fraction
 #: of the force scale: the finer one, which is reported, is then ~1/3 of that,
 #: 1e-4, 10× below the 1e-3 dynamic target. Otherwise dt keeps halving down to

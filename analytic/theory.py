@@ -1,0 +1,197 @@
+"""Mechanism theory of seed 001: mobility, Grashof's rule, dead (limit)
+positions, transmission angle extremes and slider-crank rotatability.
+
+Examples
+--------
+>>> mobility(4, {"R": 4})
+1
+>>> grashof(ground=250, crank=100, coupler=220, rocker=150).kind
+'crank-rocker'
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
+from analytic.kinematics import pose_of
+
+#: Freedom of each joint type (seed 001): revolute, prismatic, cylinder in a
+#: slot, gear contact, cylindrical, spherical, spherical with a key.
+JOINT_FREEDOM: dict[str, int] = {"R": 1, "P": 1, "Cs": 2, "G": 2, "C": 2, "S": 3, "Ss": 2}
+
+
+def mobility(links: int, joints: Mapping[str, int], *, spatial: bool = False) -> int:
+    """Gruebler–Kutzbach: S = λ(u − m − 1) + ΣSi.
+
+    ``links`` is u (ground included), ``joints`` maps joint type → count
+    (m is their total), λ = 6 if ``spatial`` else 3.
+    """
+    if links < 1:
+        raise CaseError(f"must be >= 1, got {links}", key="links")
+    unknown = sorted(set(joints) - set(JOINT_FREEDOM))
+    if unknown:
+        raise CaseError(f"unknown joint type {unknown[0]!r}; known: {', '.join(JOINT_FREEDOM)}",
+                        key="joints")
+    lam = 6 if spatial else 3
+    m = sum(joints.values())
+    return lam * (links - m - 1) + sum(JOINT_FREEDOM[j] * n for j, n in joints.items())
+
+
+def mobility_meaning(s: int) -> str:
+    """What a mobility means: a mechanism with S inputs, or a structure."""
+    if s > 0:
+        return f"mechanism with {s} degree{'s' if s > 1 else ''} of freedom"
+    if s == 0:
+        return "statically determinate structure"
+    return "statically indeterminate (over-constrained) structure"
+
+
+@dataclass(frozen=True)
+class GrashofClass:
+    """Grashof classification of a four-bar; ``s + l`` against ``p + q``."""
+
+    kind: str          # crank-rocker | double-crank | double-rocker | change-point | non-Grashof double-rocker
+    grashof: bool      # s + l <= p + q
+    shortest: str      # ground | crank | coupler | rocker
+    s_plus_l: float
+    p_plus_q: float
+
+
+#: Lengths closer than this (relative) count as equal: s + l = p + q is a change point.
+EQUALITY_RTOL = 1e-12
+
+
+def grashof(*, ground: float, crank: float, coupler: float, rocker: float) -> GrashofClass:
+    """Classify a four-bar by Grashof's rule and which link is shortest (seed 001).
+
+    s + l < p + q: shortest adjacent to ground → crank-rocker; shortest is
+    ground → double-crank; shortest opposite ground → double-rocker.
+    s + l > p + q: non-Grashof double-rocker (no link turns fully).
+    s + l = p + q: change point (the links fold flat in one pose).
+    """
+    lengths = {"ground": ground, "crank": crank, "coupler": coupler, "rocker": rocker}
+    for key, value in lengths.items():
+        if not value > 0:
+            raise CaseError(f"must be > 0, got {value}", key=key)
+    ordered = sorted(lengths.values())
+    s, p, q, l_ = ordered
+    shortest = min(lengths, key=lambda k: lengths[k])
+    total = s + l_ - (p + q)
+    if abs(total) <= EQUALITY_RTOL * (s + l_):
+        kind = "change-point"
+    elif total > 0:
+        kind = "non-Grashof double-rocker"
+    elif shortest == "ground":
+        kind = "double-crank"
+    elif shortest in ("crank", "rocker"):
+        kind = "crank-rocker"
+    else:
+        kind = "double-rocker"
+    return GrashofClass(kind, total <= EQUALITY_RTOL * (s + l_), shortest, s + l_, p + q)
+
+
+def crank_turns_fully(g: FourBarGeometry) -> bool:
+    """True when link 2 can turn a full revolution relative to the ground."""
+    return g.a2 + g.a1 <= g.a3 + g.a4 and abs(g.a1 - g.a2) >= abs(g.a3 - g.a4)
+
+
+@dataclass(frozen=True)
+class LimitPosition:
+    """A dead (limit) position of a crank-rocker: crank and coupler collinear."""
+
+    name: str          # "extended" (|A0B| = a2 + a3) or "folded" (|A0B| = a3 − a2)
+    distance: float    # |A0B| there
+    theta12: float     # rad
+    theta14: float     # rad
+
+
+def limit_positions(case: Case) -> tuple[LimitPosition, LimitPosition]:
+    """The two rocker extremes of a crank-rocker on the case's branch.
+
+    There the crank and coupler are collinear, so B lies at |A0B| = a2 + a3
+    (extended) or a3 − a2 (folded) from A0 and at a4 from B0; of the two
+    mirror-image solutions, the one on the case's branch is kept.
+    """
+    g = case.geometry
+    if not isinstance(g, FourBarGeometry):
+        raise CaseError("limit positions are defined here for a four_bar", key="mechanism")
+    out = []
+    for name, d in (("extended", g.a2 + g.a3), ("folded", g.a3 - g.a2)):
+        cos_b0 = (g.a1**2 + d**2 - g.a4**2) / (2.0 * g.a1 * d)
+        if abs(cos_b0) > 1.0 or d <= 0.0:
+            raise CaseError(f"has no {name} dead position (not a crank-rocker)", key="geometry")
+        phi = math.acos(cos_b0)  # angle of A0B from the ground line
+        candidates = []
+        for sign in (1.0, -1.0):
+            direction = case.ground_angle + sign * phi
+            theta12 = direction if name == "extended" else direction + math.pi
+            b = d * np.array([math.cos(direction), math.sin(direction)])
+            p = pose_of(case, theta12, omega=0.0, alpha=0.0)
+            if np.all(np.isfinite(p.joints["B"])):
+                candidates.append((float(np.linalg.norm(p.joints["B"][0] - b)), theta12,
+                                   float(p.theta14[0])))
+        err, theta12, theta14 = min(candidates)
+        out.append(LimitPosition(name, d, math.remainder(theta12, math.tau),
+                                 math.remainder(theta14, math.tau)))
+    return out[0], out[1]
+
+
+@dataclass(frozen=True)
+class TransmissionExtremes:
+    """Transmission-angle extremes over a full turn and where they occur (rad)."""
+
+    mu_min: float
+    theta12_at_min: float
+    mu_max: float
+    theta12_at_max: float
+
+    @property
+    def worst(self) -> float:
+        """The smaller of μmin and 180° − μmax: the worst transmission (seed: take the smaller)."""
+        return min(self.mu_min, math.pi - self.mu_max)
+
+
+def transmission_extremes(case: Case) -> TransmissionExtremes:
+    """μmin and μmax in closed form.
+
+    Four-bar: μ is the angle at B of triangle A-B-B0, cos μ = (a3² + a4² − d²)/(2 a3 a4)
+    with d = |AB0| growing from |a1 − a2| (crank along the ground, towards B0) to a1 + a2
+    (crank away from B0); the crank angles are the ground direction and its opposite.
+    Slider-crank: μ is the angle between the rod and the slide normal,
+    cos μ = |e − a2 sin φ12|/a3, smallest μ with the crank perpendicular to the slide.
+    """
+    g = case.geometry
+    gd = case.ground_angle
+    if isinstance(g, FourBarGeometry):
+        def mu(d: float) -> float:
+            c = (g.a3**2 + g.a4**2 - d**2) / (2.0 * g.a3 * g.a4)
+            return math.acos(max(-1.0, min(1.0, c)))
+        d_min, d_max = abs(g.a1 - g.a2), g.a1 + g.a2
+        lo, hi = max(d_min, abs(g.a3 - g.a4)), min(d_max, g.a3 + g.a4)
+        return TransmissionExtremes(mu(lo), math.remainder(gd, math.tau),
+                                    mu(hi), math.remainder(gd + math.pi, math.tau))
+    assert isinstance(g, SliderCrankGeometry)
+    worst_sin = 1.0 if g.offset <= 0 else -1.0   # crank at ±90° from the slide, away from e
+    cos_mu = min(1.0, (abs(g.offset) + g.a2) / g.a3)
+    best = min(1.0, max(0.0, abs(g.offset) - g.a2) / g.a3)
+    return TransmissionExtremes(math.acos(cos_mu), math.remainder(gd + worst_sin * math.pi / 2,
+                                                                  math.tau),
+                                math.acos(best), math.remainder(gd - worst_sin * math.pi / 2,
+                                                                math.tau))
+
+
+def slider_crank_rotates(g: SliderCrankGeometry) -> bool:
+    """The crank turns fully iff a2 + |e| < a3 (seed: a < b and b − a > e)."""
+    return g.a2 + abs(g.offset) < g.a3
+
+
+def slider_stroke(g: SliderCrankGeometry) -> float:
+    """Stroke of a fully rotating slider-crank: √((a3+a2)² − e²) − √((a3−a2)² − e²); 2·a2 if centric."""
+    if not slider_crank_rotates(g):
+        raise CaseError("the crank does not turn fully (a2 + |e| >= a3)", key="geometry")
+    return math.sqrt((g.a3 + g.a2) ** 2 - g.offset**2) - math.sqrt((g.a3 - g.a2) ** 2 - g.offset**2)

@@ -1,0 +1,138 @@
+"""``mechcheck theory``: mobility, Grashof, limit positions, transmission angle."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from analytic import theory
+from analytic.assembly import assembly_range_text
+from analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
+from compare.casefile import load_cases
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="Mechanism theory of the seeds (mobility, Grashof, dead positions, "
+                       "transmission angle, slider-crank rotation).")
+
+#: The seed 001 mobility catalogue: (name, u, joints, spatial, printed S).
+MOBILITY_CATALOGUE = [
+    ("slider-crank", 4, "3R,1P", False, 1), ("four-bar", 4, "4R", False, 1),
+    ("shaper (kurs)", 5, "3R,2P,1Cs", False, 1), ("five-bar", 5, "5R", False, 2),
+    ("seven-link", 7, "8R", False, 2), ("garage door", 6, "7R", False, 1),
+    ("wave-maker", 4, "2R,2S", True, 2), ("wave-maker, one S keyed", 4, "2R,1S,1Ss", True, 1),
+    ("gear pair", 3, "2R,1G", False, 1), ("excavator bucket", 10, "12R,1P", False, 1),
+    ("mixed", 9, "8R,2P,2G", False, 2), ("self-closing hinge", 3, "2C,1S", True, 1),
+    ("truss", 9, "12R", False, 0), ("over-constrained", 6, "8R", False, -1),
+]
+#: The seed 001 Grashof examples: (A0A crank, AB coupler, B0B rocker, A0B0 ground, printed).
+GRASHOF_CATALOGUE = [
+    (100.0, 220.0, 150.0, 250.0, "crank-rocker"), (300.0, 315.0, 290.0, 215.0, "double-crank"),
+    (415.0, 115.0, 500.0, 218.0, "double-rocker"),
+    (100.0, 229.0, 99.0, 300.0, "non-Grashof double-rocker"),
+]
+
+
+def parse_joints(text: str) -> dict[str, int]:
+    """``"3R,1P,1Cs"`` → {"R": 3, "P": 1, "Cs": 1}."""
+    out: dict[str, int] = {}
+    for part in filter(None, (p.strip() for p in text.split(","))):
+        match = re.fullmatch(r"(\d*)([A-Za-z]+)", part)
+        if not match:
+            raise CaseError(f"cannot read {part!r}: write COUNT TYPE, e.g. 3R", key="joints")
+        out[match[2]] = out.get(match[2], 0) + int(match[1] or 1)
+    return out
+
+
+def fail(error: CaseError) -> typer.Exit:
+    typer.echo(f"mechcheck: error: {error}", err=True)
+    return typer.Exit(2)
+
+
+@app.command("mobility")
+def mobility_command(
+    links: Annotated[int, typer.Option(help="u: number of links, ground included.")],
+    joints: Annotated[str, typer.Option(help="Joints as COUNT TYPE, e.g. 3R,1P (types "
+                                        f"{', '.join(theory.JOINT_FREEDOM)}).")],
+    spatial: Annotated[bool, typer.Option(help="λ = 6 (spatial) instead of 3.")] = False,
+) -> None:
+    """Degrees of freedom by Gruebler–Kutzbach, S = λ(u − m − 1) + ΣSi."""
+    try:
+        s = theory.mobility(links, parse_joints(joints), spatial=spatial)
+    except CaseError as error:
+        raise fail(error) from None
+    typer.echo(f"S = {s}: {theory.mobility_meaning(s)}")
+
+
+@app.command("grashof")
+def grashof_command(
+    ground: Annotated[float, typer.Option(help="A0B0")], crank: Annotated[float, typer.Option(
+        help="A0A")], coupler: Annotated[float, typer.Option(help="AB")],
+    rocker: Annotated[float, typer.Option(help="B0B")],
+) -> None:
+    """Grashof class of a four-bar from its four lengths."""
+    try:
+        g = theory.grashof(ground=ground, crank=crank, coupler=coupler, rocker=rocker)
+    except CaseError as error:
+        raise fail(error) from None
+    relation = "<" if g.s_plus_l < g.p_plus_q else (">" if g.s_plus_l > g.p_plus_q else "=")
+    typer.echo(f"{g.kind} (s + l = {g.s_plus_l:g} {relation} p + q = {g.p_plus_q:g}; "
+               f"shortest: {g.shortest})")
+
+
+def describe(case: Case) -> list[str]:
+    """The theory facts of one case, as lines."""
+    g = case.geometry
+    lines = [f"{case.name} ({case.mechanism}, {case.branch} branch)",
+             f"  assembly: {assembly_range_text(case)}"]
+    ext = theory.transmission_extremes(case)
+    lines.append(f"  transmission angle: μmin = {math.degrees(ext.mu_min):.4f}° at θ12 = "
+                 f"{math.degrees(ext.theta12_at_min):.4f}°, μmax = {math.degrees(ext.mu_max):.4f}° "
+                 f"at θ12 = {math.degrees(ext.theta12_at_max):.4f}°")
+    if isinstance(g, FourBarGeometry):
+        cls = theory.grashof(ground=g.a1, crank=g.a2, coupler=g.a3, rocker=g.a4)
+        lines.append(f"  Grashof: {cls.kind} (s + l = {cls.s_plus_l:g}, p + q = {cls.p_plus_q:g})")
+        if cls.kind == "crank-rocker" and cls.shortest == "crank":
+            for lp in theory.limit_positions(case):
+                lines.append(f"  dead position ({lp.name}, |A0B| = {lp.distance:g} m): θ12 = "
+                             f"{math.degrees(lp.theta12):.4f}°, rocker θ14 = "
+                             f"{math.degrees(lp.theta14):.4f}°")
+    else:
+        assert isinstance(g, SliderCrankGeometry)
+        turns = theory.slider_crank_rotates(g)
+        lines.append(f"  crank turns fully: {'yes' if turns else 'no'} (a2 + |e| "
+                     f"{'<' if turns else '>='} a3)")
+        if turns:
+            lines.append(f"  stroke: {theory.slider_stroke(g):g} m")
+    return lines
+
+
+@app.command("case")
+def case_command(files: Annotated[list[Path], typer.Argument(help="Case files (TOML).")]) -> None:
+    """Grashof class, assembly range, dead positions and transmission extremes of each case."""
+    try:
+        cases = load_cases(*files)
+    except CaseError as error:
+        raise fail(error) from None
+    for case in cases:
+        typer.echo("\n".join(describe(case)))
+
+
+@app.command("catalogue")
+def catalogue_command() -> None:
+    """The seed catalogue (mobility and Grashof examples of seed 001), recomputed."""
+    bad = 0
+    for name, u, joints, spatial, printed in MOBILITY_CATALOGUE:
+        s = theory.mobility(u, parse_joints(joints), spatial=spatial)
+        bad += s != printed
+        typer.echo(f"mobility  {name:26s} u={u:<3d} {joints:12s} λ={6 if spatial else 3}  "
+                   f"S = {s:2d} (printed {printed:2d})")
+    for crank, coupler, rocker, ground, printed in GRASHOF_CATALOGUE:
+        kind = theory.grashof(ground=ground, crank=crank, coupler=coupler, rocker=rocker).kind
+        bad += kind != printed
+        typer.echo(f"grashof   A0A={crank:g} AB={coupler:g} B0B={rocker:g} A0B0={ground:g}: "
+                   f"{kind} (printed {printed})")
+    raise typer.Exit(1 if bad else 0)
