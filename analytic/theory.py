@@ -55,7 +55,8 @@ def mobility_meaning(s: int) -> str:
 class GrashofClass:
     """Grashof classification of a four-bar; ``s + l`` against ``p + q``."""
 
-    kind: str          # crank-rocker | double-crank | double-rocker | change-point | non-Grashof double-rocker
+    #: crank-rocker | double-crank | double-rocker | change-point | non-Grashof double-rocker
+    kind: str
     grashof: bool      # s + l <= p + q
     shortest: str      # ground | crank | coupler | rocker
     s_plus_l: float
@@ -135,7 +136,7 @@ def limit_positions(case: Case) -> tuple[LimitPosition, LimitPosition]:
             if np.all(np.isfinite(p.joints["B"])):
                 candidates.append((float(np.linalg.norm(p.joints["B"][0] - b)), theta12,
                                    float(p.theta14[0])))
-        err, theta12, theta14 = min(candidates)
+        _, theta12, theta14 = min(candidates)  # the mirror image on the case's branch
         out.append(LimitPosition(name, d, math.remainder(theta12, math.tau),
                                  math.remainder(theta14, math.tau)))
     return out[0], out[1]
