@@ -130,9 +130,9 @@ def catalogue_command() -> None:
         bad += s != printed
         typer.echo(f"mobility  {name:26s} u={u:<3d} {joints:12s} λ={6 if spatial else 3}  "
                    f"S = {s:2d} (printed {printed:2d})")
-    for crank, coupler, rocker, ground, printed in GRASHOF_CATALOGUE:
+    for crank, coupler, rocker, ground, printed_kind in GRASHOF_CATALOGUE:
         kind = theory.grashof(ground=ground, crank=crank, coupler=coupler, rocker=rocker).kind
-        bad += kind != printed
+        bad += kind != printed_kind
         typer.echo(f"grashof   A0A={crank:g} AB={coupler:g} B0B={rocker:g} A0B0={ground:g}: "
-                   f"{kind} (printed {printed})")
+                   f"{kind} (printed {printed_kind})")
     raise typer.Exit(1 if bad else 0)
