@@ -146,6 +146,27 @@ def parse_fail_on(text: str) -> tuple[str, ...]:
     return verdicts
 
 
+@app.command("study")
+def study_command(
+    names: Annotated[list[str] | None, typer.Argument(
+        help="Studies to run (default: all): quasi_static, superposition_friction, "
+             "friction_angle, massless, rigid_joints, near_toggle.")] = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
+        Path("mechcheck-studies"),
+    quick: Annotated[bool, typer.Option(help="Fewer points per sweep (a smoke run).")] = False,
+) -> None:
+    """Run the assumption studies on the simulators; figures, data and conclusions."""
+    from compare.studies import STUDIES
+    from compare.studies_report import run_studies
+
+    chosen = list(names) if names else list(STUDIES)
+    unknown = [n for n in chosen if n not in STUDIES]
+    if unknown:
+        raise fail_input(f"unknown study {unknown[0]!r}; studies: {', '.join(STUDIES)}")
+    for line in run_studies(chosen, out, quick=quick):
+        typer.echo(line)
+
+
 @app.command("backends")
 def backends_command() -> None:
     """List the backends and whether each is available here."""

@@ -93,17 +93,21 @@ def override(case: Case, backend: str, quantity: str) -> tuple[float, float] | N
     return found
 
 
+def rule(backend: str, quantity_kind: str, case_kind: str) -> Tolerance:
+    """The policy's tolerance for a backend, quantity kind and case kind (first match wins)."""
+    for backends, qk, ck, tol in _RULES:
+        if any(_matches(b, backend) for b in backends) and _matches(qk, quantity_kind) \
+                and _matches(ck, case_kind):
+            return tol
+    raise LookupError(backend)  # unreachable: the last rule matches everything
+
+
 def tolerance_for(case: Case, backend: str, quantity: str, kind: str) -> Tolerance:
     """The tolerance of one comparison row: the case's override or the policy's rule."""
     own = override(case, backend, quantity)
     if own is not None:
         return Tolerance(own[0], own[1], "set in the case file", overridden=True)
-    qkind = quantity_kind(quantity)
-    for backends, qk, ck, tol in _RULES:
-        if any(_matches(b, backend) for b in backends) and _matches(qk, qkind) \
-                and _matches(ck, kind):
-            return tol
-    raise LookupError(backend)  # unreachable: the last rule matches everything
+    return rule(backend, quantity_kind(quantity), kind)
 
 
 def policy_table() -> list[dict[str, str | float]]:

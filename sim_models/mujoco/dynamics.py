@@ -49,7 +49,7 @@ from analytic.kinematics import pose_of
 from analytic.solution import Solution, quantity_kind
 from sim_models.mujoco.friction import friction_loads, relative_speeds
 from sim_models.mujoco.model import Settings
-from sim_models.mujoco.rig import Rig
+from sim_models.mujoco.rig import Rig, disagreement
 
 #: Dynamics: first time step 2.5e-5 s (refined by halving, see the module doc).
 #: With dt = 1e-3 the clock-driven torque was 2–4e-2 off (SIMULATORS.md): the
@@ -215,15 +215,6 @@ def run_drive(rig: Rig, drive: Drive, friction: bool) -> dict[str, float]:
         if friction:
             apply_friction(rig, values)
     return values
-
-
-def disagreement(a: dict[str, float], b: dict[str, float], length: float) -> float:
-    """Largest difference of forces (and torques/length) relative to the largest of them."""
-    def vector(v: dict[str, float]) -> np.ndarray:
-        return np.array([x / length if quantity_kind(q) == "torque" else x
-                         for q, x in v.items() if quantity_kind(q) != "pose"])
-    va, vb = vector(a), vector(b)
-    return float(np.abs(va - vb).max()) / max(float(np.abs(vb).max()), 1e-300)
 
 
 def drive_motion(case: Case) -> tuple[Settings, float, float]:

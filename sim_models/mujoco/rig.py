@@ -11,6 +11,19 @@ Forces are read from MuJoCo's own state only:
   whose moment MuJoCo refers to the subtree's centre of mass, shifted here to
   the joint point.
 
+Carried constraint forces (settled statics, :mod:`.settle`). A soft constraint
+holds a force f only with a violation r ∝ R·f (R its regulariser), so the
+settled mechanism is bent by nanometres; next to a change point the forces are
+so sensitive to the pose that this costs 2e-5 of them (seed E1 at θ12 = 179°,
+condition number 119; the error grows as the cube of the condition number).
+:meth:`Rig.carry` therefore moves the constraint forces of a settled state out
+of the constraints into explicit loads — the loop force as an equal and
+opposite pair at the two B sites (``xfrc_applied``, so ``cfrc_int`` sees it),
+the holding torque on the held hinge (a joint torque, which is what a drive
+is) — and the mechanism settles again: the constraints now hold only what is
+left, and their violation, and the bending, shrink with it. Every reported
+force is the carried part plus MuJoCo's current ``efc_force``.
+
 A driven run may give the driven hinge an armature (:data:`.model.Settings`
 ``drive_armature``); its torque I_a·q̈ is then part of the equality's force
 and is subtracted, with MuJoCo's own q̈, from the drive torque read here.
@@ -26,6 +39,7 @@ from numpy.typing import NDArray
 
 from analytic.case import Case
 from analytic.kinematics import pose_of
+from analytic.solution import quantity_kind
 from sim_models.mujoco.model import STATIC, Layout, Settings, compile_model
 
 Array = NDArray[np.float64]
@@ -85,6 +99,14 @@ class Rig:
         self.body_forces = self.incidence @ self.loads.forces
         self.efc_scale = self._efc_scale()
         self.drive_armature = settings.drive_armature_of(case)
+        self.loop_rows = self.equality_rows(self.layout.loop_eq)
+        self.drive_rows = self.equality_rows(self.layout.drive_eq)
+        self.loop_sites = (mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "B_on_4"),
+                           mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "B_on_3"))
+        # Carried constraint forces: the loop force on link 4 (global x, y, z) and
+        # the drive's torque, in the constraint rows' order (see the module doc).
+        self.nefc = int(self.data.nefc)  # constant: equalities only, no contacts or limits
+        self.carried = np.zeros(self.nefc)
 
     # -- pose -------------------------------------------------------------------
     def qpos_at(self, theta12: float, omega: float | None = None,
@@ -157,6 +179,36 @@ class Rig:
         # Extra forces (slide friction) act at pin B, the slider's origin.
         b4 = self.layout.body[4]
         xfrc[b4, 5] += cross_z(d.xpos[b4] - d.xipos[b4], self.extra_force[b4])
+        if self.carried.any():
+            self.apply_carried()
+
+    # -- carried constraint forces ----------------------------------------------
+    def reset_carried(self) -> None:
+        """Nothing carried: the constraints hold every force themselves."""
+        self.carried = np.zeros(self.nefc)
+        self.data.qfrc_applied[self.layout.drive_dof] = 0.0
+
+    def carry(self) -> None:
+        """Add the constraint forces of the last forward pass to the carried ones."""
+        self.carried = self.carried + self.data.efc_force[:self.nefc]
+
+    def apply_carried(self) -> None:
+        """The carried forces as loads: the loop pair at the B sites (moments about
+        each centre of mass from the current positions), the drive torque on the
+        held hinge. Only for a rig without a clock (the drive's row is then +1 on
+        the held joint alone)."""
+        assert not self.layout.clock, "carried forces are for held (clockless) rigs"
+        d, body = self.data, self.layout.body
+        f = self.carried[self.loop_rows]
+        for b, site, sign in ((body[4], self.loop_sites[0], 1.0),
+                              (body[3], self.loop_sites[1], -1.0)):
+            d.xfrc_applied[b, 0:3] += sign * f
+            d.xfrc_applied[b, 5] += sign * cross_z(d.site_xpos[site] - d.xipos[b], f)
+        d.qfrc_applied[self.layout.drive_dof] = self.carried[self.drive_rows[0]]
+
+    def total_constraint_forces(self) -> Array:
+        """Carried plus current constraint forces, N (and N·m for the drive's row)."""
+        return self.carried + self.data.efc_force[:self.nefc]
 
     def set_extra(self, torque: Array, force: Array) -> None:
         """Extra couples (per body, N·m) and slider forces (per body, N) on top of the loads."""
@@ -165,8 +217,9 @@ class Rig:
         self.body_forces = self.incidence @ self.loads.forces + force[:, 0:3]
 
     def constraint_forces(self) -> Array:
-        """The equality forces as one vector in N (the drive torque divided by the scale)."""
-        return self.data.efc_force[:self.data.nefc] * self.efc_scale
+        """The equality forces, carried ones included, as one vector in N (the drive
+        torque divided by the scale)."""
+        return self.total_constraint_forces() * self.efc_scale
 
     # -- read-out ---------------------------------------------------------------
     def _efc_scale(self) -> Array:
@@ -198,12 +251,13 @@ class Rig:
         values = {"theta13": float(q[lay.qpos["A0"]] + q[lay.qpos["A"]])}
         f12, _ = self.parent_force(2, d.xpos[lay.body[2], :2])
         f23, _ = self.parent_force(3, d.xpos[lay.body[3], :2])
-        loop = d.efc_force[self.equality_rows(lay.loop_eq)]
+        total = self.total_constraint_forces()
+        loop = total[self.loop_rows]
         f14, m14 = self.parent_force(4, d.xpos[lay.body[4], :2])
         # Slide friction is applied as an external force, but it is part of the
         # guide's reaction on the slider (F14 is the guide's whole force).
         f14 = f14 + self.extra_force[lay.body[4], :2]
-        drive = d.efc_force[self.equality_rows(lay.drive_eq)]
+        drive = total[self.drive_rows]
         values.update({"F12_x": f12[0], "F12_y": f12[1], "F23_x": f23[0], "F23_y": f23[1],
                        "F34_x": loop[0], "F34_y": loop[1], "F14_x": f14[0], "F14_y": f14[1]})
         if self.four_bar:
@@ -239,3 +293,12 @@ class Rig:
         if self.four_bar:
             diff[2] *= self.scale
         return float(diff.max())
+
+
+def disagreement(a: dict[str, float], b: dict[str, float], length: float) -> float:
+    """Largest difference of forces (and torques/length) relative to the largest of them."""
+    def vector(v: dict[str, float]) -> np.ndarray:
+        return np.array([x / length if quantity_kind(q) == "torque" else x
+                         for q, x in v.items() if quantity_kind(q) != "pose"])
+    va, vb = vector(a), vector(b)
+    return float(np.abs(va - vb).max()) / max(float(np.abs(vb).max()), 1e-300)

@@ -1,0 +1,34 @@
+"""Assumption studies (issue 6): each is a sweep run on the simulators, with a figure
+and a one-line conclusion computed from the data.
+
+``STUDIES`` maps a study's name to the module:function that runs it; each takes
+``quick`` (fewer points, for tests) and returns a
+:class:`~compare.studies.common.StudyResult`.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from compare.studies.common import Study, StudyResult
+
+STUDIES: dict[str, str] = {
+    "quasi_static": "compare.studies.quasi_static:run",
+    "superposition_friction": "compare.studies.superposition_friction:run",
+    "friction_angle": "compare.studies.friction_angle:run",
+    "massless": "compare.studies.massless:run",
+    "rigid_joints": "compare.studies.rigid_joints:run",
+    "near_toggle": "compare.studies.near_toggle:run",
+}
+
+
+def load(name: str) -> Study:
+    if name not in STUDIES:
+        raise KeyError(f"unknown study {name!r}; studies: {', '.join(STUDIES)}")
+    module, function = STUDIES[name].split(":")
+    study: Study = getattr(importlib.import_module(module), function)
+    return study
+
+
+def run_study(name: str, quick: bool = False) -> StudyResult:
+    return load(name)(quick)

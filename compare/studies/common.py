@@ -1,0 +1,108 @@
+"""What every assumption study shares: its result type, the simulators it runs,
+a crossing finder for the one-line conclusions, and the study cases."""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only: no display on CI machines
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from analytic.case import Case, Mass
+from analytic.solution import Solution
+from compare import backends
+from compare.casefile import builtin_case_files, load_cases
+
+#: The simulators every study measures with (their settled or driven backends).
+SIMULATORS = ("mujoco", "pymunk")
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """One study: what was asked, the data, a figure, and the conclusion computed from the data."""
+
+    name: str
+    title: str
+    question: str
+    data: pd.DataFrame
+    figure: bytes
+    conclusion: str
+    method: str
+
+
+def simulate(backend: str, case: Case) -> Solution:
+    """Run one simulator backend on a case (a crash becomes an ``error`` verdict)."""
+    from compare.run import call_backend
+
+    return call_backend(backends.load(backend), backend, case)
+
+
+def builtin(name: str) -> Case:
+    return next(c for c in load_cases(*builtin_case_files()) if c.name == name)
+
+
+def steel_bar(link: int, length: float, width: float = 0.02, thickness: float = 0.005) -> Mass:
+    """A uniform steel bar (ρ = 7850 kg/m³) along the link's x axis: m = ρ·A·L, I = m·L²/12."""
+    mass = 7850.0 * width * thickness * length
+    return Mass(link, mass, (length / 2.0, 0.0), mass * length**2 / 12.0)
+
+
+def realistic_e1(**changes: object) -> Case:
+    """Seed E1 (SEEDS.md) with steel links of 20 × 5 mm section under gravity."""
+    case = builtin("seed-E1-as-stated")
+    g = case.geometry
+    masses = (steel_bar(2, g.a2), steel_bar(3, g.a3), steel_bar(4, g.a4))  # type: ignore[union-attr]
+    return case.with_(name="E1-steel", masses=masses, gravity=(0.0, -9.81), **changes)
+
+
+def crossing(x: Sequence[float], y: Sequence[float], level: float) -> float | None:
+    """The first x at which y rises through ``level`` (log-log interpolation), or None."""
+    xs, ys = np.asarray(x, float), np.asarray(y, float)
+    for i in range(1, len(xs)):
+        if ys[i - 1] < level <= ys[i] and ys[i - 1] > 0:
+            t = (math.log(level) - math.log(ys[i - 1])) / (math.log(ys[i]) - math.log(ys[i - 1]))
+            return float(math.exp(math.log(xs[i - 1]) + t * (math.log(xs[i]) - math.log(xs[i - 1]))))
+    return None
+
+
+def fmt_value(value: float | None, unit: str = "", digits: int = 3) -> str:
+    return "—" if value is None else f"{value:.{digits}g}{' ' + unit if unit else ''}"
+
+
+def by_source(values: dict[str, float | None], unit: str = "", *, beyond: str = "") -> str:
+    """"X (mujoco Y, pymunk Z)": the first source's value, the simulators' in parentheses.
+
+    ``beyond`` describes a value that was not reached within the sweep.
+    """
+    def one(v: float | None) -> str:
+        return beyond if v is None else fmt_value(v, unit)
+
+    items = list(values.items())
+    head = one(items[0][1])
+    rest = ", ".join(f"{src} {one(v)}" for src, v in items[1:])
+    return f"{head} ({rest})" if rest else head
+
+
+def png(fig: Figure) -> bytes:
+    buffer = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buffer, format="png", dpi=90)
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def torque(solution: Solution, case: Case) -> float:
+    """The drive torque of a solution, NaN when the backend gave none."""
+    return float(solution.values.get(f"T1{case.drive_link}", math.nan))
+
+
+Study = Callable[[bool], StudyResult]
