@@ -255,7 +255,7 @@ def q2_drive_force(system: Q2System, motion: SineMotion, times: ArrayLike) -> Ar
 def exam_q2() -> tuple[Q2System, SineMotion]:
     """Exam Q2 with our numbers (the exam gives none) and a motion with ẋ > 0 around t = 0.
 
-    F = 5.886 N + 2.42 N·sin(2π t) stays positive, so a relative error of F
+    F = 5.886 N + 3.210 N·sin(2π t) stays positive, so a relative error of F
     means the same thing at every instant.
     """
     return Q2System(), SineMotion()

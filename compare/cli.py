@@ -9,6 +9,7 @@ names the file, the case and the key.
 
 from __future__ import annotations
 
+import shutil
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -118,6 +119,8 @@ def sweep_command(
         help="Comma-separated verdicts that fail the run ('none' for none).")] =
         ",".join(DEFAULT_FAIL_ON),
     junit: Annotated[Path | None, typer.Option(help="Also write a JUnit XML file.")] = None,
+    fresh: Annotated[bool, typer.Option(
+        help="Discard the parts of an earlier run in DIR instead of resuming from them.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
 ) -> None:
     """Sweep θ12 over a range for every case and backend; resumable, Parquet output."""
@@ -132,6 +135,9 @@ def sweep_command(
         tasks = plan([c for c, _ in specs], names, grid)
     except (CaseError, ValueError, registry.BackendUnavailable) as error:
         raise fail_input(str(error)) from None
+    if fresh:
+        for folder in ("results", "status"):
+            shutil.rmtree(out / folder, ignore_errors=True)
     status = run_sweep_command(specs, tasks, len(grid), out, workers=workers, dask=dask,
                                fail_on=verdicts, junit=junit, quiet=quiet)
     raise typer.Exit(status)
@@ -165,6 +171,26 @@ def study_command(
         raise fail_input(f"unknown study {unknown[0]!r}; studies: {', '.join(STUDIES)}")
     for line in run_studies(chosen, out, quick=quick):
         typer.echo(line)
+
+
+@app.command("reports")
+def reports_command(
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path("reports"),
+) -> None:
+    """Regenerate the committed reports: the built-in suite, the whole-cycle sweeps of the
+    seed four-bar and slider-crank through every backend, and the assumption studies."""
+    from compare.studies import STUDIES
+    from compare.studies_report import run_studies
+
+    codes = []
+    for args in (["run", "-q", "--out", str(out / "suite")],
+                 ["sweep", "-q", "--fresh", "--out", str(out / "sweep")]):
+        # Without standalone mode click returns the exit status instead of exiting.
+        code = app(args, standalone_mode=False)
+        codes.append(int(code or 0))
+    for line in run_studies(list(STUDIES), out / "studies"):
+        typer.echo(line)
+    raise typer.Exit(max(codes))
 
 
 @app.command("backends")

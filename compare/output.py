@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
 
 
-def write_all(directory: Path, files: dict[str, str | bytes]) -> None:
+def write_all(directory: Path, files: Mapping[str, str | bytes]) -> None:
     """Write every file to a temporary name first, then rename them all into place.
 
     Each rename is atomic, and all renames happen only after every file has

@@ -75,8 +75,21 @@ class SweepTask:
         return f"{self.case.name}__{self.backend}__{self.chunk:05d}__{self.digest}"
 
 
+def software_versions() -> tuple[str, ...]:
+    """mechcheck's and the simulators' versions: parts from other versions are not reused."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = []
+    for package in ("mechcheck", "mujoco", "pymunk", "numpy"):
+        try:
+            out.append(f"{package}={version(package)}")
+        except PackageNotFoundError:
+            out.append(f"{package}=?")
+    return tuple(out)
+
+
 def task_digest(case: Case, backend: str, theta12_deg: np.ndarray) -> str:
-    h = hashlib.sha256(repr((PART_FORMAT, case, backend)).encode())
+    h = hashlib.sha256(repr((PART_FORMAT, software_versions(), case, backend)).encode())
     h.update(np.ascontiguousarray(theta12_deg, dtype=np.float64).tobytes())
     return h.hexdigest()[:16]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import io
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import matplotlib
@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
+from numpy.typing import ArrayLike
 
 from analytic.case import Case, Mass
 from analytic.solution import Solution
@@ -64,7 +65,12 @@ def realistic_e1(**changes: object) -> Case:
     return case.with_(name="E1-steel", masses=masses, gravity=(0.0, -9.81), **changes)
 
 
-def crossing(x: Sequence[float], y: Sequence[float], level: float) -> float | None:
+def groups(data: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
+    """The study's rows per source, in order of appearance (analytic first)."""
+    return [(str(src), g) for src, g in data.groupby("source", sort=False)]
+
+
+def crossing(x: ArrayLike, y: ArrayLike, level: float) -> float | None:
     """The first x at which y rises through ``level`` (log-log interpolation), or None."""
     xs, ys = np.asarray(x, float), np.asarray(y, float)
     for i in range(1, len(xs)):

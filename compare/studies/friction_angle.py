@@ -15,6 +15,7 @@ from compare.studies.common import (
     builtin,
     by_source,
     crossing,
+    groups,
     plt,
     png,
     simulate,
@@ -56,12 +57,12 @@ def run(quick: bool = False) -> StudyResult:
     data["torque_difference"] = (data["T_small_angle"] - data["T_exact"]).abs() / data["T_exact"].abs()
     data["radius_difference"] = 1.0 / data["radius_ratio"] - 1.0
     found = {src: crossing(g["mu"], g["torque_difference"], 0.01)
-             for src, g in data.groupby("source", sort=False)}
+             for src, g in groups(data)}
     radius_1pct = _radius_level(0.01)
     fig, ax = plt.subplots(figsize=(7, 4.2))
     a = data[data["source"] == "analytic"]
     ax.plot(a["mu"], 100 * a["radius_difference"], "k-", label="circle radius: μ·r vs r·sin(atan μ)")
-    for src, g in data.groupby("source", sort=False):
+    for src, g in groups(data):
         ax.plot(g["mu"], 100 * g["torque_difference"], "o-" if src == "analytic" else "s--",
                 label=f"drive torque ({src})", ms=4)
     ax.axhline(1.0, color="grey", ls=":", lw=0.8)

@@ -13,6 +13,7 @@ from compare.studies.common import (
     StudyResult,
     by_source,
     crossing,
+    groups,
     plt,
     png,
     realistic_e1,
@@ -46,12 +47,12 @@ def run(quick: bool = False) -> StudyResult:
     data["relative_error"] = (data["T_massless"] - data["T_weighted"]).abs() / data["T_weighted"].abs()
     # The error falls as the load grows: find where it drops through each level.
     found = {}
-    for src, g in data.groupby("source", sort=False):
+    for src, g in groups(data):
         g = g.sort_values("load_N", ascending=False)
         found[src] = [crossing(1.0 / g["load_N"].to_numpy(), g["relative_error"].to_numpy(), lv)
                       for lv in LEVELS]
     fig, ax = plt.subplots(figsize=(7, 4.2))
-    for src, g in data.groupby("source", sort=False):
+    for src, g in groups(data):
         ax.loglog(g["load_N"], g["relative_error"], "o-" if src.startswith("analytic") else "s--",
                   label=src, ms=4)
     for lv in LEVELS:
@@ -63,7 +64,12 @@ def run(quick: bool = False) -> StudyResult:
     ax.grid(alpha=0.3, which="both")
     weight = sum(m.mass for m in base.masses) * 9.81
     def load_at(level: int) -> dict[str, float | None]:
-        return {k: None if v[level] is None else 1.0 / v[level] for k, v in found.items()}
+        """The load (N) at which the error falls through a level: 1 / the crossing of 1/load."""
+        out: dict[str, float | None] = {}
+        for k, v in found.items():
+            inverse = v[level]
+            out[k] = None if inverse is None else 1.0 / inverse
+        return out
 
     beyond = f"beyond the {scales[-1]:g}× loads tried"
     conclusion = (f"Ignoring the links' weight ({weight:.3g} N in all) errs in T12 by more than "

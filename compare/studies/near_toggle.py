@@ -4,6 +4,7 @@ distance below which each simulator's number stops being trustworthy."""
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 import pandas as pd
@@ -29,7 +30,7 @@ def run(quick: bool = False) -> StudyResult:
                "analytic_status": ref.status}
         for sim in SIMULATORS:
             s = simulate(sim, case)
-            errors = [float(r["rel_err"]) for r in comparison_rows(case, ref, s)
+            errors = [cast(float, r["rel_err"]) for r in comparison_rows(case, ref, s)
                       if r["quantity"] not in ("theta13", "theta14")] if s.status == "ok" else []
             row[f"{sim}_status"] = s.status
             row[f"{sim}_error"] = max(errors) if errors else math.nan

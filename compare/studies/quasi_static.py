@@ -12,6 +12,7 @@ from compare.studies.common import (
     StudyResult,
     by_source,
     crossing,
+    groups,
     plt,
     png,
     realistic_e1,
@@ -41,9 +42,9 @@ def run(quick: bool = False) -> StudyResult:
     data["T_static"] = t_static
     data["relative_miss"] = (data["T_static"] - data["T_dynamic"]).abs() / data["T_dynamic"].abs()
     found = {src: [crossing(g["omega"], g["relative_miss"], lv) for lv in LEVELS]
-             for src, g in data.groupby("source", sort=False)}
+             for src, g in groups(data)}
     fig, ax = plt.subplots(figsize=(7, 4.2))
-    for src, g in data.groupby("source", sort=False):
+    for src, g in groups(data):
         ax.loglog(g["omega"], g["relative_miss"], "o-" if src.startswith("analytic") else "s--",
                   label=src, ms=4)
     for lv in LEVELS:

@@ -15,6 +15,7 @@ from compare.studies.common import (
     builtin,
     by_source,
     crossing,
+    groups,
     plt,
     png,
     simulate,
@@ -51,9 +52,9 @@ def run(quick: bool = False) -> StudyResult:
     data = pd.DataFrame(rows)
     data["superposition_error"] = (data["T_sum"] - data["T_all"]).abs() / data["T_all"].abs()
     found = {src: [crossing(g["mu"].to_numpy()[1:], g["superposition_error"].to_numpy()[1:], lv)
-                   for lv in LEVELS] for src, g in data.groupby("source", sort=False)}
+                   for lv in LEVELS] for src, g in groups(data)}
     fig, ax = plt.subplots(figsize=(7, 4.2))
-    for src, g in data.groupby("source", sort=False):
+    for src, g in groups(data):
         g = g[g["mu"] > 0]
         ax.loglog(g["mu"], g["superposition_error"], "o-" if src == "analytic" else "s--",
                   label=src, ms=4)

@@ -8,7 +8,9 @@ analytic forces:
 - ``one forward``: one ``mj_forward`` at rest in the exact analytic pose, as a
   user would read ``efc_force`` — the soft solver returns only part of the
   rigid force when nothing has moved yet;
-- ``settled``: the settling backend (:mod:`.settle`) with that softness.
+- ``settled``: one settling pass (:func:`.settle.run_until_settled`) with that
+  softness — without the backend's refinement passes, which carry the
+  constraint forces and so remove most of the softness's effect.
 
 The error is max |sim − ref| over the reactions (N) relative to the largest
 reaction, and |ΔT12|/|T12|, in percent.
@@ -22,7 +24,6 @@ from analytic.case import Case
 from analytic.forces import solve
 from sim_models.mujoco.model import MUJOCO_DEFAULT_SOFTNESS, STATIC, Settings
 from sim_models.mujoco.rig import Rig
-from sim_models.mujoco.seeds import fourbar_e1, slidercrank_e2
 from sim_models.mujoco.settle import run_until_settled, seed_at
 
 SOFTNESS = {"MuJoCo default": MUJOCO_DEFAULT_SOFTNESS, "stiffened (this backend)": STATIC}
@@ -48,9 +49,12 @@ def one_forward(case: Case, settings: Settings) -> dict[str, float]:
     return rig.read()
 
 
-def stiffness_study(cases: list[Case] | None = None) -> list[dict[str, float | str]]:
-    """One row per (case, softness, reading) with the errors in percent."""
-    cases = cases or [fourbar_e1(), slidercrank_e2(with_friction=False)]
+def stiffness_study(cases: list[Case]) -> list[dict[str, float | str]]:
+    """One row per (case, softness, reading) with the errors in percent.
+
+    The seed cases come from the built-in case files (loaded by the caller:
+    ``sim_models`` does not depend on ``compare``).
+    """
     rows: list[dict[str, float | str]] = []
     for case in cases:
         for label, settings in SOFTNESS.items():
