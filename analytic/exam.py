@@ -37,7 +37,9 @@ Example
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -98,6 +100,26 @@ class Q1System:
     def pivot_inertia(self) -> float:
         """The bar's moment of inertia about the pin A, m·l²/3, kg·m²."""
         return self.mass * self.length**2 / 3.0
+
+    @property
+    def translating_mass(self) -> float:
+        """Slider and bar together, kg: the mass the spring k moves."""
+        return self.mass + self.slider_mass
+
+    @property
+    def swing_stiffness(self) -> float:
+        """The largest |∂Q_φ/∂φ| over all φ, l·√(F² + (m·g/2)²), N·m/rad.
+
+        Q_φ = F·l·cos φ − m·g·(l/2)·sin φ is a sinusoid in φ of that
+        amplitude, so this bounds the bar's restoring stiffness at any pose
+        (simulators size their damping and time step with it).
+        """
+        return self.length * math.hypot(self.force, 0.5 * self.mass * self.gravity)
+
+    def frequency_bound(self) -> float:
+        """max(√(k/(m + m_slider)), √(swing_stiffness/I_A)), rad/s: the uncoupled natural frequencies."""
+        return max(math.sqrt(self.stiffness / self.translating_mass),
+                   math.sqrt(self.swing_stiffness / self.pivot_inertia))
 
 
 @dataclass(frozen=True)
@@ -169,6 +191,16 @@ def exam_q1(stiffness: float = 200.0, length: float = 0.5) -> Q1System:
 
 
 # --------------------------------------------------------------------------- Q2
+
+
+class Motion(Protocol):
+    """A prescribed motion x(t) of the Q2 mass (vectorised over t, SI)."""
+
+    def position(self, t: ArrayLike) -> Array: ...
+
+    def velocity(self, t: ArrayLike) -> Array: ...
+
+    def acceleration(self, t: ArrayLike) -> Array: ...
 
 
 @dataclass(frozen=True)
@@ -246,7 +278,7 @@ def q2_force(system: Q2System, x: ArrayLike, velocity: ArrayLike, acceleration: 
             + s.mu * s.normal_force * np.sign(v))
 
 
-def q2_drive_force(system: Q2System, motion: SineMotion, times: ArrayLike) -> Array:
+def q2_drive_force(system: Q2System, motion: Motion, times: ArrayLike) -> Array:
     """The force F(t) that makes the mass follow ``motion`` at ``times``, N."""
     t = np.asarray(times, dtype=float)
     return q2_force(system, motion.position(t), motion.velocity(t), motion.acceleration(t))
@@ -259,3 +291,54 @@ def exam_q2() -> tuple[Q2System, SineMotion]:
     means the same thing at every instant.
     """
     return Q2System(), SineMotion()
+
+
+# ------------------------------------------------------------- simulator results
+
+#: ``ok``, or ``not_settled``: the simulator did not reach a state the readings
+#: are valid in (Q1: no equilibrium within its step budget; Q2: the start-up
+#: transient had not died at a reading). Its numbers are then withheld.
+Status = Literal["ok", "not_settled"]
+
+
+@dataclass(frozen=True)
+class Q1Result:
+    """A simulator's answer to exam Q1, read from its own settled state.
+
+    ``values`` is None unless ``status == "ok"``: an unsettled state is no
+    equilibrium, so its forces mean nothing. ``diagnostics`` always carry the
+    last pose (``x``, ``phi``) and how the run ended.
+    """
+
+    backend: str
+    values: Q1Equilibrium | None
+    status: Status
+    steps: int
+    wall_time_s: float
+    residual_velocity: float
+    force_change: float
+    message: str = ""
+    diagnostics: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Q2Result:
+    """A simulator's drive force along a prescribed Q2 motion, read from its own state.
+
+    ``times`` are the simulator's own reading instants (the step grid point
+    nearest each requested time), s. ``force`` is the driving force on the
+    mass, ``friction`` the friction force on it and ``normal`` the surface's
+    normal force, N, per reading; readings taken before the start-up
+    transient had died are NaN and make ``status`` ``not_settled``.
+    """
+
+    backend: str
+    times: Array
+    force: Array
+    friction: Array
+    normal: Array
+    status: Status
+    steps: int
+    wall_time_s: float
+    message: str = ""
+    diagnostics: Mapping[str, float] = field(default_factory=dict)

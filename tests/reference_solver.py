@@ -55,6 +55,10 @@ Matrix = NDArray[np.float64]
 #: 1e-15 threshold cannot always be met: rounding alone makes steps of
 #: cond·eps ≈ 1e-14 in a moderately conditioned pose).
 NEWTON_RTOL = 1e-12
+#: Near a toggle the Jacobian's condition number c makes Newton's steps stall at about
+#: c·eps (2e-12 at c = 1e4, the test's limit) instead of shrinking below NEWTON_RTOL; a
+#: step below this that no longer halves is that rounding floor, i.e. converged.
+ROUNDING_FLOOR = 1e-9
 #: A Newton iteration that has not converged after this many steps has failed.
 NEWTON_MAX_ITERATIONS = 60
 
@@ -227,12 +231,17 @@ def solve_positions(model: Model, q0: Vector) -> tuple[Vector, int]:
     q = q0.copy()
     scale = model.case.geometry.scale
     size = np.array([scale, scale, 1.0] * 3)
+    previous = math.inf
     for it in range(1, NEWTON_MAX_ITERATIONS + 1):
         step = np.linalg.solve(model.jacobian(q, 2), model.phi(q, model.case.theta12, 2))
         q -= step
-        if np.max(np.abs(step) / size) <= NEWTON_RTOL:
+        size_of_step = float(np.max(np.abs(step) / size))
+        if size_of_step <= NEWTON_RTOL:
             q -= np.linalg.solve(model.jacobian(q, 2), model.phi(q, model.case.theta12, 2))
             return q, it + 1
+        if size_of_step <= ROUNDING_FLOOR and size_of_step > 0.5 * previous:
+            return q, it  # stalled at the rounding floor of a near-toggle pose
+        previous = size_of_step
     raise ReferenceError("position Newton–Raphson did not converge")
 
 

@@ -23,11 +23,15 @@ threshold by a convergence check, never by a fixed setting:
   rocker drive a rocker dead point, where the driven link cannot move the
   crank and the crank's sense is undetermined;
 - the time discretisation: a soft constraint holds its force with a violation
-  ∝ R·f·(2·dt)², and semi-implicit Euler puts velocities half a step behind
-  the positions. Both are O(dt²) and are magnified by the inverse transmission
-  ratio near a dead point (exam Q3: 1/|dθ14/dθ12| = 16, 3.7e-3 at
-  dt = 2.5e-5 s). The run is repeated with half the step (and as many lead
-  steps) until two answers agree within :data:`TIMESTEP_AGREEMENT_RTOL`.
+  ∝ R·f·(2·dt)² (R grows as the links touching it get lighter: massless links
+  carry only a fictitious 1e-5 of the real masses), and MuJoCo leaves out the
+  constraints' J̇·v, which the same stiffness makes up with a violation ∝ dt².
+  The pose error this makes is magnified by the inverse transmission ratio
+  near a dead point (exam Q3: the crank follows the rocker at
+  1/|dθ14/dθ12| = 16 times its angle; 3.7e-3 of the forces at dt = 2.5e-5 s,
+  against ~1e-5 on ordinary cases). The run is repeated with half the step
+  (and as many lead steps) until two answers agree within
+  :data:`TIMESTEP_AGREEMENT_RTOL`.
 
 Friction (:mod:`.friction`) is emulated from the current reactions every step
 with the senses of the simulator's own joint velocities. A static friction case
@@ -78,8 +82,8 @@ LEAD_AGREEMENT_RTOL = 1e-5
 LEAD_CONDITION_GROWTH = 2.0
 #: Runs with time steps dt and dt/2 (same number of lead steps) agree to this
 #: fraction of the largest force (or torque/scale). The error is O(dt²)
-#: (measured on exam Q3: 3.7e-3, 9e-4, 2.4e-4, 6e-5, 1.6e-5 from 2.5e-5 s down
-#: by halves): while the error at least halves per halving, the finer run's
+#: (measured on exam Q3: 3.7e-3, 9.5e-4, 2.4e-4, 6.1e-5, 1.6e-5 from 2.5e-5 s
+#: down by halves): while the error at least halves per halving, the finer run's
 #: error is at most the difference (a third of it at second order), so 1e-4
 #: keeps it ≥ 10× below the 1e-3 dynamic target.
 TIMESTEP_AGREEMENT_RTOL = 1e-4
@@ -129,9 +133,11 @@ def coupling_table(case: Case, drive: Drive) -> np.ndarray:
     For the crank it is θ12 = θ12* + φ throughout. For the rocker it is the
     analytic θ14(θ12* + φ) expanded to second order about the clock's angle φ_k
     at that pass, so the rocker's prescribed position, speed and acceleration
-    are exact at every step (not only at the instant); a single polynomial
-    fitted over the whole lead-in was off by up to 1e-4 rad at its ends, which
-    started every run with a constraint violation.
+    are exact at every step (not only at the instant). A single quartic fitted
+    over the lead-in started runs with a violation of the drive equality:
+    1.8e-5 rad for exam Q3's 1600-step lead-in, 0.16 rad for
+    fourbar-dynamic-drive4's 800-step one, whose fitting range reached a rocker
+    dead point (measured).
     """
     phi = drive.clock_angles()
     table = np.zeros((phi.size, 5))

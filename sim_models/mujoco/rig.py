@@ -153,12 +153,6 @@ class Rig:
         """Hold the driven joint at ``target`` (rad) through the joint equality."""
         self.model.eq_data[self.layout.drive_eq, 0] = target
 
-    def lock_target(self, theta12: float) -> float:
-        """The held angle of the driven link: θ12, or θ14 at that pose for drive on link 4."""
-        if self.case.drive_link == 2:
-            return theta12
-        return float(self.qpos_at(theta12)[0][2])
-
     # -- loads ------------------------------------------------------------------
     def apply_loads(self) -> None:
         """xfrc_applied from the current pose: each force at its body-fixed point.
@@ -169,8 +163,8 @@ class Rig:
         """
         d = self.data
         xfrc = d.xfrc_applied
-        xfrc[:, 3:] = self.extra_force
         xfrc[:, 0:3] = self.body_forces
+        xfrc[:, 3:5] = 0.0  # planar: no moments about x or y
         xfrc[:, 5] = self.extra_torque
         t = self.loads
         if t.sites.size:
@@ -178,7 +172,8 @@ class Rig:
             xfrc[:, 5] += self.incidence @ (cross_z(arm, t.forces) + t.torques)
         # Extra forces (slide friction) act at pin B, the slider's origin.
         b4 = self.layout.body[4]
-        xfrc[b4, 5] += cross_z(d.xpos[b4] - d.xipos[b4], self.extra_force[b4])
+        if self.extra_force[b4].any():
+            xfrc[b4, 5] += cross_z(d.xpos[b4] - d.xipos[b4], self.extra_force[b4])
         if self.carried.any():
             self.apply_carried()
 
@@ -281,12 +276,16 @@ class Rig:
             v[2] /= self.scale
         return float(v.max() * self.scale)
 
-    def pose_drift(self, theta12: float) -> float:
-        """Largest difference of the simulated pose from the analytic one, as a length (m).
+    def pose_drift(self, theta12: float | None = None, qpos: Array | None = None) -> float:
+        """Largest difference of the simulated pose from the analytic one (at
+        ``theta12``, or given as joint coordinates ``qpos``), as a length (m).
 
         Angles are weighted by the mechanism's scale, the slider coordinate as is.
         """
-        q, _, _ = self.qpos_at(theta12)
+        if qpos is None:
+            assert theta12 is not None
+            qpos, _, _ = self.qpos_at(theta12)
+        q = qpos
         sim = self.data.qpos[self.joint_addresses()]
         diff = np.abs(sim - q)
         diff[:2] *= self.scale

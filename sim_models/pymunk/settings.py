@@ -1,7 +1,7 @@
 """Solver settings and stopping thresholds of the pymunk backends, in one place.
 
 Every number a pymunk run depends on lives here, with the reason it has
-that value, so that the solver-setting study (:mod:`sim_models.pymunk.study`)
+that value, so that the solver-setting study (:mod:`compare.studies.rigid_joints`)
 can vary them and a reader can see what "settled" means.
 """
 
@@ -30,7 +30,7 @@ class SolverSettings:
         (``Constraint.error_bias``); per step 1 − error_bias^dt is corrected.
         Chipmunk's default 0.9⁶⁰ corrects only 1 % per 0.1 s step; 1e-6
         corrects 75 % per step, which removes the start-up drift in a few
-        steps (studied in :mod:`sim_models.pymunk.study`).
+        steps (studied in :mod:`compare.studies.rigid_joints`).
     damping : fraction of velocity kept after one second (``Space.damping``).
         It removes the kinetic energy of the settling transient and has no
         effect on a body at rest, so it cannot bias a settled force. Strong
