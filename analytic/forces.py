@@ -31,7 +31,7 @@ from analytic.friction import (
     solve_with_friction,
 )
 from analytic.kinematics import Pose, as_angles, pose_of
-from analytic.solution import Solution
+from analytic.solution import Solution, Status
 
 FORCE_QUANTITIES = ("F12_x", "F12_y", "F23_x", "F23_y", "F34_x", "F34_y", "F14_x", "F14_y")
 
@@ -134,6 +134,41 @@ def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
     return PoseResults(angles, values, cond, iterations, converged, reversing)
 
 
+@dataclass(frozen=True)
+class PoseVerdict:
+    """Why no force analysis exists at a pose: a property of the pose, so every
+    backend, analytic or simulated, reports the same verdict there."""
+
+    status: Status
+    message: str
+    condition: float
+
+
+def verdict_at(case: Case, results: PoseResults, index: int) -> PoseVerdict | None:
+    """The pose's verdict (singular, indeterminate friction, no solution), or None if regular."""
+    cond = float(results.condition[index])
+    if results.singular[index]:
+        return PoseVerdict("singular", f"condition number {cond:.3g} exceeds "
+                           f"{SINGULAR_CONDITION:.0e}: the pose is at or next to a toggle/change "
+                           "point, where statics is singular; forces withheld", cond)
+    if results.indeterminate[index]:
+        assert results.reversing is not None
+        return PoseVerdict("indeterminate", f"the relative motion at {results.reversing[index]} "
+                           "reverses at this pose: Coulomb friction there may take any value "
+                           "within ±μ·r·|F| (±μ·|N| on the slide), so the drive torque and "
+                           "reactions are not unique; forces withheld", cond)
+    if not results.converged[index]:
+        return PoseVerdict("no_solution", "the friction equations have no solution with the "
+                           "assumed senses of motion (the mechanism self-locks)", cond)
+    return None
+
+
+def pose_verdicts(case: Case, theta12: ArrayLike | None = None) -> list[PoseVerdict | None]:
+    """:func:`verdict_at` for every θ12 (rad); simulators use it to skip such poses."""
+    results = solve_poses(case, theta12)
+    return [verdict_at(case, results, i) for i in range(results.theta12.shape[0])]
+
+
 def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0, *,
                   method: str, elapsed: float) -> Solution:
     """A :class:`Solution` for one pose of vectorised results, with its verdict."""
@@ -143,28 +178,30 @@ def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0
     }
     if case.has_coulomb_friction:
         diagnostics["newton_iterations"] = int(results.iterations[index])
-    pose_only = {q: float(v[index]) for q, v in results.values.items()
-                 if q in ("theta13", "theta14", "s14")}
-    if results.singular[index]:
-        return Solution(case.name, backend, pose_only, status="singular",
-                        message=f"condition number {cond:.3g} exceeds {SINGULAR_CONDITION:.0e}: "
-                                "the pose is at or next to a toggle/change point; forces withheld",
-                        diagnostics=diagnostics)
-    if results.indeterminate[index]:
-        assert results.reversing is not None
-        return Solution(case.name, backend, pose_only, status="indeterminate",
-                        message=f"the relative motion at {results.reversing[index]} reverses at this "
-                                "pose: Coulomb friction there may take any value within ±μ·r·|F| "
-                                "(±μ·|N| on the slide), so the drive torque and reactions are not "
-                                "unique; forces withheld",
-                        diagnostics=diagnostics)
-    if not results.converged[index]:
-        return Solution(case.name, backend, pose_only, status="no_solution",
-                        message="the friction equations have no solution with the assumed "
-                                "senses of motion (the mechanism self-locks)",
-                        diagnostics=diagnostics)
+    verdict = verdict_at(case, results, index)
+    if verdict is not None:
+        pose_only = {q: float(v[index]) for q, v in results.values.items()
+                     if q in ("theta13", "theta14", "s14")}
+        return Solution(case.name, backend, pose_only, status=verdict.status,
+                        message=verdict.message, diagnostics=diagnostics)
     values = {q: float(v[index]) for q, v in results.values.items()}
     return Solution(case.name, backend, values, diagnostics=diagnostics)
+
+
+def withheld_solution(case: Case, backend: str, verdict: PoseVerdict) -> Solution:
+    """What a simulator reports at a pose whose verdict withholds forces: no numbers
+    (a simulator's numbers must be its own, and there are none to measure)."""
+    return Solution(case.name, backend, {}, status=verdict.status,
+                    message=f"{verdict.message}; not simulated",
+                    diagnostics={"condition_number": verdict.condition})
+
+
+def unassemblable_solution(case: Case, backend: str, theta12: float) -> Solution:
+    """What any backend reports at a swept θ12 (rad) where the mechanism cannot be assembled."""
+    return Solution(case.name, backend, {}, status="no_solution",
+                    message=f"the {case.mechanism} cannot be assembled at θ12 = "
+                            f"{np.degrees(theta12):.6g}° ({case.branch} branch)",
+                    diagnostics={"theta12": theta12})
 
 
 def solve(case: Case) -> Solution:

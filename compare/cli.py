@@ -216,3 +216,7 @@ _add_theory()
 
 def main() -> None:
     app()
+
+
+if __name__ == "__main__":
+    main()

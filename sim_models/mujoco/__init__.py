@@ -11,13 +11,12 @@ read from MuJoCo's own constraint state.
 from __future__ import annotations
 
 from analytic.case import Case
-from analytic.equilibrium import condition
-from analytic.kinematics import pose_of
+from analytic.forces import pose_verdicts, withheld_solution
 from analytic.solution import Solution
+from sim_models.mujoco import solve as exact
 from sim_models.mujoco.dynamics import driven
 from sim_models.mujoco.settle import settle_static
-from sim_models.mujoco.solve import solve_at_pose
-from sim_models.mujoco.sweep import SWEEP_SINGULAR_CONDITION, singular_solution, sweep
+from sim_models.mujoco.sweep import sweep
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
 
@@ -25,13 +24,22 @@ __all__ = ["settle", "solve_at_pose", "sweep"]
 def settle(case: Case) -> Solution:
     """The ``mujoco`` backend: settled statics, or a driven run for motion/friction.
 
-    A pose at a change point (condition number beyond the line the analytic
-    backend and :func:`sweep` withhold forces at) is not simulated: its forces
-    do not exist, and a soft model would settle to whatever its bending allows.
+    A pose whose forces do not exist or are not unique (a change point beyond
+    the analytic backend's singular line, a friction reversal) is not
+    simulated: a soft model would settle to whatever its bending allows.
     """
-    cond = float(condition(case, pose_of(case))[0])
-    if not cond <= SWEEP_SINGULAR_CONDITION:
-        return singular_solution(case, "mujoco", cond)
+    verdict = pose_verdicts(case)[0]
+    if verdict is not None:
+        return withheld_solution(case, "mujoco", verdict)
     if case.kind == "static":
         return settle_static(case)
     return driven(case)
+
+
+def solve_at_pose(case: Case) -> Solution:
+    """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose
+    (not at a pose whose forces do not exist or are not unique, as :func:`settle`)."""
+    verdict = pose_verdicts(case)[0]
+    if verdict is not None:
+        return withheld_solution(case, "mujoco_solve", verdict)
+    return exact.solve_at_pose(case)

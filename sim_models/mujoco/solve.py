@@ -56,19 +56,20 @@ def constraint_solve(rig: Rig, qacc: np.ndarray) -> dict[str, float]:
     return rig.read()
 
 
-def friction_senses(rig: Rig) -> dict[str, float]:
-    """Relative speeds whose signs friction opposes: the prescribed motion, or a
-    unit quasi-static motion in friction.direction when the case is static."""
-    case = rig.case
+def friction_senses(rig: Rig, case: Case) -> dict[str, float]:
+    """Relative speeds whose signs friction opposes at the case's own pose: the
+    prescribed motion, or a unit quasi-static motion in friction.direction when
+    the case is static. (A sweep reuses one rig for many poses, so the pose must
+    come from ``case``, not from the case the rig was built for.)"""
     omega = case.motion.omega if case.motion.omega else float(case.input_sense)
     _, qvel, _ = rig.qpos_at(case.theta12, omega=omega, alpha=0.0)
     return relative_speeds(rig, qvel)
 
 
-def solve_with_friction(rig: Rig, qvel: np.ndarray,
+def solve_with_friction(rig: Rig, case: Case, qvel: np.ndarray,
                         qacc: np.ndarray) -> tuple[dict[str, float], int]:
     """Fixed point: friction couples from the reactions, reactions from the couples."""
-    senses = friction_senses(rig)
+    senses = friction_senses(rig, case)
     speeds = relative_speeds(rig, qvel)
     values = constraint_solve(rig, qacc)
     for passes in range(1, FRICTION_MAX_PASSES + 1):
@@ -108,7 +109,7 @@ def solve_state(case: Case, rig: Rig, qpos: np.ndarray, qvel: np.ndarray, qacc: 
     rig.set_lock(qpos[0] if case.drive_link == 2 else qpos[2])
     passes = 0
     if case.has_friction:
-        values, passes = solve_with_friction(rig, qvel, qacc)
+        values, passes = solve_with_friction(rig, case, qvel, qacc)
     else:
         values = constraint_solve(rig, qacc)
     diagnostics: dict[str, float | str] = {

@@ -15,7 +15,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from analytic.case import Case, CaseError
-from analytic.forces import solve_poses
+from analytic.forces import (
+    PoseVerdict,
+    pose_verdicts,
+    unassemblable_solution,
+    withheld_solution,
+)
 from analytic.solution import Solution
 from sim_models.mujoco.dynamics import drive_motion, driven
 from sim_models.mujoco.rig import Rig
@@ -23,13 +28,6 @@ from sim_models.mujoco.settle import settle_static
 from sim_models.mujoco.solve import exact_rig, solve_at_pose, solve_state
 
 BACKENDS = ("mujoco", "mujoco_solve")
-
-
-def singular_solution(case: Case, backend: str, condition: float) -> Solution:
-    return Solution(case.name, backend, {}, status="singular",
-                    message=f"condition number {condition:.3g}: the pose is at or next to a "
-                            "change/toggle point; not simulated",
-                    diagnostics={"condition_number": condition})
 
 
 def pose_case(case: Case, theta12: float) -> Case | None:
@@ -51,33 +49,33 @@ def sweep(case: Case, theta12: ArrayLike, backend: str = "mujoco") -> list[Solut
     if backend not in BACKENDS:
         raise ValueError(f"unknown MuJoCo backend {backend!r}; use one of {BACKENDS}")
     angles = np.atleast_1d(np.asarray(theta12, dtype=float))
-    condition = solve_poses(case, angles).condition
+    verdicts = pose_verdicts(case, angles)
     rig = sweep_rig(case, backend)
     if backend == "mujoco_solve" and not case.has_friction:
-        return exact_sweep(case, angles, condition, rig)
+        return exact_sweep(case, angles, verdicts, rig)
     out = []
-    for t, cond in zip(angles, condition, strict=True):
+    for t, verdict in zip(angles, verdicts, strict=True):
         at = pose_case(case, t)
-        if at is None or not cond <= SWEEP_SINGULAR_CONDITION:
-            out.append(singular_solution(case, backend, float(cond)))
-            continue
-        out.append(solve_one(at, backend, rig))
+        if at is None:
+            out.append(unassemblable_solution(case, backend, float(t)))
+        elif verdict is not None:
+            out.append(withheld_solution(case, backend, verdict))
+        else:
+            out.append(solve_one(at, backend, rig))
     return out
 
 
-#: The analytic backend withholds forces above 1e8 (analytic.equilibrium); the
-#: simulators are held to the same line so that every sweep compares like with like.
-SWEEP_SINGULAR_CONDITION = 1e8
-
-
-def exact_sweep(case: Case, angles: np.ndarray, condition: np.ndarray,
+def exact_sweep(case: Case, angles: np.ndarray, verdicts: list[PoseVerdict | None],
                 rig: Rig) -> list[Solution]:
     """``mujoco_solve`` over many poses with the analytic states computed at once."""
     qpos, qvel, qacc = rig.states(angles)
     out = []
-    for i, cond in enumerate(condition):
-        if not cond <= SWEEP_SINGULAR_CONDITION or not np.all(np.isfinite(qpos[i])):
-            out.append(singular_solution(case, "mujoco_solve", float(cond)))
+    for i, verdict in enumerate(verdicts):
+        if not np.all(np.isfinite(qpos[i])):
+            out.append(unassemblable_solution(case, "mujoco_solve", float(angles[i])))
+            continue
+        if verdict is not None:
+            out.append(withheld_solution(case, "mujoco_solve", verdict))
             continue
         out.append(solve_state(case, rig, qpos[i], qvel[i], qacc[i], time.perf_counter()))
     return out

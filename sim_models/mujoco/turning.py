@@ -76,6 +76,15 @@ TORQUE_LIMIT = 50.0
 #: angle is never reached; with it, the crank settles at the toggle.
 JOINT_DAMPING = 1.0
 
+#: Armature of the crank hinge, in units of m·L² (MuJoCo only). A grounded
+#: hinge's armature is a pure couple between ground and crank: it changes no
+#: pose, only the inertia the servo drives. Without it a crank much shorter
+#: than the other links (a bar of 1/12 of the longest link has 1/1700 of its
+#: m·L²) faces a servo gain and loop forces scaled to the long links: measured
+#: on (375, 31.25, 250, 250) mm the saturated servo could not keep the crank
+#: from creeping backwards with the loop 1.7e-5 m open.
+CRANK_ARMATURE = 1.0
+
 #: Crank rotation before recording starts (the servo's spin-up: measured, it
 #: saturates for up to 16° on the double-crank in pymunk, whose rigid motor
 #: chatters at its bound while the fast rocker is brought up to speed), and
@@ -413,6 +422,7 @@ def turning_spec(case: Case) -> mujoco.MjSpec:
     spec.option.integrator = int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
     unit = inertia_unit(case)
     spec.joint("A").damping = [JOINT_DAMPING * unit, 0.0, 0.0]
+    spec.joint("A0").armature = CRANK_ARMATURE * unit
     out = output_joint(case)
     spec.joint(out).damping = [JOINT_DAMPING * (unit if out == "B0" else SETTLE_MASS), 0.0, 0.0]
     servo = spec.add_actuator(name="servo", trntype=mujoco.mjtTrn.mjTRN_JOINT, target="A0")

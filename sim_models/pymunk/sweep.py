@@ -20,30 +20,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from analytic.case import Case
-from analytic.equilibrium import SINGULAR_CONDITION
+from analytic.forces import pose_verdicts, unassemblable_solution, withheld_solution
 from analytic.kinematics import pose_of
 from analytic.solution import Solution
 from sim_models.pymunk.model import build_model, place
 from sim_models.pymunk.settings import SETTLE, SOLVE
 from sim_models.pymunk.settle import solution_of, step_until_settled
 from sim_models.pymunk.solve import iterate_at_pose
-from sim_models.pymunk.verdict import singular_mask
 
 BACKENDS = ("pymunk", "pymunk_solve")
-
-
-def _unassemblable(case: Case, backend: str, theta: float) -> Solution:
-    return Solution(case.name, backend, {}, status="no_solution",
-                    message=f"the {case.mechanism} cannot be assembled at θ12 = "
-                            f"{np.degrees(theta):.4g}° ({case.branch} branch)",
-                    diagnostics={"theta12": theta})
-
-
-def _singular(case: Case, backend: str, theta: float, condition: float) -> Solution:
-    return Solution(case.name, backend, {}, status="singular",
-                    message=f"condition number {condition:.3g} exceeds {SINGULAR_CONDITION:.0e} "
-                            "at a toggle/change point; forces withheld",
-                    diagnostics={"theta12": theta, "condition_number": condition})
 
 
 def sweep(case: Case, theta12: ArrayLike, backend: str = "pymunk") -> list[Solution]:
@@ -54,16 +39,17 @@ def sweep(case: Case, theta12: ArrayLike, backend: str = "pymunk") -> list[Solut
     if case.kind != "static":
         return _driven_sweep(case, angles, backend)
     poses = pose_of(case, angles, omega=0.0, alpha=0.0)
-    singular, condition = singular_mask(case, angles)
+    verdicts = pose_verdicts(case, angles)
     settings = SETTLE if backend == "pymunk" else SOLVE
     model = None
     out = []
     for k, theta in enumerate(angles):
         if not (np.isfinite(poses.theta13[k]) and np.isfinite(poses.theta14[k])):
-            out.append(_unassemblable(case, backend, float(theta)))
+            out.append(unassemblable_solution(case, backend, float(theta)))
             continue
-        if singular[k]:
-            out.append(_singular(case, backend, float(theta), float(condition[k])))
+        verdict = verdicts[k]
+        if verdict is not None:
+            out.append(withheld_solution(case, backend, verdict))
             continue
         start = time.perf_counter()
         at = case.with_(theta12=float(theta))
@@ -92,7 +78,7 @@ def _driven_sweep(case: Case, angles: np.ndarray, backend: str) -> list[Solution
     for theta in angles:
         at = case.with_(theta12=float(theta)) if _assembles(case, float(theta)) else None
         if at is None:
-            out.append(_unassemblable(case, backend, float(theta)))
+            out.append(unassemblable_solution(case, backend, float(theta)))
         elif backend == "pymunk_solve":
             out.append(not_applicable(at))
         else:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from analytic.case import Case
-from analytic.forces import solve_poses
+from analytic.forces import pose_verdicts, solve_poses, withheld_solution
 from analytic.solution import Solution
 from sim_models.pymunk.model import Model
 from sim_models.pymunk.readout import pose_values
@@ -23,14 +23,10 @@ def singular_mask(case: Case, theta12: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 
 def singular_solution(case: Case, backend: str) -> Solution | None:
-    """A ``singular`` Solution if the case's pose is at or next to a toggle, else None."""
-    singular, condition = singular_mask(case, np.array([case.theta12]))
-    if not singular[0]:
-        return None
-    return Solution(case.name, backend, {}, status="singular",
-                    message=f"condition number {condition[0]:.3g}: the pose is at or next to a "
-                            "toggle/change point; statics there is meaningless in any simulator",
-                    diagnostics={"condition_number": float(condition[0])})
+    """A Solution without forces if the case's pose has none to measure (at or next to a
+    toggle, or where friction reverses: :func:`analytic.forces.pose_verdicts`), else None."""
+    verdict = pose_verdicts(case)[0]
+    return None if verdict is None else withheld_solution(case, backend, verdict)
 
 
 def unsettled_solution(model: Model, backend: str, diag: dict[str, float | str]) -> Solution:
