@@ -52,7 +52,7 @@ def sweep_figure(case: Case, results: pd.DataFrame, status: pd.DataFrame,
                  comparison: pd.DataFrame) -> bytes:
     """PNG bytes of the four-panel figure of one case's sweep."""
     drive = f"T1{case.drive_link}"
-    backends = list(dict.fromkeys(results["backend"].astype(str)))
+    backends = [str(b) for b in pd.unique(results["backend"])]
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), sharex=True)
     (ax_t, ax_f), (ax_e, ax_mu) = axes
     for b in backends:

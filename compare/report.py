@@ -166,7 +166,7 @@ def sweep_view_model(cases: list[Case], specs: dict[str, CaseSpec], statuses: pd
     failed = comparison[~comparison["passed"].astype(bool)] if len(comparison) else comparison
     failing = statuses[statuses["status"].isin(fail_on)] if len(statuses) else statuses
     summaries = []
-    for backend in dict.fromkeys(statuses["backend"].astype(str)):
+    for backend in (str(b) for b in pd.unique(statuses["backend"])):
         if backend == REFERENCE:
             continue
         rows = comparison[comparison["backend"] == backend] if len(comparison) else comparison
@@ -182,9 +182,15 @@ def sweep_view_model(cases: list[Case], specs: dict[str, CaseSpec], statuses: pd
         st = statuses[statuses["case"] == case.name]
         ref = st[st["backend"] == REFERENCE]
         others = {}
-        unusual = st[(st["backend"] != REFERENCE) & ~st["status"].isin(["ok", "singular"])]
+        # Verdicts the reference does not share (singular and indeterminate poses are
+        # listed once, from the reference, below).
+        unusual = st[(st["backend"] != REFERENCE)
+                     & ~st["status"].isin(["ok", "singular", "indeterminate"])]
+        poses_in_case = int((st["backend"] == REFERENCE).sum())
         for key, group in unusual.groupby(["backend", "status"], observed=True):
-            others[" ".join(map(str, key))] = _pose_list(group["theta12"])
+            label = " ".join(map(str, key))
+            others[label] = ("every pose" if len(group) == poses_in_case
+                             else _pose_list(group["theta12"]))
         spec = specs.get(case.name)
         mine = failed[failed["case"] == case.name] if len(failed) else failed
         case_views.append({
@@ -193,6 +199,7 @@ def sweep_view_model(cases: list[Case], specs: dict[str, CaseSpec], statuses: pd
             "figure": f"{case.name}.png",
             "figure_b64": base64.b64encode(figures[case.name]).decode(),
             "singular": _pose_list(ref.loc[ref["status"] == "singular", "theta12"]),
+            "indeterminate": _pose_list(ref.loc[ref["status"] == "indeterminate", "theta12"]),
             "near_singular": _pose_list(ref.loc[(ref["condition_number"] > 1e4)
                                                 & (ref["status"] == "ok"), "theta12"]),
             "other_verdicts": others,
