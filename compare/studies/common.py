@@ -85,17 +85,26 @@ def fmt_value(value: float | None, unit: str = "", digits: int = 3) -> str:
 
 
 def by_source(values: dict[str, float | None], unit: str = "", *, beyond: str = "") -> str:
-    """"X (mujoco Y, pymunk Z)": the first source's value, the simulators' in parentheses.
+    """The first source's value with the simulators' beside it: "X (mujoco Y, pymunk Z)",
+    or "X (both simulators agree)" when they give the same three digits.
 
-    ``beyond`` describes a value that was not reached within the sweep.
+    ``beyond`` describes a level that was not reached within the sweep.
     """
     def one(v: float | None) -> str:
         return beyond if v is None else fmt_value(v, unit)
 
-    items = list(values.items())
-    head = one(items[0][1])
-    rest = ", ".join(f"{src} {one(v)}" for src, v in items[1:])
-    return f"{head} ({rest})" if rest else head
+    texts = [one(v) for v in values.values()]
+    if len(set(texts)) == 1:
+        return texts[0] + (" (both simulators agree)" if len(texts) == 3 else "")
+    rest = ", ".join(f"{src} {t}" for src, t in list(zip(values, texts, strict=True))[1:])
+    return f"{texts[0]} ({rest})"
+
+
+def reached(values: dict[str, float | None], unit: str, *, at: str, tried: str) -> str:
+    """"from ω = X rad/s (…)", or "only beyond the 200 rad/s tried" if no source reached it."""
+    if all(v is None for v in values.values()):
+        return f"only beyond the {tried} tried"
+    return f"from {at} = " + by_source(values, unit, beyond=f"beyond {tried}")
 
 
 def png(fig: Figure) -> bytes:

@@ -10,11 +10,11 @@ from analytic.case import Motion
 from compare.studies.common import (
     SIMULATORS,
     StudyResult,
-    by_source,
     crossing,
     groups,
     plt,
     png,
+    reached,
     realistic_e1,
     simulate,
     torque,
@@ -54,12 +54,12 @@ def run(quick: bool = False) -> StudyResult:
     ax.set_title("Quasi-static assumption (seed E1, steel links)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
-    beyond = f"beyond {omegas[-1]:g} rad/s"
+    tried = f"{omegas[-1]:g} rad/s"
     conclusion = (
-        "The static drive torque misses the dynamic one by 1 % from ω = "
-        + by_source({k: v[0] for k, v in found.items()}, "rad/s", beyond=beyond)
-        + " and by 10 % from ω = "
-        + by_source({k: v[1] for k, v in found.items()}, "rad/s", beyond=beyond)
+        "The static drive torque misses the dynamic one by 1 % "
+        + reached({k: v[0] for k, v in found.items()}, "rad/s", at="ω", tried=tried)
+        + " and by 10 % "
+        + reached({k: v[1] for k, v in found.items()}, "rad/s", at="ω", tried=tried)
         + f"; the miss grows like ω² (static T12 = {t_static:.4g} N·m).")
     return StudyResult(
         "quasi_static", "Quasi-static loading",

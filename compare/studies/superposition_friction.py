@@ -13,11 +13,11 @@ from compare.studies.common import (
     SIMULATORS,
     StudyResult,
     builtin,
-    by_source,
     crossing,
     groups,
     plt,
     png,
+    reached,
     simulate,
     torque,
 )
@@ -66,12 +66,12 @@ def run(quick: bool = False) -> StudyResult:
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
     zero = data[data["mu"] == 0.0]["superposition_error"].max()
-    beyond = f"— (not within μ ≤ {mus[-1]:g})"
+    tried = f"μ = {mus[-1]:g}"
     conclusion = (f"Without friction superposition is exact (largest error {zero:.1e}); with pin "
-                  "friction the sum of single-load solutions misses T12 by 1 % from μ = "
-                  + by_source({k: v[0] for k, v in found.items()}, beyond=beyond)
-                  + " and by 10 % from μ = "
-                  + by_source({k: v[1] for k, v in found.items()}, beyond=beyond) + ".")
+                  "friction the sum of single-load solutions misses T12 by 1 % "
+                  + reached({k: v[0] for k, v in found.items()}, "", at="μ", tried=tried)
+                  + " and by 10 % "
+                  + reached({k: v[1] for k, v in found.items()}, "", at="μ", tried=tried) + ".")
     return StudyResult(
         "superposition_friction", "Superposition with friction",
         "How wrong is summing single-load solutions when the joints have Coulomb friction?",

@@ -52,12 +52,19 @@ SIMULATOR = "pymunk"
 LINK_MASS = 1000.0
 
 #: Settings of a turning run. Same step as MuJoCo's (one sample per 0.057° of
-#: crank). error_bias = 0 corrects the whole joint error every step (at
-#: dt = 1e-3 any "per second" bias that is not ~0 corrects almost nothing per
-#: step, see sim_models.pymunk.dynamics.DRIVEN); damping = 1: no global drag,
-#: the dissipation is the passive joints' damping alone, as in MuJoCo. 50
-#: iterations keep the loop closed within 3e-7 m (measured).
-TURN_SETTINGS = SolverSettings(dt=TIMESTEP, iterations=50, error_bias=0.0, damping=1.0,
+#: crank); damping = 1: no global drag, the dissipation is the passive joints'
+#: damping alone, as in MuJoCo. error_bias = 1e-100 corrects ~20 % of a joint
+#: error per step. Full correction (error_bias = 0) keeps the loop tightest
+#: while turning (double-crank: 1e-6 m open) but, at a toggle, where the
+#: servo's bounded torque becomes loop forces of T/(a short lever arm),
+#: kicks the links so hard that some linkages never come to rest: on 60
+#: random non-Grashof four-bars (links 0.05–0.5 m) 2 rang in a limit cycle
+#: with the crank 0.45° past its limit and the loop 0.14 mm open. A gentle
+#: correction (1e-6, ~1.4 % per step) jams all 60 but leaves the turning
+#: double-crank's loop 6.6e-5 m open; 1e-100 jams all 60 with it 4.8e-6 m
+#: open and the dead positions 2e-4° off (measured). 100 iterations: with 50,
+#: one of the 60 still rang.
+TURN_SETTINGS = SolverSettings(dt=TIMESTEP, iterations=100, error_bias=1e-100, damping=1.0,
                                fictitious_mass=LINK_MASS)
 
 
