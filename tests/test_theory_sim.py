@@ -398,13 +398,15 @@ def crank_rockers(draw: st.DrawFn) -> Case:
 
 @st.composite
 def non_grashof_cranks(draw: st.DrawFn) -> Case:
-    """A four-bar whose crank rocks through φ12 = 0 between ±limit, limit in (20°, 160°)."""
+    """A four-bar whose crank rocks through φ12 = 0 between ±limit, limit in (20°, 160°),
+    starting at φ12 = 0 clear of the folded toggle (|A B0| − |a3 − a4| > 5 % of the longest link)."""
     length = st.floats(0.05, 0.5)
     g = FourBarGeometry(draw(length), draw(length), draw(length), draw(length))
     interval = fourbar_kinematics.assembly_interval(g)
     assume(interval is not None and interval[0] == 0.0)
     assert interval is not None
     assume(math.radians(20.0) < interval[1] < math.radians(160.0))
+    assume(abs(g.a1 - g.a2) - abs(g.a3 - g.a4) > 0.05 * g.scale)
     return Case(name="random-non-grashof", geometry=g, theta12=0.0)
 
 
