@@ -82,6 +82,13 @@ def _positive(value: float, key: str) -> float:
     return value
 
 
+def _nonnegative(value: float, key: str) -> float:
+    value = _finite(value, key)
+    if value < 0.0:
+        raise CaseError(f"must be >= 0, got {value:g}", key=key)
+    return value
+
+
 def _vec2(value: Vec2, key: str) -> Vec2:
     if len(value) != 2:
         raise CaseError(f"must be a pair [x, y], got {value!r}", key=key)
@@ -168,10 +175,7 @@ class Mass:
         object.__setattr__(self, "link", _link(self.link, "link"))
         object.__setattr__(self, "mass", _positive(self.mass, "mass"))
         object.__setattr__(self, "com", _vec2(self.com, "com"))
-        inertia = _finite(self.inertia, "inertia")
-        if inertia < 0.0:
-            raise CaseError(f"must be >= 0, got {inertia:g}", key="inertia")
-        object.__setattr__(self, "inertia", inertia)
+        object.__setattr__(self, "inertia", _nonnegative(self.inertia, "inertia"))
 
 
 @dataclass(frozen=True)
@@ -206,29 +210,14 @@ class Friction:
     direction: int = 0
 
     def __post_init__(self) -> None:
-        mu = _finite(self.mu, "friction.mu")
-        if mu < 0.0:
-            raise CaseError(f"must be >= 0, got {mu:g}", key="friction.mu")
-        object.__setattr__(self, "mu", mu)
-        radii = {}
-        for joint, r in dict(self.pin_radius).items():
-            r = _finite(r, f"friction.pin_radius.{joint}")
-            if r < 0.0:
-                raise CaseError(f"must be >= 0, got {r:g}", key=f"friction.pin_radius.{joint}")
-            radii[joint] = r
-        object.__setattr__(self, "pin_radius", _FrozenDict(radii))
+        object.__setattr__(self, "mu", _nonnegative(self.mu, "friction.mu"))
         if self.slide_mu is not None:
-            smu = _finite(self.slide_mu, "friction.slide_mu")
-            if smu < 0.0:
-                raise CaseError(f"must be >= 0, got {smu:g}", key="friction.slide_mu")
-            object.__setattr__(self, "slide_mu", smu)
-        viscous = {}
-        for joint, c in dict(self.viscous).items():
-            c = _finite(c, f"friction.viscous.{joint}")
-            if c < 0.0:
-                raise CaseError(f"must be >= 0, got {c:g}", key=f"friction.viscous.{joint}")
-            viscous[joint] = c
-        object.__setattr__(self, "viscous", _FrozenDict(viscous))
+            object.__setattr__(self, "slide_mu",
+                               _nonnegative(self.slide_mu, "friction.slide_mu"))
+        for name in ("pin_radius", "viscous"):
+            values = {joint: _nonnegative(v, f"friction.{name}.{joint}")
+                      for joint, v in dict(getattr(self, name)).items()}
+            object.__setattr__(self, name, _FrozenDict(values))
         if self.direction not in (-1, 0, 1):
             raise CaseError("must be 'cw' or 'ccw'", key="friction.direction")
 

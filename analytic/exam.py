@@ -37,9 +37,9 @@ Example
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import Literal, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -342,3 +342,54 @@ class Q2Result:
     wall_time_s: float
     message: str = ""
     diagnostics: Mapping[str, float] = field(default_factory=dict)
+
+
+# -- driving Q2 in a simulator: shared by the MuJoCo and pymunk models ------------------
+def checked_times(times: ArrayLike) -> Array:
+    """Reading times as a non-empty, finite, ascending 1-D array."""
+    t = np.asarray(times, dtype=float)
+    if t.ndim != 1 or t.size == 0 or not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0.0):
+        raise ValueError("times must be a non-empty, finite, ascending 1-D array")
+    return t
+
+
+def reading_steps(times: Array, dt: float, lead: float) -> tuple[float, NDArray[np.int_]]:
+    """(start time, step index of each reading): the grid starts ``lead`` before the first time."""
+    start = float(times[0]) - lead
+    return start, np.rint((times - start) / dt).astype(int)
+
+
+class DrivenRun(Protocol):
+    """What a driven Q2 run must report for its lead-in to be judged."""
+
+    normal_change: Array
+    steps: int
+
+
+RunT = TypeVar("RunT", bound=DrivenRun)
+
+
+def drive_until_steady(run_once: Callable[[float], RunT], lead: float, max_lead: float,
+                       rtol: float) -> tuple[RunT, float, int, NDArray[np.bool_]]:
+    """Run with a lead-in that doubles until the normal force is steady at every reading.
+
+    A reading is steady when its normal force changed by at most ``rtol`` over
+    its step (friction of that step was computed from the same N). Returns the
+    last run, its lead-in, the steps of all runs and which readings are steady.
+    """
+    total = 0
+    while True:
+        run = run_once(lead)
+        total += run.steps
+        steady = run.normal_change <= rtol
+        if bool(np.all(steady)) or not lead < 2.0 * lead <= max_lead:
+            return run, lead, total, steady
+        lead *= 2.0
+
+
+def unsteady_message(steady: NDArray[np.bool_], lead: float) -> str:
+    """The ``not_settled`` message of a driven run, or "" when every reading is steady."""
+    if bool(np.all(steady)):
+        return ""
+    return (f"the normal force was still changing at {int(np.sum(~steady))} readings "
+            f"after a {lead:.3g} s lead-in")

@@ -42,21 +42,22 @@ SIMULATORS: dict[str, ModuleType] = {"mujoco": mujoco_turning, "pymunk": pymunk_
 
 #: The issue's requirement for the dead positions: the measured rocker
 #: extremes and the crank angles where they occur agree with
-#: theory.limit_positions within 0.1°. (Measured: ≤ 2.5e-4° in MuJoCo,
-#: ≤ 1.3e-4° in pymunk; the samples are 0.057° of crank apart and a parabola
+#: theory.limit_positions within 0.1°. (Measured on the seed examples:
+#: ≤ 2.4e-4° in MuJoCo, ≤ 1.8e-4° in pymunk; on 30 random crank-rockers with
+#: μ ≥ 5°, ≤ 1.5e-3°. The samples are 0.057° of crank apart and a parabola
 #: through seven of them locates the extreme.)
 LIMIT_ANGLE_TOL_DEG = 0.1
 
 #: A jammed crank rests against the toggle; the servo's bounded torque still
 #: stretches the loop a little, by the constraint's give, which turns into
-#: crank angle (measured: 7e-6° in MuJoCo, 1e-11° in pymunk on the
-#: non-Grashof four-bar; 1e-5° and 2e-11° on the offset slider-crank).
-#: 1e-3° leaves two orders of margin and is still 100 times finer than the
-#: dead-position requirement.
+#: crank angle (measured: 6.3e-6° in MuJoCo, 1e-14° in pymunk on the
+#: non-Grashof four-bar; 1.6e-5° and 5e-9° on the offset slider-crank; up to
+#: 1.8e-4° in MuJoCo on 25 random non-Grashof four-bars). 1e-3° keeps a
+#: margin and is still 100 times finer than the dead-position requirement.
 REACH_TOL_DEG = 1.0e-3
 
 #: Loop closure while turning, metres: the largest gap at pin B over a turn
-#: (measured: ≤ 1.1e-6 m in MuJoCo, ≤ 2.4e-6 m in pymunk on links of
+#: (measured: ≤ 1.1e-6 m in MuJoCo, ≤ 4.8e-6 m in pymunk on links of
 #: 0.1–0.3 m, the double-crank being the worst). A gap of 1e-5 m would move
 #: the rocker by ~1e-4 rad, still ~20 times inside the 0.1° requirement.
 LOOP_TOL = 1.0e-5

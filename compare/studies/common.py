@@ -107,6 +107,23 @@ def reached(values: dict[str, float | None], unit: str, *, at: str, tried: str) 
     return f"from {at} = " + by_source(values, unit, beyond=f"beyond {tried}")
 
 
+def loglog_by_source(data: pd.DataFrame, x: str, y: str, *, levels: tuple[float, ...],
+                     xlabel: str, ylabel: str, title: str) -> bytes:
+    """The usual study figure: one log-log curve per source (analytic solid, simulators
+    dashed), dotted lines at the conclusion's levels."""
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for src, g in groups(data):
+        ax.loglog(g[x], g[y], "o-" if src.startswith("analytic") else "s--", label=src, ms=4)
+    for level in levels:
+        ax.axhline(level, color="grey", ls=":", lw=0.8)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+    return png(fig)
+
+
 def png(fig: Figure) -> bytes:
     buffer = io.BytesIO()
     fig.tight_layout()

@@ -14,8 +14,7 @@ from compare.studies.common import (
     by_source,
     crossing,
     groups,
-    plt,
-    png,
+    loglog_by_source,
     realistic_e1,
     simulate,
     torque,
@@ -51,17 +50,11 @@ def run(quick: bool = False) -> StudyResult:
         g = g.sort_values("load_N", ascending=False)
         found[src] = [crossing(1.0 / g["load_N"].to_numpy(), g["relative_error"].to_numpy(), lv)
                       for lv in LEVELS]
-    fig, ax = plt.subplots(figsize=(7, 4.2))
-    for src, g in groups(data):
-        ax.loglog(g["load_N"], g["relative_error"], "o-" if src.startswith("analytic") else "s--",
-                  label=src, ms=4)
-    for lv in LEVELS:
-        ax.axhline(lv, color="grey", ls=":", lw=0.8)
-    ax.set_xlabel("rocker load |F14| [N] (the coupler load scales with it)")
-    ax.set_ylabel("|T_massless − T_weighted| / |T_weighted|")
-    ax.set_title("Massless-link assumption (seed E1, steel links)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3, which="both")
+    figure = loglog_by_source(
+        data, "load_N", "relative_error", levels=LEVELS,
+        xlabel="rocker load |F14| [N] (the coupler load scales with it)",
+        ylabel="|T_massless − T_weighted| / |T_weighted|",
+        title="Massless-link assumption (seed E1, steel links)")
     weight = sum(m.mass for m in base.masses) * 9.81
     def load_at(level: int) -> dict[str, float | None]:
         """The load (N) at which the error falls through a level: 1 / the crossing of 1/load."""
@@ -78,7 +71,7 @@ def run(quick: bool = False) -> StudyResult:
                   + "; the error falls like 1/load.")
     return StudyResult(
         "massless", "Massless links", "How large is the error in T12 from ignoring realistic link "
-        "weights, against the load magnitude?", data, png(fig), conclusion,
+        "weights, against the load magnitude?", data, figure, conclusion,
         "Seed E1 at θ12 = 60°, both loads scaled together; steel links of 20 × 5 mm section. "
         "Massless: analytic without masses. Weighted: MuJoCo and pymunk settled with the masses "
         "under gravity (and the analytic solution with weights).")

@@ -12,8 +12,7 @@ from compare.studies.common import (
     StudyResult,
     crossing,
     groups,
-    plt,
-    png,
+    loglog_by_source,
     reached,
     realistic_e1,
     simulate,
@@ -43,17 +42,10 @@ def run(quick: bool = False) -> StudyResult:
     data["relative_miss"] = (data["T_static"] - data["T_dynamic"]).abs() / data["T_dynamic"].abs()
     found = {src: [crossing(g["omega"], g["relative_miss"], lv) for lv in LEVELS]
              for src, g in groups(data)}
-    fig, ax = plt.subplots(figsize=(7, 4.2))
-    for src, g in groups(data):
-        ax.loglog(g["omega"], g["relative_miss"], "o-" if src.startswith("analytic") else "s--",
-                  label=src, ms=4)
-    for lv in LEVELS:
-        ax.axhline(lv, color="grey", ls=":", lw=0.8)
-    ax.set_xlabel("crank speed ω [rad/s]")
-    ax.set_ylabel("|T_static − T_dynamic| / |T_dynamic|")
-    ax.set_title("Quasi-static assumption (seed E1, steel links)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3, which="both")
+    figure = loglog_by_source(data, "omega", "relative_miss", levels=LEVELS,
+                              xlabel="crank speed ω [rad/s]",
+                              ylabel="|T_static − T_dynamic| / |T_dynamic|",
+                              title="Quasi-static assumption (seed E1, steel links)")
     tried = f"{omegas[-1]:g} rad/s"
     conclusion = (
         "The static drive torque misses the dynamic one by 1 % "
@@ -64,7 +56,7 @@ def run(quick: bool = False) -> StudyResult:
     return StudyResult(
         "quasi_static", "Quasi-static loading",
         "At what crank speed does the static drive torque miss the measured dynamic torque "
-        "by 1 % and by 10 %?", data, png(fig), conclusion,
+        "by 1 % and by 10 %?", data, figure, conclusion,
         "Seed E1 at θ12 = 60° with its two loads, steel links (20 × 5 mm) under gravity, "
         "steady ω (α = 0). Static: analytic with ω = 0. Dynamic: MuJoCo and pymunk driven "
         "through the prescribed motion (and the analytic D'Alembert solution for reference).")

@@ -15,8 +15,7 @@ from compare.studies.common import (
     builtin,
     crossing,
     groups,
-    plt,
-    png,
+    loglog_by_source,
     reached,
     simulate,
     torque,
@@ -53,18 +52,10 @@ def run(quick: bool = False) -> StudyResult:
     data["superposition_error"] = (data["T_sum"] - data["T_all"]).abs() / data["T_all"].abs()
     found = {src: [crossing(g["mu"].to_numpy()[1:], g["superposition_error"].to_numpy()[1:], lv)
                    for lv in LEVELS] for src, g in groups(data)}
-    fig, ax = plt.subplots(figsize=(7, 4.2))
-    for src, g in groups(data):
-        g = g[g["mu"] > 0]
-        ax.loglog(g["mu"], g["superposition_error"], "o-" if src == "analytic" else "s--",
-                  label=src, ms=4)
-    for lv in LEVELS:
-        ax.axhline(lv, color="grey", ls=":", lw=0.8)
-    ax.set_xlabel("friction coefficient μ (pin radius 10 mm)")
-    ax.set_ylabel("|ΣT_single − T_all| / |T_all|")
-    ax.set_title("Superposition with friction (seed E1)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3, which="both")
+    figure = loglog_by_source(data[data["mu"] > 0], "mu", "superposition_error", levels=LEVELS,
+                              xlabel="friction coefficient μ (pin radius 10 mm)",
+                              ylabel="|ΣT_single − T_all| / |T_all|",
+                              title="Superposition with friction (seed E1)")
     zero = data[data["mu"] == 0.0]["superposition_error"].max()
     tried = f"μ = {mus[-1]:g}"
     conclusion = (f"Without friction superposition is exact (largest error {zero:.1e}); with pin "
@@ -75,7 +66,7 @@ def run(quick: bool = False) -> StudyResult:
     return StudyResult(
         "superposition_friction", "Superposition with friction",
         "How wrong is summing single-load solutions when the joints have Coulomb friction?",
-        data, png(fig), conclusion,
+        data, figure, conclusion,
         "Seed E1 at θ12 = 60°, friction circles at all four pins (r = 10 mm), crank turning "
         "counter-clockwise. Each load alone and both together, by the analytic friction-circle "
         "solution and by both simulators (driven slowly, friction from their own reactions).")

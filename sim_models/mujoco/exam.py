@@ -58,7 +58,19 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from analytic.exam import Motion, Q1Equilibrium, Q1Result, Q1System, Q2Result, Q2System, Status
+from analytic.exam import (
+    Motion,
+    Q1Equilibrium,
+    Q1Result,
+    Q1System,
+    Q2Result,
+    Q2System,
+    Status,
+    checked_times,
+    drive_until_steady,
+    reading_steps,
+    unsteady_message,
+)
 
 BACKEND = "mujoco"
 
@@ -373,19 +385,6 @@ def q2_xml(system: Q2System) -> str:
     return str(q2_spec(system).to_xml())
 
 
-def reading_steps(times: Array, dt: float, lead: float) -> tuple[float, NDArray[np.int_]]:
-    """(start time, step index of each reading): the grid starts ``lead`` before the first time."""
-    start = float(times[0]) - lead
-    return start, np.rint((times - start) / dt).astype(int)
-
-
-def _checked_times(times: ArrayLike) -> Array:
-    t = np.asarray(times, dtype=float)
-    if t.ndim != 1 or t.size == 0 or not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0.0):
-        raise ValueError("times must be a non-empty, finite, ascending 1-D array")
-    return t
-
-
 @dataclass
 class _Q2Run:
     """One driven run: readings at the steps asked for, and what is needed to judge them."""
@@ -455,21 +454,13 @@ def drive_q2(system: Q2System, motion: Motion, times: ArrayLike,
     ``not_settled`` with those readings NaN.
     """
     tic = time.perf_counter()
-    t = _checked_times(times)
-    lead = settings.lead_in
-    total_steps = 0
-    while True:
-        run = _drive_once(system, motion, t, settings, lead)
-        total_steps += run.steps
-        steady = run.normal_change <= settings.normal_change_rtol
-        if bool(np.all(steady)) or not lead < 2.0 * lead <= settings.max_lead_in:
-            break
-        lead *= 2.0
+    t = checked_times(times)
+    run, lead, total_steps, steady = drive_until_steady(
+        lambda lead: _drive_once(system, motion, t, settings, lead), settings.lead_in,
+        settings.max_lead_in, settings.normal_change_rtol)
     force = np.where(steady, run.force, np.nan)
     status: Status = "ok" if bool(np.all(steady)) else "not_settled"
-    message = "" if status == "ok" else (
-        f"the normal force was still changing at {int(np.sum(~steady))} readings "
-        f"after a {lead:.3g} s lead-in")
+    message = unsteady_message(steady, lead)
     diagnostics = {"timestep": settings.timestep, "lead_in": lead,
                    "max_normal_change": float(np.nanmax(run.normal_change)),
                    "max_tracking_error": float(np.nanmax(run.tracking)),

@@ -19,10 +19,11 @@ actuator and equality forces); the analytic side only seeds the first pose.
   so T12 / T_out is the force amplification, which for a rigid linkage is
   −ω4/ω2 (virtual work) and grows without bound toward a toggle.
 
-The simulator-independent parts — the run protocol (:func:`run_protocol`),
-the result types and the extreme finder — are used unchanged by
-:mod:`sim_models.pymunk.turning`, so that both simulators are judged by the
-same rules.
+The simulator-independent parts — the run protocol (:func:`run_leg`,
+:func:`turn_result`), the result types and the extreme finder — are used
+unchanged by :mod:`sim_models.pymunk.turning`, so that both simulators are
+judged by the same rules. (They would sit better in a module of their own
+beside both backends.)
 """
 
 from __future__ import annotations
@@ -57,8 +58,10 @@ TIMESTEP = 1.0e-3
 #: 3e-6 m on 0.25 m links).
 SERVO_SPEED = 1.0
 
-#: Velocity gain of the servo, in units of m·L² (m the link mass, L the
+#: Velocity gain of MuJoCo's servo, in units of m·L² (m the link mass, L the
 #: longest link), so 1/s: the crank's speed error relaxes in ~1/50 s.
+#: (pymunk's SimpleMotor has no gain: it is a velocity constraint that holds
+#: the speed exactly until it needs more than its torque bound.)
 SERVO_GAIN = 50.0
 
 #: The servo's torque bound, in units of m·L²·ω². Enough to drive the links'
@@ -289,6 +292,9 @@ class TurnResult:
         if not self.completed:
             raise ValueError(f"{self.case.name}: the crank did not turn fully in {self.simulator}; "
                              "a rocker extreme over a turn is undefined")
+        if float(np.ptp(self.theta14)) >= math.pi:
+            raise ValueError(f"{self.case.name}: the rocker turns fully in {self.simulator} "
+                             "(a double-crank); it has no extremes")
         return rocker_extremes(self.theta12, self.theta14)
 
     def output_at(self, theta12: float) -> float:
@@ -445,6 +451,7 @@ class MujocoTurner:
         m = self.model
         self.q = [int(m.joint(j).qposadr[0]) for j in ("A0", "A", output_joint(case))]
         self.loop_eq = int(m.equality("loop_B").id)
+        self.loop_rows: NDArray[np.int_] = np.zeros(0, dtype=int)  # set by reset()
 
     def reset(self, sense: int) -> None:
         m, d = self.model, self.data
