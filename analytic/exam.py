@@ -344,6 +344,23 @@ class Q2Result:
     diagnostics: Mapping[str, float] = field(default_factory=dict)
 
 
+def q1_result(backend: str, settled: bool, x: float, phi: float,
+              forces: tuple[float, float, float, float], *, steps: int, elapsed: float,
+              speed: float, change: float, max_steps: int,
+              diagnostics: dict[str, float]) -> Q1Result:
+    """A simulator's Q1 answer: its equilibrium and (spring, pin x, pin y, normal) forces,
+    or ``not_settled`` with none when the run did not settle within ``max_steps``."""
+    if not settled:
+        return Q1Result(backend, None, "not_settled", steps, elapsed, speed, change,
+                        message=f"no equilibrium within {max_steps} steps "
+                                f"(point speed {speed:.2e} m/s, force change {change:.2e})",
+                        diagnostics=diagnostics)
+    spring, pin_x, pin_y, normal = forces
+    values = Q1Equilibrium(x=x, phi=phi, spring_force=spring, pin_x=pin_x, pin_y=pin_y,
+                           normal=normal)
+    return Q1Result(backend, values, "ok", steps, elapsed, speed, change, diagnostics=diagnostics)
+
+
 # -- driving Q2 in a simulator: shared by the MuJoCo and pymunk models ------------------
 def checked_times(times: ArrayLike) -> Array:
     """Reading times as a non-empty, finite, ascending 1-D array."""

@@ -60,7 +60,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from analytic.exam import (
     Motion,
-    Q1Equilibrium,
     Q1Result,
     Q1System,
     Q2Result,
@@ -68,6 +67,7 @@ from analytic.exam import (
     Status,
     checked_times,
     drive_until_steady,
+    q1_result,
     reading_steps,
     unsteady_message,
 )
@@ -329,15 +329,10 @@ def settle_q1(system: Q1System, settings: Q1Settings = Q1Settings()) -> Q1Result
                    "pin_violation": rig.pin_violation(),
                    "slide_violation": abs(float(d.qpos[rig.dof["slider_y"]])),
                    "start_x": settings.start_x, "start_phi": settings.start_phi}
-    elapsed = time.perf_counter() - tic
-    if not settled:
-        return Q1Result(BACKEND, None, "not_settled", step, elapsed, speed, change,
-                        message=f"no equilibrium within {settings.max_steps} steps "
-                                f"(point speed {speed:.2e} m/s, force change {change:.2e})",
-                        diagnostics=diagnostics)
-    spring, pin_x, pin_y, normal = (float(v) for v in rig.forces())
-    values = Q1Equilibrium(x=x, phi=phi, spring_force=spring, pin_x=pin_x, pin_y=pin_y, normal=normal)
-    return Q1Result(BACKEND, values, "ok", step, elapsed, speed, change, diagnostics=diagnostics)
+    forces = tuple(float(v) for v in rig.forces())
+    return q1_result(BACKEND, settled, x, phi, (forces[0], forces[1], forces[2], forces[3]),
+                     steps=step, elapsed=time.perf_counter() - tic, speed=speed, change=change,
+                     max_steps=settings.max_steps, diagnostics=diagnostics)
 
 
 # ------------------------------------------------------------------------- Q2
