@@ -35,8 +35,8 @@ from analytic import fourbar_kinematics, slidercrank_kinematics, theory
 from analytic.case import Case, FourBarGeometry, SliderCrankGeometry
 from analytic.kinematics import pose_of
 from sim_models.mujoco import turning as mujoco_turning
-from sim_models.mujoco.turning import Amplification, TurnResult
 from sim_models.pymunk import turning as pymunk_turning
+from sim_models.turning import Amplification, TurnResult
 
 SIMULATORS: dict[str, ModuleType] = {"mujoco": mujoco_turning, "pymunk": pymunk_turning}
 
@@ -182,7 +182,7 @@ def analytic_reach(case: Case) -> tuple[float, float]:
     return case.ground_angle + low, case.ground_angle + math.pi - low
 
 
-def check_id(case: Case) -> str:
+def case_id(case: Case) -> str:
     return case.name
 
 
@@ -192,7 +192,7 @@ parametrize_simulator = pytest.mark.parametrize("simulator", list(SIMULATORS))
 # -- 1. which cranks turn --------------------------------------------------------------------
 
 @parametrize_simulator
-@pytest.mark.parametrize("case", GRASHOF_CRANKS, ids=check_id)
+@pytest.mark.parametrize("case", GRASHOF_CRANKS, ids=case_id)
 def test_grashof_cranks_turn_fully(simulator: str, case: Case) -> None:
     """The crank of a Grashof crank-rocker or double-crank (seed 001) makes a full turn
     against a bounded servo torque, with the loop closed all the way."""
@@ -217,7 +217,7 @@ def test_double_crank_rocker_turns_fully_too(simulator: str) -> None:
 
 
 @parametrize_simulator
-@pytest.mark.parametrize("case", GRASHOF_CRANKS[:2], ids=check_id)
+@pytest.mark.parametrize("case", GRASHOF_CRANKS[:2], ids=case_id)
 def test_crank_rocker_rocker_swings_back(simulator: str, case: Case) -> None:
     """In a crank-rocker (seed 001) the rocker only swings: after a crank turn it is back
     where it started, and its swing is less than half a turn."""
@@ -247,7 +247,7 @@ def test_non_grashof_crank_jams_at_the_assembly_limits(simulator: str) -> None:
 
 
 @parametrize_simulator
-@pytest.mark.parametrize("case", SLIDER_CRANKS, ids=check_id)
+@pytest.mark.parametrize("case", SLIDER_CRANKS, ids=case_id)
 def test_slider_crank_turns_fully_iff_crank_plus_offset_is_shorter_than_the_rod(
         simulator: str, case: Case) -> None:
     """A slider-crank's crank turns fully exactly when a2 + |e| < a3 (seed 001); otherwise it
@@ -270,7 +270,7 @@ def test_slider_crank_turns_fully_iff_crank_plus_offset_is_shorter_than_the_rod(
 # -- 2. dead positions -------------------------------------------------------------------------
 
 @parametrize_simulator
-@pytest.mark.parametrize("case", DEAD_POSITION_CASES, ids=check_id)
+@pytest.mark.parametrize("case", DEAD_POSITION_CASES, ids=case_id)
 def test_rocker_extremes_are_the_dead_positions(simulator: str, case: Case) -> None:
     """Over a crank turn the rocker's extremes are the dead positions of theory.limit_positions
     — angle and crank angle within 0.1° — for the seed's crank-rocker (100, 220, 150, 250)

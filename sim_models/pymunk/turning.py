@@ -27,7 +27,11 @@ import pymunk
 from numpy.typing import ArrayLike
 
 from analytic.case import Case, SliderCrankGeometry
-from sim_models.mujoco.turning import (
+from sim_models.pymunk.forces import torque_on_b
+from sim_models.pymunk.model import Model, build_model, slide_axes
+from sim_models.pymunk.readout import joint_separation
+from sim_models.pymunk.settings import SolverSettings
+from sim_models.turning import (
     JOINT_DAMPING,
     SERVO_SPEED,
     TIMESTEP,
@@ -40,10 +44,6 @@ from sim_models.mujoco.turning import (
     seed_pose,
     turn_result,
 )
-from sim_models.pymunk.forces import torque_on_b
-from sim_models.pymunk.model import Model, build_model, slide_axes
-from sim_models.pymunk.readout import joint_separation
-from sim_models.pymunk.settings import SolverSettings
 
 SIMULATOR = "pymunk"
 
@@ -57,13 +57,13 @@ LINK_MASS = 1000.0
 #: error per step. Full correction (error_bias = 0) keeps the loop tightest
 #: while turning (double-crank: 1e-6 m open) but, at a toggle, where the
 #: servo's bounded torque becomes loop forces of T/(a short lever arm),
-#: kicks the links so hard that some linkages never come to rest: on 60
-#: random non-Grashof four-bars (links 0.05–0.5 m) 2 rang in a limit cycle
-#: with the crank 0.45° past its limit and the loop 0.14 mm open. A gentle
-#: correction (1e-6, ~1.4 % per step) jams all 60 but leaves the turning
-#: double-crank's loop 6.6e-5 m open; 1e-100 jams all 60 with it 4.8e-6 m
-#: open and the dead positions 2e-4° off (measured). 100 iterations: with 50,
-#: one of the 60 still rang.
+#: kicks the links so hard that some linkages never come to rest (measured on
+#: random non-Grashof four-bars, links 0.05–0.5 m: 2 of 55 rang in a limit
+#: cycle, one with the crank 0.45° past its limit and the loop 0.14 mm
+#: open). A gentle correction (1e-6, ~1.4 % per step) jams all of them but
+#: leaves the turning double-crank's loop 6.6e-5 m open; 1e-100 jammed 60 of
+#: 60 with it 4.8e-6 m open and the dead positions 2e-4° off. 100
+#: iterations: with 50, one of 30 still rang.
 TURN_SETTINGS = SolverSettings(dt=TIMESTEP, iterations=100, error_bias=1e-100, damping=1.0,
                                fictitious_mass=LINK_MASS)
 
