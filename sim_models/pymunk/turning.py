@@ -1,7 +1,7 @@
 """Seed 001's mechanism theory measured in pymunk: turn the crank and see.
 
 The same two experiments as :mod:`sim_models.mujoco.turning`, judged by the
-same run protocol, result types and extreme finder (imported from there):
+same run protocol, result types and extreme finder (:mod:`sim_models.turning`):
 
 - :func:`turn_crank` drives the crank with a :class:`pymunk.SimpleMotor` of
   bounded torque (``max_force``) — pymunk's velocity servo — in place of the
@@ -100,7 +100,7 @@ def joint_dampers(model: Model) -> list[pymunk.Constraint]:
 
 
 class PymunkTurner:
-    """The servo-driven pymunk model of a Case (a :class:`~sim_models.mujoco.turning.Turner`)."""
+    """The servo-driven pymunk model of a Case (a :class:`~sim_models.turning.Turner`)."""
 
     def __init__(self, case: Case) -> None:
         self.case = case
