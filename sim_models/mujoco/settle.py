@@ -5,9 +5,13 @@ equality at the pose's angle; the loads are re-applied at the current pose
 every step; the model is stepped until it has SETTLED — its joints at rest and
 its forces no longer changing — never for a fixed number of steps.
 Settling damps itself: with the driven link locked the mechanism has no
-freedom left, and the only motion is the critically damped (dampratio 1)
-relaxation of the soft constraints (:func:`run_until_settled`, stop rule
-:func:`remaining_change`).
+freedom left, and the only motion is the relaxation of the soft constraints —
+critically damped (dampratio 1) at ordinary poses, a lightly damped slow mode
+next to a change point (:func:`run_until_settled`, stop rule
+:class:`DecayWatch`). The forces never come to rest exactly: they sit on a
+floor set by the rounding of the positions, ~1e-8 of their size next to a
+change point (:data:`WOBBLE_RTOL`), which the stop rule must accept as settled
+without mistaking a slow oscillation's turning point for it.
 
 A settled soft model is bent: each constraint holds its force with a small
 violation. Next to a change point that bending costs far more than the 1e-6
@@ -24,6 +28,8 @@ from __future__ import annotations
 
 import itertools
 import time
+from collections import deque
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 import mujoco
@@ -44,36 +50,68 @@ from sim_models.mujoco.rig import Rig, disagreement
 SETTLE_RTOL = 1e-8
 #: Δ and r are the largest change and step ratio over the last this-many
 #: changes. Next to a change point the soft constraints leave a lightly damped
-#: mode (period ~20 steps at condition number 1200), whose change dips to almost
-#: nothing for one step at each turning point; a window of 4 bridges the dip
-#: (a two-step estimate stopped there, 4e-6 off), at ~3 steps' cost per pass.
+#: mode (half-period 13 steps at condition number 360, 18 at 880, 36 at 2100,
+#: measured), whose change dips to almost nothing for a step or two at each
+#: turning point; a window of 4 bridges the dip (a two-step estimate stopped
+#: there, 4e-6 off), at ~3 steps' cost per pass.
 STOP_WINDOW = 4
-#: When the changes no longer shrink (r ≥ 1), the forces are wobbling at the
-#: rounding level of the positions in the stiff constraints (a cycle of 2–4
-#: steps, ~1e-8 of the forces at condition number 100 and growing with it); the
-#: state is then settled if the wobble itself is below this fraction — the most
-#: any one reading can be off the cycle's centre.
-WOBBLE_RTOL = 1e-8
-#: ... and no joint moves faster than this (a point speed at the scale length, m/s).
+#: The forces cannot settle below the FLOOR set by the positions' rounding. The
+#: loop closure at B is computed from site positions of ~0.1 m, which move in
+#: steps of an ulp (~3e-17 m), and next to a change point the loop constraint
+#: holds such a step with a large force: at rest the forces hop by ~1e-8 of
+#: their size every few steps and decay back, for ever (seed E1, measured:
+#: ≤ 1e-10 over most of the cycle, 4e-9 at θ12 = 175°, 1e-8–3e-8 from 178°
+#: on, flat up to condition number 5000; the residual joint speed is then
+#: ~1e-12 m/s). The old stop rule accepted such a wobble only below 1e-8, so
+#: whether a pose settled was a lottery on the floor's size and phase: 4 of 40
+#: poses between condition numbers 100 and 450 of seed E1 ran out of steps, all
+#: on a floor of 1–3e-8, while poses closer to the change point settled.
+#: A state is now settled on the floor when the forces' spread (max − min of
+#: each, relative to the largest force) over the last :data:`FLOOR_WINDOW`
+#: readings is at most this: every reading in the window, the last one
+#: included, is then within it of the floor's centre. 1e-7 is 3× the largest
+#: floor measured and 10× below the 1e-6 static target.
+WOBBLE_RTOL = 1e-7
+#: The window over which the floor's spread is judged. It must span a swing of
+#: the slowest mode left, or the turning point of a decaying oscillation would
+#: pass for a floor (the spread over a window ending at a turning point covers
+#: the whole last swing only if the window is at least a half-period long):
+#: 32 covers the half-periods measured up to condition number ~2000 (see
+#: :data:`STOP_WINDOW`); a pose settling on its floor thereby costs ≥ 32 steps.
+FLOOR_WINDOW = 32
+#: A shortcut to the floor rule for poses whose floor is far below it (most of
+#: the cycle: ≤ 1e-10, so a second pass would otherwise wait 32 steps for
+#: nothing): settled when each of the last :data:`STOP_WINDOW` changes is at
+#: most this. Around a turning point of a mode with a half-period of H steps,
+#: the changes over 4 steps are ≥ ~2·A·(π/H)² for an amplitude A, so changes
+#: ≤ 1e-9 mean A ≤ 7e-8 even for H = 36 (condition number ~2000).
+QUIET_RTOL = 1e-9
+#: ... and no joint moves faster than this (a point speed at the scale length,
+#: m/s; on the floor it is ~1e-12).
 VELOCITY_TOL = 1e-9
 #: Step budget of one settling run; a pose that has not settled by then is
-#: reported ``not_settled``. Ordinary poses settle in 30–60 steps; the decay
-#: ratio r tends to 1 as a change point nears (about 400 steps at condition
-#: number 600), and the budget runs out there, which is the honest verdict.
+#: reported ``not_settled``. Ordinary poses settle in 30–60 steps; next to a
+#: change point the slow mode takes longer (about 270 steps at condition number
+#: 880, 1100 at 2100, 2600 at 5400), and beyond ~5000 the budget runs out,
+#: which is the honest verdict.
 MAX_STEPS = 3000
 #: Settling passes: after each one the constraint forces are carried as loads
 #: (:meth:`~.rig.Rig.carry`), the pose is re-seeded unbent and the mechanism
-#: settles again, until two passes agree within this fraction of the largest
-#: force. A single pass is off by the soft constraints' bending — 2e-5 of the
-#: forces at θ12 = 179° of seed E1 (condition number 119), growing as the cube
-#: of the condition number — and each pass shrinks that 50–1e4 times
-#: (measured), so the last pass is well within the last difference of the rigid
-#: answer. The line sits above the wobble (:data:`WOBBLE_RTOL`), by which two
-#: readings of the same equilibrium can differ, and 10× below the 1e-6 static
-#: target. Ordinary poses need two passes, 179° three, 179.9° (condition 1200)
-#: seven; at 179.95° (2400) eight are not enough.
+#: settles again. A single pass is off by the soft constraints' bending — 2e-5
+#: of the forces at θ12 = 179° of seed E1 (condition number 119), 8e-3 at
+#: condition number 880 — and each pass shrinks that by a factor c (measured:
+#: c < 0.02 up to condition number 200, 0.01 at 880, 0.1 at 2100, 0.2 at 2650,
+#: 0.3 at 3400), so the passes' differences d decay geometrically too, and the
+#: last pass is within d·c/(1 − c) of the rigid answer (:func:`refinement_left`).
+#: Done when that, and d itself, are below this fraction of the largest force:
+#: above the floor (:data:`WOBBLE_RTOL`), by which two readings of the same
+#: equilibrium can differ, and 10× below the 1e-6 static target.
 REFINE_RTOL = 1e-7
-MAX_PASSES = 8
+#: Enough passes for the contraction measured up to condition number ~3500
+#: (ordinary poses need two, 179° three, condition number 880 five, 2100 eight,
+#: 2650 eleven, 3400 fifteen); beyond that the passes' own settling runs out of
+#: steps first (:data:`MAX_STEPS`).
+MAX_PASSES = 16
 
 
 @dataclass(frozen=True)
@@ -87,6 +125,7 @@ class Settled:
     loop_violation: float
     passes: int = 1
     refinement: float = float("nan")
+    rule: str = ""  # the stop rule that ended the last pass (DecayWatch.rule)
 
 
 def run_until_settled(rig: Rig, max_steps: int | None = None) -> Settled:
@@ -107,33 +146,52 @@ def run_until_settled(rig: Rig, max_steps: int | None = None) -> Settled:
             settled = True
             break
         mujoco.mj_Euler(m, d)
-    return Settled(rig.read(), step, settled, rig.joint_velocity(), rig.loop_violation())
+    return Settled(rig.read(), step, settled, rig.joint_velocity(), rig.loop_violation(),
+                   rule=watch.rule if settled else "")
 
 
 class DecayWatch:
-    """The stop rule on a sequence of force vectors (see :data:`SETTLE_RTOL`)."""
+    """The stop rule on a sequence of force vectors: settled when the change
+    still to come of a decay is below :data:`SETTLE_RTOL`, when the last changes
+    are all below :data:`QUIET_RTOL`, or when the forces sit on their rounding
+    floor, spread over :data:`FLOOR_WINDOW` readings by at most
+    :data:`WOBBLE_RTOL`. ``rule`` names the one that fired."""
 
     def __init__(self) -> None:
-        self.previous: np.ndarray | None = None
+        self.readings: deque[list[float]] = deque(maxlen=FLOOR_WINDOW)
         self.changes: list[float] = []
+        self.rule = ""
 
     def settled(self, current: np.ndarray) -> bool:
         """Record ``current``; True when the forces have settled."""
-        previous, self.previous = self.previous, current
-        if previous is None:
+        # Plain floats: a handful of numbers per step, where numpy's call
+        # overhead would dominate the step's cost.
+        values = current.tolist()
+        size = max(max(map(abs, values)), 1e-300)
+        if self.readings:
+            previous = self.readings[-1]
+            self.changes.append(max(abs(a - b) for a, b in zip(values, previous, strict=True))
+                                / size)
+        self.readings.append(values)
+        if remaining_change(self.changes) <= SETTLE_RTOL:
+            self.rule = "decay"
+        elif len(self.changes) >= STOP_WINDOW and max(self.changes[-STOP_WINDOW:]) <= QUIET_RTOL:
+            self.rule = "quiet"
+        elif (len(self.readings) == FLOOR_WINDOW
+              and max(self.changes[-STOP_WINDOW:]) <= WOBBLE_RTOL
+              and floor_spread(self.readings) / size <= WOBBLE_RTOL):
+            self.rule = "floor"
+        else:
             return False
-        size = max(float(np.abs(current).max()), 1e-300)
-        self.changes.append(float(np.abs(current - previous).max()) / size)
-        return remaining_change(self.changes) <= SETTLE_RTOL
+        return True
 
 
 def remaining_change(changes: list[float]) -> float:
     """Estimated change still to come after the last of ``changes`` (relative
     per-step changes), from the last :data:`STOP_WINDOW` of them: Δ·r/(1 − r)
-    while they decay geometrically, the wobble Δ itself (scaled to
-    :data:`SETTLE_RTOL`) once they no longer do, ∞ before a window is known.
-    Δ is the window's largest change and r its largest step ratio, so neither a
-    dip of one step nor an alternation passes for a decay."""
+    while they decay geometrically, ∞ when they do not (or before a window is
+    known). Δ is the window's largest change and r its largest step ratio, so
+    neither a dip of one step nor an alternation passes for a decay."""
     if len(changes) < STOP_WINDOW:
         return np.inf
     window = changes[-STOP_WINDOW:]
@@ -143,7 +201,13 @@ def remaining_change(changes: list[float]) -> float:
     ratio = max(b / a if a else np.inf for a, b in itertools.pairwise(window))
     if ratio < 1.0:
         return size * ratio / (1.0 - ratio)
-    return size * SETTLE_RTOL / WOBBLE_RTOL
+    return np.inf
+
+
+def floor_spread(readings: Iterable[Iterable[float]]) -> float:
+    """Largest spread (max − min) of any force component over ``readings``."""
+    stack = np.array(list(readings))
+    return float((stack.max(axis=0) - stack.min(axis=0)).max())
 
 
 def reseed(rig: Rig, qpos: np.ndarray) -> None:
@@ -166,23 +230,44 @@ def seed_at(rig: Rig, theta12: float) -> np.ndarray:
 
 def settle_refined(rig: Rig, qpos: np.ndarray) -> Settled:
     """Settle, carry the constraint forces, re-seed the pose, settle again, until
-    two passes agree (:data:`REFINE_RTOL`) or one does not settle."""
+    the passes have converged (:func:`refinement_left` ≤ :data:`REFINE_RTOL`) or
+    one does not settle."""
     total = 0
     previous: Settled | None = None
-    difference = float("nan")
+    differences: list[float] = []
     for passes in range(1, MAX_PASSES + 1):
         result = run_until_settled(rig)
         total += result.steps
         if not result.settled or not np.all(np.isfinite(list(result.values.values()))):
-            return replace(result, steps=total, settled=False, passes=passes)
+            return replace(result, steps=total, settled=False, passes=passes,
+                           refinement=differences[-1] if differences else float("nan"))
         if previous is not None:
-            difference = disagreement(result.values, previous.values, rig.scale)
-            if difference <= REFINE_RTOL:
-                return replace(result, steps=total, passes=passes, refinement=difference)
+            differences.append(disagreement(result.values, previous.values, rig.scale))
+            if refinement_left(differences) <= REFINE_RTOL:
+                return replace(result, steps=total, passes=passes, refinement=differences[-1])
         previous = result
         rig.carry()
         reseed(rig, qpos)
-    return replace(result, steps=total, settled=False, passes=MAX_PASSES, refinement=difference)
+    return replace(result, steps=total, settled=False, passes=MAX_PASSES,
+                   refinement=differences[-1])
+
+
+def refinement_left(differences: list[float]) -> float:
+    """How far the last pass may still be from the rigid answer, given the
+    differences ``d`` between successive passes (relative to the largest force).
+
+    With a contraction c = d_k/d_(k−1) < 1 per pass, what is left is d·c/(1 − c);
+    never taken as less than d itself (the last step is known only to d). Two
+    passes are all ordinary poses need and give no c; their difference is then
+    taken as it is (a bending small enough for two passes to agree to 1e-7 is
+    shrunk ≥ 50× by the second). A difference that no longer shrinks (c ≥ 1)
+    is the floor: both passes read the same equilibrium, up to the floor.
+    """
+    d = differences[-1]
+    if len(differences) == 1 or d >= differences[-2]:
+        return d
+    c = d / differences[-2]
+    return d * max(1.0, c / (1.0 - c))
 
 
 def settled_solution(rig: Rig, qpos: np.ndarray, result: Settled, elapsed: float) -> Solution:
@@ -191,6 +276,7 @@ def settled_solution(rig: Rig, qpos: np.ndarray, result: Settled, elapsed: float
     diagnostics: dict[str, float | str] = {
         "method": "settle", "steps": result.steps, "wall_time_s": elapsed,
         "passes": result.passes, "pass_disagreement": result.refinement,
+        "stop_rule": result.rule,
         "residual_velocity": result.residual_velocity,
         "loop_violation": result.loop_violation,
         "pose_drift": rig.pose_drift(qpos=qpos),
