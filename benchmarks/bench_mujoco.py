@@ -7,9 +7,13 @@ reference value of its kind at that pose), and each pose is judged against its
 policy tolerance (static 1e-6; near-singular, condition number > 1e4, 1e-2).
 
 Targets: settled statics ≤ 2 ms/pose, mujoco_solve ≤ 0.2 ms/pose.
+
+A second table follows the near-toggle study (seed E1 at θ12 = 180° − δ): the
+settled backend's status, error, steps and passes as the change point nears.
 Run: /work/venv/bin/python benchmarks/bench_mujoco.py
 """
 
+import math
 import time
 
 import mujoco
@@ -18,9 +22,11 @@ import numpy as np
 from analytic.forces import solve
 from compare.casefile import builtin_case_files, load_cases
 from compare.tables import comparison_rows
-from sim_models.mujoco import sweep
+from sim_models.mujoco import settle, sweep
 
 CASE = "seed-E1-as-stated"
+#: The near-toggle study's distances from the change point down to condition number ~5000, degrees.
+NEAR_TOGGLE_DELTAS = np.geomspace(30.0, 1e-4, 15)[2:9]
 
 
 def pose_errors(case, theta, solutions):
@@ -59,6 +65,18 @@ def main() -> None:
         print(f"| {backend} | {per_pose:.3f} | {status.count('ok')} | "
               f"{status.count('singular')} | {status.count('not_settled')} | "
               f"{worst_regular:.2e} | {failing} | {np.median(steps):.0f} | {max(steps)} |")
+
+    print("\n| δ (deg) | condition number | status | rel. error | steps | passes | ms |")
+    print("|---:|---:|---|---:|---:|---:|---:|")
+    for delta in NEAR_TOGGLE_DELTAS:
+        at = case.with_(theta12=math.pi - math.radians(float(delta)))
+        start = time.perf_counter()
+        sim = settle(at)
+        ms = (time.perf_counter() - start) * 1e3
+        reference = solve(at)
+        error = pose_errors(at, [at.theta12], [sim])[0] if sim.status == "ok" else math.nan
+        print(f"| {delta:.4g} | {reference.diagnostics['condition_number']:.0f} | {sim.status} | "
+              f"{error:.1e} | {sim.diagnostics['steps']} | {sim.diagnostics['passes']} | {ms:.1f} |")
 
 
 if __name__ == "__main__":

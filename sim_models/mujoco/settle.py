@@ -76,8 +76,8 @@ WOBBLE_RTOL = 1e-7
 #: the slowest mode left, or the turning point of a decaying oscillation would
 #: pass for a floor (the spread over a window ending at a turning point covers
 #: the whole last swing only if the window is at least a half-period long):
-#: 32 covers the half-periods measured up to condition number ~2000 (see
-#: :data:`STOP_WINDOW`); a pose settling on its floor thereby costs ≥ 32 steps.
+#: 32 covers the half-periods measured up to condition number ~1900 (see
+#: :data:`STOP_WINDOW`); a pass settling on its floor thereby costs ≥ 32 steps.
 FLOOR_WINDOW = 32
 #: A shortcut to the floor rule for poses whose floor is far below it (most of
 #: the cycle: ≤ 1e-10, so a second pass would otherwise wait 32 steps for
@@ -92,25 +92,30 @@ VELOCITY_TOL = 1e-9
 #: Step budget of one settling run; a pose that has not settled by then is
 #: reported ``not_settled``. Ordinary poses settle in 30–60 steps; next to a
 #: change point the slow mode takes longer (about 270 steps at condition number
-#: 880, 1100 at 2100, 2600 at 5400), and beyond ~5000 the budget runs out,
-#: which is the honest verdict.
+#: 880, 1100 at 2100, 2600 at 5400; a second pass somewhat more), and from
+#: condition number ~4000 on the budget runs out, which is the honest verdict.
 MAX_STEPS = 3000
 #: Settling passes: after each one the constraint forces are carried as loads
 #: (:meth:`~.rig.Rig.carry`), the pose is re-seeded unbent and the mechanism
 #: settles again. A single pass is off by the soft constraints' bending — 2e-5
 #: of the forces at θ12 = 179° of seed E1 (condition number 119), 8e-3 at
 #: condition number 880 — and each pass shrinks that by a factor c (measured:
-#: c < 0.02 up to condition number 200, 0.01 at 880, 0.1 at 2100, 0.2 at 2650,
+#: c ≤ 2e-3 up to condition number 360, 0.01 at 880, 0.1 at 2100, 0.2 at 2650,
 #: 0.3 at 3400), so the passes' differences d decay geometrically too, and the
 #: last pass is within d·c/(1 − c) of the rigid answer (:func:`refinement_left`).
 #: Done when that, and d itself, are below this fraction of the largest force:
-#: above the floor (:data:`WOBBLE_RTOL`), by which two readings of the same
-#: equilibrium can differ, and 10× below the 1e-6 static target.
+#: above the floor (≤ 3e-8 measured), by which two readings of the same
+#: equilibrium can differ, and 10× below the 1e-6 static target. The same
+#: bound covers the stop rule's weak spot, a pass stopped at a turning point of
+#: the slow mode (the decay estimate takes the approach to it for a decay): such
+#: a pass is off by at most its own swing, which is the bending the previous pass
+#: left, ~d.
 REFINE_RTOL = 1e-7
 #: Enough passes for the contraction measured up to condition number ~3500
-#: (ordinary poses need two, 179° three, condition number 880 five, 2100 eight,
-#: 2650 eleven, 3400 fifteen); beyond that the passes' own settling runs out of
-#: steps first (:data:`MAX_STEPS`).
+#: (ordinary poses need two, 179° three, condition number 880 five, 2100 eight
+#: or nine, 2600 ten, 3200 thirteen, 3550 sixteen); closer to the change point
+#: the passes' own settling runs out of steps first (:data:`MAX_STEPS`). The
+#: old limit, 8, was reached from condition number ~2100 on.
 MAX_PASSES = 16
 
 
