@@ -24,7 +24,6 @@ import math
 from dataclasses import dataclass, field
 
 import mujoco
-import numpy as np
 
 from analytic.case import Case, FourBarGeometry, SliderCrankGeometry
 
@@ -299,7 +298,3 @@ def model_xml(case: Case, settings: Settings = STATIC) -> str:
     """The model of ``case`` as MJCF text (committed as golden files for review)."""
     return str(build_spec(case, settings).to_xml())
 
-
-def qpos_of(case: Case, theta12: float, theta13: float, theta14_or_s14: float) -> np.ndarray:
-    """Joint coordinates (A0, A, B0|slide) of a pose given by its link angles."""
-    return np.array([theta12, theta13 - theta12, theta14_or_s14])

@@ -52,13 +52,6 @@ def slide_friction_force(model: Model, sense: float) -> float:
     return force - c * slide_speed(model)
 
 
-def apply_slide_force(model: Model, force: float) -> None:
-    """Apply a force along u to the slider at pin B (its body origin)."""
-    (ux, uy), _ = slide_axes(model.case)
-    slider = model.bodies[4]
-    slider.apply_force_at_world_point((force * ux, force * uy), slider.local_to_world((0, 0)))
-
-
 def apply_viscous_pin_moments(model: Model) -> None:
     """−c·(ω_j − ω_i) on link j and +c·(ω_j − ω_i) on link i at every viscous pin."""
     f = model.case.friction

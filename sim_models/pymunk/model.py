@@ -61,10 +61,6 @@ class Model:
     motors: dict[str, pymunk.SimpleMotor] = field(default_factory=dict)
     mass_mode: MassMode = "fictitious"
 
-    @property
-    def drive_body(self) -> pymunk.Body:
-        return self.bodies[self.case.drive_link]
-
     def constraints(self) -> list[pymunk.Constraint]:
         """Every constraint, motors included."""
         out: list[pymunk.Constraint] = [*self.pins.values(), self.drive, *self.motors.values()]
@@ -233,11 +229,6 @@ def build_model(case: Case, settings: SolverSettings, *, mass_mode: MassMode = "
 def analytic_pose(case: Case, theta12: float) -> Pose:
     """The closed-form pose at one θ12 (static: velocities zero)."""
     return pose_of(case, np.array([theta12]), omega=0.0, alpha=0.0)
-
-
-def drive_angle(case: Case, pose: Pose) -> float:
-    """The angle the drive lock holds: θ12, or θ14 when the drive acts on the rocker."""
-    return float(pose.links[case.drive_link].angle[0])
 
 
 def place(model: Model, pose: Pose, index: int = 0) -> None:
