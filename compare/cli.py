@@ -1,4 +1,5 @@
-"""The ``mechcheck`` command line.
+"""The ``mechcheck`` command line: ``run``, ``sweep``, ``study``, ``theory``,
+``reports`` and ``backends`` (see README).
 
 ``mechcheck run FILE... [--backend NAME]... [--out DIR]`` writes
 ``results.csv``, ``comparison.csv``, ``diagnostics.csv``, ``report.md`` and
@@ -36,16 +37,16 @@ def fail_input(message: str) -> typer.Exit:
     return typer.Exit(2)
 
 
-def progress_printer(total_hint: int) -> Progress:
+def progress_printer() -> Progress:
+    """Progress on stderr: one updating line on a terminal, a line per step otherwise (logs)."""
     tty = sys.stderr.isatty()
 
     def show(done: int, total: int, label: str) -> None:
         line = f"[{done}/{total}] {label}"
         if tty:
-            end = "\n" if done == total else ""
-            sys.stderr.write(f"\r\x1b[K{line}{end}")
+            sys.stderr.write(f"\r\x1b[K{line}{chr(10) if done == total else ''}")
             sys.stderr.flush()
-        elif total_hint > 1:
+        else:
             sys.stderr.write(line + "\n")
     return show
 
@@ -80,7 +81,7 @@ def run_command(
     except registry.BackendUnavailable as error:
         raise fail_input(str(error)) from None
     cases = [case for case, _ in specs]
-    progress = None if quiet else progress_printer(len(cases) * len(names))
+    progress = None if quiet else progress_printer()
     result = run(cases, names, progress=progress, fail_on=verdicts)
     markdown, page = render(result, {c.name: s for c, s in specs})
     write_all(out, {
