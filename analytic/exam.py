@@ -361,6 +361,44 @@ def q1_result(backend: str, settled: bool, x: float, phi: float,
     return Q1Result(backend, values, "ok", steps, elapsed, speed, change, diagnostics=diagnostics)
 
 
+# -- settling Q1 in a simulator: shared by the MuJoCo and pymunk models -----------------
+#: Q1 has settled when no velocity exceeds this point speed, m/s (slide speeds, and
+#: the hinge's angular speed times l). With critical damping (decay rate ≥ 5/s here)
+#: the pose error left is about this speed over the rate: ~1e-10 m and ~1e-10 rad, far
+#: inside the 1e-4 rad target.
+Q1_VELOCITY_TOL = 1e-9
+#: ... and no reported force changes between two steps by more than this fraction of
+#: the largest. Forces converge geometrically by a few per cent per step, so the
+#: force error left is ≲ 30× this: ~3e-9, far inside 1e-3.
+Q1_FORCE_CHANGE_RTOL = 1e-10
+#: Q1 time step: this many steps per period of the fastest uncoupled mode
+#: (:meth:`Q1System.frequency_bound`), at most :data:`Q1_MAX_TIMESTEP`. At rest the
+#: step does not enter the forces (no inertia terms), so it only has to keep the
+#: damped transient stable and well resolved.
+Q1_STEPS_PER_PERIOD = 60.0
+Q1_MAX_TIMESTEP = 1e-2
+#: Damping ratio of the settling dampers (1 = critical for the uncoupled modes).
+Q1_DAMPING_RATIO = 1.0
+
+
+def q1_timestep(system: Q1System) -> float:
+    """The Q1 settling time step, s (see :data:`Q1_STEPS_PER_PERIOD`)."""
+    return min(Q1_MAX_TIMESTEP,
+               2.0 * math.pi / (Q1_STEPS_PER_PERIOD * system.frequency_bound()))
+
+
+def q1_dampers(system: Q1System, ratio: float = Q1_DAMPING_RATIO) -> tuple[float, float]:
+    """(slider damping N·s/m, bar hinge damping N·m·s/rad), ``ratio`` × critical.
+
+    Critical for each uncoupled mode: the spring with the whole translating mass,
+    and the bar about A with its largest restoring stiffness. Dampers change the
+    path to equilibrium, never the equilibrium.
+    """
+    c_x = 2.0 * ratio * math.sqrt(system.stiffness * system.translating_mass)
+    c_phi = 2.0 * ratio * math.sqrt(system.swing_stiffness * system.pivot_inertia)
+    return c_x, c_phi
+
+
 # -- driving Q2 in a simulator: shared by the MuJoCo and pymunk models ------------------
 def checked_times(times: ArrayLike) -> Array:
     """Reading times as a non-empty, finite, ascending 1-D array."""

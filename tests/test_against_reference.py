@@ -13,8 +13,7 @@ import math
 import numpy as np
 import pytest
 import reference_solver as ref
-from hypothesis import HealthCheck, assume, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from analytic.case import (
     Case,

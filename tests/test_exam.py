@@ -13,8 +13,7 @@ from types import ModuleType
 import mujoco
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from analytic.exam import (
     EXAM_Q1_PHI_DEG,

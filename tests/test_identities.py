@@ -11,8 +11,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from strategies import cases
 
 from analytic import forces, superposition, virtual_work

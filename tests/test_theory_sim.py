@@ -28,8 +28,7 @@ from types import ModuleType
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from analytic import fourbar_kinematics, slidercrank_kinematics, theory
 from analytic.case import Case, FourBarGeometry, SliderCrankGeometry

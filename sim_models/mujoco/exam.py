@@ -59,6 +59,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from analytic.exam import (
+    Q1_DAMPING_RATIO as DAMPING_RATIO,
+    Q1_FORCE_CHANGE_RTOL as FORCE_CHANGE_RTOL,
+    Q1_VELOCITY_TOL as VELOCITY_TOL,
     Motion,
     Q1Result,
     Q1System,
@@ -67,7 +70,9 @@ from analytic.exam import (
     Status,
     checked_times,
     drive_until_steady,
+    q1_dampers,
     q1_result,
+    q1_timestep,
     reading_steps,
     unsteady_message,
 )
@@ -84,28 +89,9 @@ STIFF_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 #: (as in :mod:`sim_models.mujoco.model`).
 SOLVER_TOLERANCE = 1e-16
 
-#: Q1 settled when no velocity exceeds this point speed, m/s (slide speeds,
-#: and the hinge's angular speed times l). With roughly critical damping
-#: (decay rate ~ω ≥ 5/s here) the pose error left is about this speed
-#: divided by ω: ~1e-10 m, ~1e-10 rad, far inside the 1e-4 rad target.
-VELOCITY_TOL = 1e-9
-#: ... and no reported force changes between two steps by more than this
-#: fraction of the largest. The decay per step is a few per cent (dt ≈ ω/40),
-#: so the force error left is ~30× this: ~3e-9, far inside 1e-3.
-FORCE_CHANGE_RTOL = 1e-10
 #: Q1 step budget: 100 s of simulated time at the longest step; the exam
 #: system settles in ~550 steps.
 MAX_STEPS = 10_000
-
-#: Q1 time step: this many steps per period of the fastest uncoupled mode
-#: (:meth:`Q1System.frequency_bound`), at most :data:`MAX_TIMESTEP`. At rest
-#: the step does not enter the forces (no inertia terms), so it only has to
-#: keep the damped transient stable and well resolved.
-STEPS_PER_PERIOD = 60.0
-MAX_TIMESTEP = 1e-2
-
-#: Damping ratio of the Q1 settling dampers (1 = critical for the uncoupled modes).
-DAMPING_RATIO = 1.0
 
 #: Mass of the Q2 driver, kg. It carries the mass's reaction F (≲ 100 N) with
 #: an acceleration F/DRIVER_MASS ~ 1e-7 m/s², so over a second it leaves the
@@ -170,22 +156,6 @@ class Q1Settings:
     velocity_tol: float = VELOCITY_TOL
     force_change_rtol: float = FORCE_CHANGE_RTOL
     max_steps: int = MAX_STEPS
-
-
-def q1_timestep(system: Q1System) -> float:
-    """The Q1 time step, s (see :data:`STEPS_PER_PERIOD`)."""
-    return min(MAX_TIMESTEP, 2.0 * math.pi / (STEPS_PER_PERIOD * system.frequency_bound()))
-
-
-def q1_dampers(system: Q1System, ratio: float = DAMPING_RATIO) -> tuple[float, float]:
-    """(slider x damping N·s/m, bar hinge damping N·m·s/rad), ``ratio`` × critical.
-
-    Critical for each uncoupled mode: the spring with the whole translating
-    mass, and the bar about A with its largest restoring stiffness.
-    """
-    c_x = 2.0 * ratio * math.sqrt(system.stiffness * system.translating_mass)
-    c_phi = 2.0 * ratio * math.sqrt(system.swing_stiffness * system.pivot_inertia)
-    return c_x, c_phi
 
 
 def q1_spec(system: Q1System, settings: Q1Settings = Q1Settings()) -> mujoco.MjSpec:

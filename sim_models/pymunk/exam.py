@@ -51,6 +51,9 @@ import pymunk
 from numpy.typing import ArrayLike, NDArray
 
 from analytic.exam import (
+    Q1_DAMPING_RATIO as DAMPING_RATIO,
+    Q1_FORCE_CHANGE_RTOL as FORCE_CHANGE_RTOL,
+    Q1_VELOCITY_TOL as VELOCITY_TOL,
     Motion,
     Q1Result,
     Q1System,
@@ -59,7 +62,9 @@ from analytic.exam import (
     Status,
     checked_times,
     drive_until_steady,
+    q1_dampers,
     q1_result,
+    q1_timestep,
     reading_steps,
     unsteady_message,
 )
@@ -73,26 +78,12 @@ Array = NDArray[np.float64]
 #: its end points, and a long one never ends within reach.
 GROOVE_HALF_LENGTH = 1.0e3
 
-#: Q1 time step: steps per period of the fastest uncoupled mode
-#: (:meth:`Q1System.frequency_bound`), at most :data:`MAX_TIMESTEP`. At rest
-#: no inertia force enters, so the step only has to keep the transient stable.
-STEPS_PER_PERIOD = 60.0
-MAX_TIMESTEP = 1e-2
 #: Gauss–Seidel iterations per step. Warm starting carries the impulses from
 #: step to step, so this shortens the settling; it does not change the result.
 Q1_ITERATIONS = 100
 #: ``Constraint.error_bias`` of the pin and the groove (fraction of a joint
 #: error left after one second): corrects ~13 % of any drift per 0.01 s step.
 Q1_ERROR_BIAS = 1e-6
-#: Damping ratio of the settling dampers (1 = critical for the uncoupled modes).
-DAMPING_RATIO = 1.0
-#: Settled when no body point moves faster than this, m/s; with roughly
-#: critical damping (decay rate ≥ 5/s) the pose error left is ~1e-10.
-VELOCITY_TOL = 1e-9
-#: ... and no reported force changes by more than this fraction of the
-#: largest between steps (forces converge geometrically, a few per cent per
-#: step, so the error left is ≲ 30× this).
-FORCE_CHANGE_RTOL = 1e-10
 #: Both criteria must hold this many consecutive steps, so that the turning
 #: point of an oscillation is not taken for rest.
 PATIENCE = 3
@@ -136,18 +127,6 @@ class Q1Settings:
     force_change_rtol: float = FORCE_CHANGE_RTOL
     patience: int = PATIENCE
     max_steps: int = MAX_STEPS
-
-
-def q1_timestep(system: Q1System) -> float:
-    """The Q1 time step, s (see :data:`STEPS_PER_PERIOD`)."""
-    return min(MAX_TIMESTEP, 2.0 * math.pi / (STEPS_PER_PERIOD * system.frequency_bound()))
-
-
-def q1_dampers(system: Q1System, ratio: float = DAMPING_RATIO) -> tuple[float, float]:
-    """(slider damping N·s/m, bar rotary damping N·m·s/rad), ``ratio`` × critical per mode."""
-    c_x = 2.0 * ratio * math.sqrt(system.stiffness * system.translating_mass)
-    c_phi = 2.0 * ratio * math.sqrt(system.swing_stiffness * system.pivot_inertia)
-    return c_x, c_phi
 
 
 @dataclass
