@@ -5,26 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from builtin import rocker_load_case
 from typer.testing import CliRunner
 
 from compare.cli import app
 
-GOOD = """
-[[case]]
-name = "good"
-mechanism = "four_bar"
-length_unit = "mm"
-theta12 = 60.0
-[case.geometry]
-a1 = 140.0
-a2 = 80.0
-a3 = 100.0
-a4 = 120.0
-[[case.loads]]
-link = 4
-at = [90.0, 0.0]
-force = { magnitude = 100.0, angle = 20.0 }
-"""
+GOOD = rocker_load_case("good")
 
 SLIDER = """
 [[case]]

@@ -6,26 +6,12 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pandas as pd
+from builtin import rocker_load_case
 from typer.testing import CliRunner
 
 from compare.cli import app
 
-CASE = """
-[[case]]
-name = "e1"
-mechanism = "four_bar"
-length_unit = "mm"
-theta12 = 60.0
-[case.geometry]
-a1 = 140.0
-a2 = 80.0
-a3 = 100.0
-a4 = 120.0
-[[case.loads]]
-link = 4
-at = [90.0, 0.0]
-force = { magnitude = 100.0, angle = 20.0 }
-"""
+CASE = rocker_load_case("e1")
 
 #: No method can meet a relative tolerance of 1e-30 unless it is bit-identical: this
 #: injects a disagreement without touching any solver.
