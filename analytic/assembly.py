@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-from analytic import fourbar_kinematics, slidercrank_kinematics
-from analytic.case import Case, CaseError, FourBarGeometry
+from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
+from mechcheck.analytic.case import Case, CaseError, FourBarGeometry
 
 
 def _deg(rad: float) -> str:
@@ -53,7 +53,7 @@ def assembly_range_text(case: Case) -> str:
 
 def check_assembly(case: Case) -> None:
     """Raise :class:`CaseError` (key ``theta12``) if the case's pose cannot be assembled."""
-    from analytic.kinematics import pose_of
+    from mechcheck.analytic.kinematics import pose_of
 
     p = pose_of(case, omega=0.0, alpha=0.0)
     if not np.all(np.isfinite(p.theta14)) or not np.all(np.isfinite(p.theta13)):

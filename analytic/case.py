@@ -1,6 +1,6 @@
 """The one immutable description of a problem: :class:`Case`.
 
-A Case is built once (from a TOML file by :mod:`compare.casefile`, or in code)
+A Case is built once (from a TOML file by :mod:`mechcheck.casefile`, or in code)
 and flows unchanged through every backend. Everything inside is SI and radians;
 the file format's degrees and millimetres are converted at the border.
 
@@ -271,7 +271,7 @@ class Case:
     loads, masses : tuples of :class:`Load` and :class:`Mass`.
     motion : prescribed ω, α of link 2.
     friction : :class:`Friction` or None.
-    tolerance : per-case tolerance overrides (see :mod:`compare.tolerance`),
+    tolerance : per-case tolerance overrides (see :mod:`mechcheck.tolerance`),
         as ``((selector, rtol, atol), ...)``.
     source : where the case came from (a file path), for messages only.
     """
@@ -324,7 +324,7 @@ class Case:
                 raise CaseError(f"link {m.link} has more than one mass entry", key=f"masses[{i}].link")
             seen.add(m.link)
         self._validate_friction()
-        from analytic.assembly import check_assembly  # late: assembly needs Case defined
+        from mechcheck.analytic.assembly import check_assembly  # late: assembly needs Case defined
 
         check_assembly(self)
 

@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.case import Case, FourBarGeometry, Load, Mass
-from analytic.kinematics import Array, Pose, cross, unit
+from mechcheck.analytic.case import Case, FourBarGeometry, Load, Mass
+from mechcheck.analytic.kinematics import Array, Pose, cross, unit
 
 N_UNKNOWNS = 9
 #: Columns of the pin forces F_ij in x, by joint name.

@@ -1,9 +1,9 @@
 """The ``analytic`` backend: drive torque and every joint reaction by the
-member-equilibrium matrix method (:mod:`analytic.equilibrium`), with Coulomb
-friction solved to convergence (:mod:`analytic.friction`).
+member-equilibrium matrix method (:mod:`mechcheck.analytic.equilibrium`), with Coulomb
+friction solved to convergence (:mod:`mechcheck.analytic.friction`).
 
 :func:`solve_poses` is vectorised over an array of θ12; :func:`solve` wraps it
-for one Case and returns a :class:`~analytic.solution.Solution`.
+for one Case and returns a :class:`~mechcheck.analytic.solution.Solution`.
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from analytic.case import Case, FourBarGeometry
-from analytic.equilibrium import (
+from mechcheck.analytic.case import Case, FourBarGeometry
+from mechcheck.analytic.equilibrium import (
     SINGULAR_CONDITION,
     Array,
     coefficient_matrix,
@@ -24,14 +24,14 @@ from analytic.equilibrium import (
     known_vector,
     slide_frame,
 )
-from analytic.friction import (
+from mechcheck.analytic.friction import (
     coulomb_terms,
     reversing_joints,
     slide_friction_force,
     solve_with_friction,
 )
-from analytic.kinematics import Pose, as_angles, pose_of
-from analytic.solution import Solution, Status
+from mechcheck.analytic.kinematics import Pose, as_angles, pose_of
+from mechcheck.analytic.solution import Solution, Status
 
 FORCE_QUANTITIES = ("F12_x", "F12_y", "F23_x", "F23_y", "F34_x", "F34_y", "F14_x", "F14_y")
 
@@ -110,7 +110,7 @@ def unknowns_to_values(case: Case, pose: Pose, x: Array) -> dict[str, Array]:
 def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
     """Static or dynamic force analysis of ``case`` at each θ12 (rad).
 
-    Poses beyond :data:`~analytic.equilibrium.SINGULAR_CONDITION`, and
+    Poses beyond :data:`~mechcheck.analytic.equilibrium.SINGULAR_CONDITION`, and
     friction poses whose Newton iteration did not converge, get NaN forces.
     """
     angles = as_angles(case.theta12 if theta12 is None else theta12)

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from analytic.case import Case
-from analytic.equilibrium import (
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.equilibrium import (
     JOINT_LINKS,
     N_UNKNOWNS,
     PIN_COLUMNS,
@@ -29,7 +29,7 @@ from analytic.equilibrium import (
     row,
     slide_frame,
 )
-from analytic.kinematics import Pose, cross, pose_of
+from mechcheck.analytic.kinematics import Pose, cross, pose_of
 
 #: Newton stops when the update is below this fraction of the solution's size.
 #: Convergence is quadratic, so the error left after that update is of order

@@ -1,7 +1,7 @@
 """Pose, velocity and acceleration of every link, vectorised over θ12.
 
-The mechanism-specific closed forms live in :mod:`analytic.fourbar_kinematics`
-and :mod:`analytic.slidercrank_kinematics`; both return a :class:`Pose`, whose
+The mechanism-specific closed forms live in :mod:`mechcheck.analytic.fourbar_kinematics`
+and :mod:`mechcheck.analytic.slidercrank_kinematics`; both return a :class:`Pose`, whose
 link frames (CONVENTIONS.md) let any body-fixed point be located, and
 differentiated, the same way for either mechanism.
 """
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from analytic.case import Case, FourBarGeometry, Vec2
+from mechcheck.analytic.case import Case, FourBarGeometry, Vec2
 
 Array = NDArray[np.float64]
 
@@ -97,7 +97,7 @@ def pose_of(case: Case, theta12: ArrayLike | None = None, *,
     ``omega``/``alpha`` override the case's motion (the static force analysis
     with friction needs velocity *ratios*, computed with a unit ω).
     """
-    from analytic import fourbar_kinematics, slidercrank_kinematics
+    from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
 
     angles = as_angles(case.theta12 if theta12 is None else theta12)
     w = case.motion.omega if omega is None else omega

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.case import SliderCrankGeometry
-from analytic.kinematics import Array, LinkState, Pose, unit
+from mechcheck.analytic.case import SliderCrankGeometry
+from mechcheck.analytic.kinematics import Array, LinkState, Pose, unit
 
 
 def rod_angle(g: SliderCrankGeometry, phi12: Array, branch: str) -> Array:

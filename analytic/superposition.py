@@ -12,11 +12,11 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike
 
-from analytic.case import Case
-from analytic.equilibrium import condition, eliminate, known_vectors
-from analytic.forces import PoseResults, pose_values, solution_from, unknowns_to_values
-from analytic.kinematics import as_angles, pose_of
-from analytic.solution import Solution
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.equilibrium import condition, eliminate, known_vectors
+from mechcheck.analytic.forces import PoseResults, pose_values, solution_from, unknowns_to_values
+from mechcheck.analytic.kinematics import as_angles, pose_of
+from mechcheck.analytic.solution import Solution
 
 REFUSAL = ("superposition applies only to frictionless (linear) systems; this case has "
            "Coulomb friction, whose moments depend on the total reactions, so the sum of "

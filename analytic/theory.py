@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
-from analytic.kinematics import pose_of
+from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
+from mechcheck.analytic.kinematics import pose_of
 
 #: Freedom of each joint type (seed 001): revolute, prismatic, cylinder in a
 #: slot, gear contact, cylindrical, spherical, spherical with a key.

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from analytic.case import Case
-from analytic.kinematics import Array, pose_of
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.kinematics import Array, pose_of
 
 
 def transmission_angle(case: Case, theta12: ArrayLike | None = None) -> Array:

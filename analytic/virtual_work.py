@@ -15,11 +15,11 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike
 
-from analytic.case import Case
-from analytic.equilibrium import JOINT_LINKS, SINGULAR_CONDITION, relative_omega
-from analytic.forces import PoseResults, drive_quantity, pose_values
-from analytic.kinematics import Array, Pose, as_angles, pose_of
-from analytic.solution import Solution
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.equilibrium import JOINT_LINKS, SINGULAR_CONDITION, relative_omega
+from mechcheck.analytic.forces import PoseResults, drive_quantity, pose_values
+from mechcheck.analytic.kinematics import Array, Pose, as_angles, pose_of
+from mechcheck.analytic.solution import Solution
 
 REFUSAL = ("the power (virtual work) method gives the drive torque only for systems without "
            "Coulomb friction: friction power depends on the unknown reactions")

@@ -4,7 +4,7 @@ Usage:  python benchmarks/bench_analytic.py [--poses 1000000] [--loop-poses 2000
 
 Solves the frictionless seed four-bar (SEEDS.md E1) statics at N input angles
 spread over the assemblable range, first in one vectorised call
-(:func:`analytic.forces.solve_poses`), then pose by pose through the same
+(:func:`mechcheck.analytic.forces.solve_poses`), then pose by pose through the same
 solver in a Python loop, and prints poses/s for both and their ratio.
 """
 
@@ -17,8 +17,8 @@ import time
 
 import numpy as np
 
-from analytic import forces
-from compare.casefile import builtin_case_files, load_cases
+from mechcheck.analytic import forces
+from mechcheck.casefile import builtin_case_files, load_cases
 
 
 def seed_case():  # type: ignore[no-untyped-def]

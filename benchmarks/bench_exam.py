@@ -1,5 +1,5 @@
 """Exam Q1 and Q2 (seed 002): agreement and run time of MuJoCo and pymunk, and the MuJoCo
-contact-friction study behind the choice of ``frictionloss`` in :mod:`sim_models.mujoco.exam`.
+contact-friction study behind the choice of ``frictionloss`` in :mod:`mechcheck.sim_models.mujoco.exam`.
 
 Run: /work/venv/bin/python benchmarks/bench_exam.py
 """
@@ -12,9 +12,9 @@ import time
 import mujoco
 import numpy as np
 
-from analytic.exam import exam_q1, exam_q2, q1_equilibrium, q2_drive_force
-from sim_models.mujoco import exam as mujoco_exam
-from sim_models.pymunk import exam as pymunk_exam
+from mechcheck.analytic.exam import exam_q1, exam_q2, q1_equilibrium, q2_drive_force
+from mechcheck.sim_models.mujoco import exam as mujoco_exam
+from mechcheck.sim_models.pymunk import exam as pymunk_exam
 
 BACKENDS = {"mujoco": mujoco_exam, "pymunk": pymunk_exam}
 Q2_TIMES = np.linspace(-0.2, 0.2, 9)

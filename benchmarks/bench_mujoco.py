@@ -2,7 +2,7 @@
 ``seed-E1-as-stated`` from the built-in case files) and measure their error.
 
 Errors are measured as the tolerance policy measures them
-(:func:`compare.tables.comparison_rows`: each value against the largest
+(:func:`mechcheck.tables.comparison_rows`: each value against the largest
 reference value of its kind at that pose), and each pose is judged against its
 policy tolerance (static 1e-6; near-singular, condition number > 1e4, 1e-2).
 
@@ -19,10 +19,10 @@ import time
 import mujoco
 import numpy as np
 
-from analytic.forces import solve
-from compare.casefile import builtin_case_files, load_cases
-from compare.tables import comparison_rows
-from sim_models.mujoco import settle, sweep
+from mechcheck.analytic.forces import solve
+from mechcheck.casefile import builtin_case_files, load_cases
+from mechcheck.sim_models.mujoco import settle, sweep
+from mechcheck.tables import comparison_rows
 
 CASE = "seed-E1-as-stated"
 #: The near-toggle study's distances from the change point down to condition number ~5000, degrees.

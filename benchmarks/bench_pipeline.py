@@ -43,7 +43,7 @@ force = { magnitude = 100.0, angle = 20.0 }
 
 def timed(args: list[str]) -> tuple[float, str]:
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "compare.cli", *args], capture_output=True,
+    done = subprocess.run([sys.executable, "-m", "mechcheck.cli", *args], capture_output=True,
                           text=True, check=False)
     return time.perf_counter() - start, done.stdout.strip().splitlines()[-1]
 

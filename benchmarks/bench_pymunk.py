@@ -15,10 +15,10 @@ import time
 import numpy as np
 import pymunk
 
-from analytic.forces import solve_poses
-from analytic.solution import Solution
-from compare.casefile import builtin_case_files, load_cases
-from sim_models.pymunk import sweep
+from mechcheck.analytic.forces import solve_poses
+from mechcheck.analytic.solution import Solution
+from mechcheck.casefile import builtin_case_files, load_cases
+from mechcheck.sim_models.pymunk import sweep
 
 
 def worst_error(solutions: list[Solution], reference: dict[str, np.ndarray]) -> float:

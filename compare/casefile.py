@@ -1,15 +1,15 @@
-"""Case files (TOML, CONVENTIONS.md) → validated, immutable :class:`~analytic.case.Case`.
+"""Case files (TOML, CONVENTIONS.md) → validated, immutable :class:`~mechcheck.analytic.case.Case`.
 
 Structure and types are checked by pydantic models (unknown keys, missing
 keys, wrong types, non-finite numbers); physical sense (positive lengths,
 masses, assemblable pose …) by the Case values themselves. Either way the
-error is one :class:`~analytic.case.CaseError` naming the file, the case and
+error is one :class:`~mechcheck.analytic.case.CaseError` naming the file, the case and
 the key, and nothing is returned for a file with any bad case.
 
 Extensions beyond CONVENTIONS.md (all optional): ``description``, a
 ``[case.seed]`` table (the source and printed answers of a seed example, shown
 beside the computed values in the report) and ``[[case.tolerance]]`` entries
-(see :mod:`compare.tolerance`).
+(see :mod:`mechcheck.tolerance`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from analytic.case import (
+from mechcheck.analytic.case import (
     Case,
     CaseError,
     FourBarGeometry,

@@ -17,15 +17,13 @@ from typing import Annotated
 
 import typer
 
-from analytic.case import CaseError
-from compare import backends as registry
-from compare.casefile import builtin_case_files, builtin_sweep_files, load_specs
-from compare.junit import junit_xml
-from compare.output import write_all
-from compare.report import render
-from compare.run import DEFAULT_FAIL_ON, VERDICTS, Progress, run
-from compare.sweep import parse_range, plan
-from compare.tables import COMPARISON_COLUMNS, diagnostics_frame, results_frame
+from mechcheck import backends as registry
+from mechcheck.analytic.case import CaseError
+from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
+
+# pandas, matplotlib, pydantic and the simulators are imported inside the commands
+# that need them, so that `mechcheck --help` and `mechcheck backends` start fast
+# (benchmarks/bench_startup.py).
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Validate planar force analysis against MuJoCo and pymunk.")
@@ -68,6 +66,13 @@ def run_command(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
 ) -> None:
     """Run backends over case files and report agreement with the analytic solution."""
+    from mechcheck.casefile import builtin_case_files, load_specs
+    from mechcheck.junit import junit_xml
+    from mechcheck.output import write_all
+    from mechcheck.report import render
+    from mechcheck.run import run
+    from mechcheck.tables import diagnostics_frame, results_frame
+
     paths = list(files) if files else builtin_case_files()
     verdicts = parse_fail_on(fail_on)
     try:
@@ -86,7 +91,7 @@ def run_command(
     markdown, page = render(result, {c.name: s for c, s in specs})
     write_all(out, {
         "results.csv": results_frame(result.solutions).to_csv(index=False),
-        "comparison.csv": result.detail[COMPARISON_COLUMNS].to_csv(index=False),
+        "comparison.csv": result.comparison.to_csv(index=False),
         "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
         "report.md": markdown,
         "report.html": page,
@@ -125,7 +130,9 @@ def sweep_command(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
 ) -> None:
     """Sweep θ12 over a range for every case and backend; resumable, Parquet output."""
-    from compare.sweep_run import run_sweep_command
+    from mechcheck.casefile import builtin_sweep_files, load_specs
+    from mechcheck.sweep import parse_range, plan
+    from mechcheck.sweep_run import run_sweep_command
 
     verdicts = parse_fail_on(fail_on)
     paths = list(files) if files else builtin_sweep_files()
@@ -163,8 +170,8 @@ def study_command(
     quick: Annotated[bool, typer.Option(help="Fewer points per sweep (a smoke run).")] = False,
 ) -> None:
     """Run the assumption studies on the simulators; figures, data and conclusions."""
-    from compare.studies import STUDIES
-    from compare.studies_report import run_studies
+    from mechcheck.studies import STUDIES
+    from mechcheck.studies_report import run_studies
 
     chosen = list(names) if names else list(STUDIES)
     unknown = [n for n in chosen if n not in STUDIES]
@@ -180,8 +187,8 @@ def reports_command(
 ) -> None:
     """Regenerate the committed reports: the built-in suite, the whole-cycle sweeps of the
     seed four-bar and slider-crank through every backend, and the assumption studies."""
-    from compare.studies import STUDIES
-    from compare.studies_report import run_studies
+    from mechcheck.studies import STUDIES
+    from mechcheck.studies_report import run_studies
 
     codes = []
     for args in (["run", "-q", "--out", str(out / "suite")],
@@ -198,16 +205,13 @@ def reports_command(
 def backends_command() -> None:
     """List the backends and whether each is available here."""
     for name in registry.REGISTRY:
-        try:
-            registry.load(name)
-            state = "available"
-        except registry.BackendUnavailable as error:
-            state = f"unavailable ({error})"
+        missing = registry.missing_requirement(name)
+        state = "available" if missing is None else f"unavailable ({missing} is not installed)"
         typer.echo(f"{name:15s} {state}")
 
 
 def _add_theory() -> None:
-    from compare.theory_cli import app as theory_app
+    from mechcheck.theory_cli import app as theory_app
 
     app.add_typer(theory_app, name="theory")
 

@@ -1,6 +1,6 @@
 """Where sweeps run: in-process, local processes, or an existing Dask cluster.
 
-All three are ``concurrent.futures.Executor`` s, so :func:`compare.sweep.run_sweep`
+All three are ``concurrent.futures.Executor`` s, so :func:`mechcheck.sweep.run_sweep`
 does not know which it got.
 """
 
@@ -23,7 +23,7 @@ def executor_for(workers: int | None = None, dask_address: str | None = None) ->
             yield client.get_executor()
         return
     if workers == 0:
-        from compare.sweep import LocalExecutor
+        from mechcheck.sweep import LocalExecutor
 
         yield LocalExecutor()
         return

@@ -19,10 +19,10 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 
-from analytic.case import Case
-from analytic.transmission import transmission_angle
-from compare.backends import REFERENCE
-from compare.tolerance import NEAR_SINGULAR_CONDITION
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.transmission import transmission_angle
+from mechcheck.backends import REFERENCE
+from mechcheck.tolerance import NEAR_SINGULAR_CONDITION
 
 #: Figures never plot more points than this per line (a 10⁶-pose sweep is thinned).
 MAX_POINTS = 4000

@@ -13,7 +13,7 @@ from collections.abc import Iterable
 
 import pandas as pd
 
-from compare.run import RunResult
+from mechcheck.run import RunResult
 
 #: (case, backend, θ12 in degrees or NaN, status, message)
 Verdict = tuple[str, str, float, str, str]

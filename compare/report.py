@@ -15,17 +15,17 @@ from typing import Any
 import jinja2
 import pandas as pd
 
-from analytic.case import Case
-from analytic.solution import QUANTITY_UNITS, Solution
-from compare.backends import REFERENCE
-from compare.casefile import CaseSpec
-from compare.run import RunResult
-from compare.seeds import SeedRow, derived_value
-from compare.tables import in_table_units, ordered
-from compare.tolerance import policy_table
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
+from mechcheck.backends import REFERENCE
+from mechcheck.casefile import CaseSpec
+from mechcheck.run import RunResult
+from mechcheck.seeds import SeedRow, derived_value
+from mechcheck.tables import in_table_units, ordered
+from mechcheck.tolerance import policy_table
 
 _ENV = jinja2.Environment(
-    loader=jinja2.PackageLoader("compare", "templates"),
+    loader=jinja2.PackageLoader("mechcheck", "templates"),
     autoescape=jinja2.select_autoescape(["html.j2"]),
     trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
 )

@@ -8,34 +8,32 @@ from __future__ import annotations
 
 import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import pandas as pd
 
-from analytic.case import Case
-from analytic.solution import Solution
-from compare import backends as registry
-from compare.tables import comparison_detail
-
-#: Backend verdicts that turn a run red unless ``--fail-on`` says otherwise:
-#: a simulator that never settled, or a backend that crashed, means the check
-#: did not happen. ``singular`` (an expected outcome at a change point),
-#: ``indeterminate`` (friction reversing at the pose), ``not_applicable`` and
-#: ``no_solution`` (self-locking) are reported only.
-DEFAULT_FAIL_ON = ("not_settled", "error")
-VERDICTS = ("singular", "indeterminate", "not_settled", "not_applicable", "no_solution", "error")
-
-Progress = Callable[[int, int, str], None]
+from mechcheck import backends as registry
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import Solution
+from mechcheck.tables import COMPARISON_COLUMNS, comparison_detail
+from mechcheck.verdicts import DEFAULT_FAIL_ON, Progress
 
 
 @dataclass(frozen=True)
 class RunResult:
+    """The outcome of :func:`run`: every Solution, the comparison and the exit status."""
+
     cases: list[Case]
     solutions: list[Solution]
     detail: pd.DataFrame = field(repr=False)
     wall_time_s: float
     fail_on: tuple[str, ...] = DEFAULT_FAIL_ON
+
+    @property
+    def comparison(self) -> pd.DataFrame:
+        """The comparison table exactly as ``comparison.csv`` holds it (table units)."""
+        return self.detail[COMPARISON_COLUMNS]
 
     @property
     def failed_comparisons(self) -> pd.DataFrame:

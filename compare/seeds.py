@@ -12,9 +12,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from analytic.case import Case
-from analytic.equilibrium import slide_frame
-from analytic.solution import QUANTITY_UNITS, Solution
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.equilibrium import slide_frame
+from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
 
 
 def _wrap_deg(angle: float) -> float:

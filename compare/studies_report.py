@@ -8,9 +8,9 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from compare.output import write_all
-from compare.report import _ENV
-from compare.studies import run_study
+from mechcheck.output import write_all
+from mechcheck.report import _ENV
+from mechcheck.studies import run_study
 
 
 def run_studies(names: list[str], out: Path, *, quick: bool = False) -> Iterator[str]:

@@ -14,6 +14,7 @@ chunk in one vectorised call; simulator backends run their own ``sweep``
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
 import io
@@ -27,10 +28,10 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from analytic.case import Case
-from analytic.solution import QUANTITY_UNITS, Solution
-from compare.backends import REFERENCE, REGISTRY, BackendUnavailable
-from compare.output import write_all
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
+from mechcheck.backends import REFERENCE, REGISTRY, BackendUnavailable
+from mechcheck.output import write_all
 
 #: Bump when the part format or a backend's meaning changes: old parts are then ignored.
 PART_FORMAT = 1
@@ -42,14 +43,14 @@ SIMULATOR_CHUNK = 60
 
 #: Vectorised solvers, name → "module:function" taking (case, theta12_rad) → PoseResults.
 VECTOR_BACKENDS = {
-    "analytic": "analytic.forces:solve_poses",
-    "superposition": "analytic.superposition:solve_poses",
-    "virtual_work": "analytic.virtual_work:solve_poses",
+    "analytic": "mechcheck.analytic.forces:solve_poses",
+    "superposition": "mechcheck.analytic.superposition:solve_poses",
+    "virtual_work": "mechcheck.analytic.virtual_work:solve_poses",
 }
 #: Simulator sweeps, name → "module:function" taking (case, theta12_rad, backend) → [Solution].
 SIMULATOR_SWEEPS = {
-    "mujoco": "sim_models.mujoco:sweep", "mujoco_solve": "sim_models.mujoco:sweep",
-    "pymunk": "sim_models.pymunk:sweep", "pymunk_solve": "sim_models.pymunk:sweep",
+    "mujoco": "mechcheck.sim_models.mujoco:sweep", "mujoco_solve": "mechcheck.sim_models.mujoco:sweep",
+    "pymunk": "mechcheck.sim_models.pymunk:sweep", "pymunk_solve": "mechcheck.sim_models.pymunk:sweep",
 }
 
 RESULT_COLUMNS = ["case", "backend", "theta12", "quantity", "value", "unit"]
@@ -75,8 +76,12 @@ class SweepTask:
         return f"{self.case.name}__{self.backend}__{self.chunk:05d}__{self.digest}"
 
 
+@functools.cache
 def software_versions() -> tuple[str, ...]:
-    """mechcheck's and the simulators' versions: parts from other versions are not reused."""
+    """mechcheck's and the simulators' versions: parts from other versions are not reused.
+
+    Computed once per process: each look-up scans every installed distribution.
+    """
     from importlib.metadata import PackageNotFoundError, version
 
     out = []

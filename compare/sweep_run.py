@@ -9,16 +9,16 @@ from pathlib import Path
 import pandas as pd
 from tqdm import tqdm
 
-from analytic.case import Case
-from compare.backends import REFERENCE
-from compare.casefile import CaseSpec
-from compare.executors import executor_for
-from compare.figures import sweep_figure
-from compare.junit import junit_sweep_xml
-from compare.output import write_all
-from compare.report import render_sweep, sweep_view_model
-from compare.sweep import SweepOutcome, SweepTask, run_sweep
-from compare.tables import sweep_comparison
+from mechcheck.analytic.case import Case
+from mechcheck.backends import REFERENCE
+from mechcheck.casefile import CaseSpec
+from mechcheck.executors import executor_for
+from mechcheck.figures import sweep_figure
+from mechcheck.junit import junit_sweep_xml
+from mechcheck.output import write_all
+from mechcheck.report import render_sweep, sweep_view_model
+from mechcheck.sweep import SweepOutcome, SweepTask, run_sweep
+from mechcheck.tables import sweep_comparison
 
 
 def compare_sweep(cases: list[Case], outcome: SweepOutcome) -> pd.DataFrame:

@@ -11,10 +11,10 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from analytic.case import Case
-from analytic.solution import QUANTITY_ORDER, QUANTITY_UNITS, Solution, quantity_kind
-from compare.backends import REFERENCE
-from compare.tolerance import NEAR_SINGULAR_CONDITION, case_kind, tolerance_for
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import QUANTITY_ORDER, QUANTITY_UNITS, Solution, quantity_kind
+from mechcheck.backends import REFERENCE
+from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, case_kind, tolerance_for
 
 RESULT_COLUMNS = ["case", "backend", "quantity", "value", "unit"]
 COMPARISON_COLUMNS = ["case", "quantity", "backend", "value", "reference", "abs_err",

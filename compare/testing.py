@@ -3,18 +3,17 @@ the one tolerance policy, exactly as ``mechcheck run`` does.
 
 Examples
 --------
->>> from compare.casefile import builtin_case_files, load_cases
->>> from analytic import virtual_work
->>> case = load_cases(*builtin_case_files())[0]
->>> assert_solution_close(case, virtual_work.solve(case))
+>>> import mechcheck
+>>> case = mechcheck.load_cases()[0]
+>>> assert_solution_close(case, mechcheck.solve(case, "virtual_work"))
 """
 
 from __future__ import annotations
 
-from analytic import forces
-from analytic.case import Case
-from analytic.solution import QUANTITY_UNITS, Solution
-from compare.tables import comparison_rows
+from mechcheck.analytic import forces
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
+from mechcheck.tables import comparison_rows
 
 
 def assert_solution_close(case: Case, solution: Solution, reference: Solution | None = None, *,

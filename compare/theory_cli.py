@@ -5,14 +5,17 @@ from __future__ import annotations
 import math
 import re
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from analytic import theory
-from analytic.assembly import assembly_range_text
-from analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
-from compare.casefile import load_cases
+from mechcheck.analytic.case import CaseError
+
+if TYPE_CHECKING:
+    from mechcheck.analytic.case import Case
+
+# The theory (numpy) and the case-file reader (pydantic) are imported in the commands
+# that use them: this module is loaded for every `mechcheck` invocation, --help included.
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Mechanism theory of the seeds (mobility, Grashof, dead positions, "
@@ -55,11 +58,13 @@ def fail(error: CaseError) -> typer.Exit:
 @app.command("mobility")
 def mobility_command(
     links: Annotated[int, typer.Option(help="u: number of links, ground included.")],
-    joints: Annotated[str, typer.Option(help="Joints as COUNT TYPE, e.g. 3R,1P (types "
-                                        f"{', '.join(theory.JOINT_FREEDOM)}).")],
+    joints: Annotated[str, typer.Option(help="Joints as COUNT TYPE, e.g. 3R,1P (the seed's "
+                                        "types: R, P, Cs, G, C, S, Ss).")],
     spatial: Annotated[bool, typer.Option(help="λ = 6 (spatial) instead of 3.")] = False,
 ) -> None:
     """Degrees of freedom by Gruebler–Kutzbach, S = λ(u − m − 1) + ΣSi."""
+    from mechcheck.analytic import theory
+
     try:
         s = theory.mobility(links, parse_joints(joints), spatial=spatial)
     except CaseError as error:
@@ -74,6 +79,8 @@ def grashof_command(
     rocker: Annotated[float, typer.Option(help="B0B")],
 ) -> None:
     """Grashof class of a four-bar from its four lengths."""
+    from mechcheck.analytic import theory
+
     try:
         g = theory.grashof(ground=ground, crank=crank, coupler=coupler, rocker=rocker)
     except CaseError as error:
@@ -85,6 +92,10 @@ def grashof_command(
 
 def describe(case: Case) -> list[str]:
     """The theory facts of one case, as lines."""
+    from mechcheck.analytic import theory
+    from mechcheck.analytic.assembly import assembly_range_text
+    from mechcheck.analytic.case import FourBarGeometry, SliderCrankGeometry
+
     g = case.geometry
     lines = [f"{case.name} ({case.mechanism}, {case.branch} branch)",
              f"  assembly: {assembly_range_text(case)}"]
@@ -113,6 +124,8 @@ def describe(case: Case) -> list[str]:
 @app.command("case")
 def case_command(files: Annotated[list[Path], typer.Argument(help="Case files (TOML).")]) -> None:
     """Grashof class, assembly range, dead positions and transmission extremes of each case."""
+    from mechcheck.casefile import load_cases
+
     try:
         cases = load_cases(*files)
     except CaseError as error:
@@ -124,6 +137,8 @@ def case_command(files: Annotated[list[Path], typer.Argument(help="Case files (T
 @app.command("catalogue")
 def catalogue_command() -> None:
     """The seed catalogue (mobility and Grashof examples of seed 001), recomputed."""
+    from mechcheck.analytic import theory
+
     bad = 0
     for name, u, joints, spatial, printed in MOBILITY_CATALOGUE:
         s = theory.mobility(u, parse_joints(joints), spatial=spatial)

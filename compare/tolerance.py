@@ -1,12 +1,12 @@
 """The one tolerance policy: every comparison's tolerance comes from here.
 
 A tolerance is looked up by (backend, quantity kind, case kind). Quantity
-kinds are ``force``, ``torque`` and ``pose`` (:func:`analytic.solution.quantity_kind`);
+kinds are ``force``, ``torque`` and ``pose`` (:func:`mechcheck.analytic.solution.quantity_kind`);
 case kinds are ``static``, ``dynamic``, ``friction`` and ``near_singular``
 (:func:`case_kind`). Each entry carries the reason for its size.
 
 The relative error of a value is measured against the *scale* of its kind in
-that case (:func:`compare.tables.kind_scales`): a reaction component that
+that case (:func:`mechcheck.tables.kind_scales`): a reaction component that
 happens to be near zero is judged against the case's largest reaction, and a
 torque against the largest reaction times the longest link, not against its
 own tiny magnitude.
@@ -21,8 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fnmatch import fnmatch
 
-from analytic.case import Case
-from analytic.solution import quantity_kind
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import quantity_kind
 
 #: Cases whose analytic condition number exceeds this are ``near_singular``:
 #: forces are amplified ≥ 10⁴× over an ordinary pose, simulators settle

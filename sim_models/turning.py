@@ -3,7 +3,7 @@
 The run protocol (:func:`run_leg`, :func:`turn_result`), the result types
 (:class:`TurnResult`, :class:`Amplification`) and the extreme finder
 (:func:`rocker_extremes`) are simulator-independent, so MuJoCo
-(:mod:`sim_models.mujoco.turning`) and pymunk (:mod:`sim_models.pymunk.turning`)
+(:mod:`mechcheck.sim_models.mujoco.turning`) and pymunk (:mod:`mechcheck.sim_models.pymunk.turning`)
 are judged by the same rules. Each simulator supplies a :class:`Turner`.
 """
 
@@ -17,8 +17,8 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from analytic.case import Case
-from analytic.kinematics import pose_of
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.kinematics import pose_of
 
 Array = NDArray[np.float64]
 Ending = Literal["turned", "jammed", "budget"]
@@ -363,7 +363,7 @@ class Amplification:
     @property
     def transmission_angle(self) -> Array:
         """μ (rad) of the settled poses (the seed's definition, as in
-        :mod:`analytic.transmission`), from the simulator's own link angles."""
+        :mod:`mechcheck.analytic.transmission`), from the simulator's own link angles."""
         if self.case.mechanism == "four_bar":
             return np.abs(np.remainder(self.theta13 - self.output + np.pi, 2 * np.pi) - np.pi)
         rod = np.abs(np.remainder(self.theta13 - self.case.ground_angle + np.pi / 2, np.pi)

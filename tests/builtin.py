@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from functools import cache
 
-from analytic.case import Case
-from compare.casefile import builtin_case_files, load_cases
+from mechcheck.analytic.case import Case
+from mechcheck.casefile import builtin_case_files, load_cases
 
 
 @cache

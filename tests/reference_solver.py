@@ -1,7 +1,7 @@
 """An independent reference force analysis in maximal (Cartesian) coordinates.
 
 This module is test code. It shares nothing with :mod:`analytic` except the
-input dataclasses of :mod:`analytic.case`; the method is deliberately
+input dataclasses of :mod:`mechcheck.analytic.case`; the method is deliberately
 different from the backend's member-equilibrium matrix method:
 
 * Every moving link i carries q_i = (x_i, y_i, φ_i), the position of its
@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from analytic.case import Case, FourBarGeometry, SliderCrankGeometry
+from mechcheck.analytic.case import Case, FourBarGeometry, SliderCrankGeometry
 
 Vector = NDArray[np.float64]
 Matrix = NDArray[np.float64]

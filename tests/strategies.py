@@ -6,8 +6,8 @@ import math
 
 from hypothesis import assume, strategies as st
 
-from analytic import forces
-from analytic.case import (
+from mechcheck.analytic import forces
+from mechcheck.analytic.case import (
     Case,
     CaseError,
     FourBarGeometry,

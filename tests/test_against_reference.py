@@ -2,7 +2,7 @@
 
 Acceptance criterion: on cases it has never seen — static, dynamic, Coulomb and
 viscous friction, mm- and m-sized, tilted ground, crossed/left branch, drive on
-link 4 — ``analytic.forces.solve`` agrees with the maximal-coordinate,
+link 4 — ``mechcheck.analytic.forces.solve`` agrees with the maximal-coordinate,
 Lagrange-multiplier reference to 1e-9 relative in every quantity it reports.
 """
 
@@ -12,10 +12,9 @@ import math
 
 import numpy as np
 import pytest
-import reference_solver as ref
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
-from analytic.case import (
+from mechcheck.analytic.case import (
     Case,
     FourBarGeometry,
     Friction,
@@ -24,8 +23,10 @@ from analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
-from analytic.forces import solve as analytic_solve
-from analytic.solution import Solution
+from mechcheck.analytic.forces import solve as analytic_solve
+from mechcheck.analytic.solution import Solution
+
+from . import reference_solver as ref
 
 #: The acceptance criterion. Forces are compared against the largest force
 #: component of the case: every force comes out of one linear solve whose

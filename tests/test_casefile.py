@@ -5,10 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from builtin import rocker_load_case
 from typer.testing import CliRunner
 
-from compare.cli import app
+from mechcheck.cli import app
+
+from .builtin import rocker_load_case
 
 GOOD = rocker_load_case("good")
 

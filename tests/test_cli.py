@@ -6,10 +6,11 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pandas as pd
-from builtin import rocker_load_case
 from typer.testing import CliRunner
 
-from compare.cli import app
+from mechcheck.cli import app
+
+from .builtin import rocker_load_case
 
 CASE = rocker_load_case("e1")
 

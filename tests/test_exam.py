@@ -1,6 +1,6 @@
 """Exam Q1 and Q2 of seed 002 (SEEDS.md): analytic models, and MuJoCo and pymunk against them.
 
-Expected values come from :mod:`analytic.exam` only. The simulators never see
+Expected values come from :mod:`mechcheck.analytic.exam` only. The simulators never see
 them: Q1 settles from a pose chosen here (never the equilibrium) and Q2 gets
 only the prescribed path x(t).
 """
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from analytic.exam import (
+from mechcheck.analytic.exam import (
     EXAM_Q1_PHI_DEG,
     EXAM_Q1_TAN_PHI,
     Q1Equilibrium,
@@ -32,8 +32,8 @@ from analytic.exam import (
     q2_drive_force,
     q2_force,
 )
-from sim_models.mujoco import exam as mujoco_exam
-from sim_models.pymunk import exam as pymunk_exam
+from mechcheck.sim_models.mujoco import exam as mujoco_exam
+from mechcheck.sim_models.pymunk import exam as pymunk_exam
 
 #: The exam prints φ to one decimal (34,2°) and tan φ to two (0,68): half a unit.
 PRINTED_DEG_HALF = 0.05

@@ -12,12 +12,13 @@ from dataclasses import replace
 
 import numpy as np
 from hypothesis import given, settings, strategies as st
-from strategies import cases
 
-from analytic import forces, superposition, virtual_work
-from analytic.case import Case
-from analytic.kinematics import cross, pose_of
-from analytic.solution import quantity_kind
+from mechcheck.analytic import forces, superposition, virtual_work
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.kinematics import cross, pose_of
+from mechcheck.analytic.solution import quantity_kind
+
+from .strategies import cases
 
 #: Identities that are exact in exact arithmetic hold to rounding, amplified
 #: by the condition number (< 1e4 in these strategies): 1e4 × 2.2e-16 ≈ 2e-12,
@@ -168,7 +169,7 @@ def test_friction_never_lowers_the_input_power(case: Case) -> None:
 
 def test_mm_input_equals_m_input() -> None:
     """A case written in mm and the same case in m give the same SI results."""
-    from compare.casefile import parse_cases
+    from mechcheck.casefile import parse_cases
 
     def doc(unit: str, k: float) -> dict[str, object]:
         return {"case": [{

@@ -1,9 +1,9 @@
 """Cross-checks of the MuJoCo backends against the analytic backend.
 
-Expected values always come from :func:`analytic.forces.solve` (the
+Expected values always come from :func:`mechcheck.analytic.forces.solve` (the
 member-equilibrium matrix method), an independent method; never from MuJoCo.
 
-Every comparison goes through :func:`compare.testing.assert_solution_close`,
+Every comparison goes through :func:`mechcheck.testing.assert_solution_close`,
 the one tolerance policy (compare/tolerance.py). The seed cases are the
 built-in case files' (compare/cases/seeds.toml), loaded by name.
 """
@@ -16,17 +16,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from builtin import builtin
 
-from analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
-from analytic.equilibrium import condition
-from analytic.kinematics import pose_of
-from analytic.solution import Solution
-from compare.testing import assert_solution_close
-from sim_models.mujoco import settle, solve_at_pose, sweep
-from sim_models.mujoco.dynamics import DYNAMIC, LEAD_CONDITION_GROWTH, Drive, lead_in_condition
-from sim_models.mujoco.model import model_xml
-from sim_models.mujoco.settle import (
+from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
+from mechcheck.analytic.equilibrium import condition
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco import settle, solve_at_pose, sweep
+from mechcheck.sim_models.mujoco.dynamics import DYNAMIC, LEAD_CONDITION_GROWTH, Drive, lead_in_condition
+from mechcheck.sim_models.mujoco.model import model_xml
+from mechcheck.sim_models.mujoco.settle import (
     FLOOR_WINDOW,
     REFINE_RTOL,
     SETTLE_RTOL,
@@ -35,6 +33,9 @@ from sim_models.mujoco.settle import (
     refinement_left,
     remaining_change,
 )
+from mechcheck.testing import assert_solution_close
+
+from .builtin import builtin
 
 
 def fourbar_e1() -> Case:
@@ -54,8 +55,10 @@ GOLDEN = Path(__file__).parent / "golden" / "mujoco"
 
 
 def assert_close(sim: Solution) -> None:
-    """The solution agrees with the analytic backend under the one tolerance policy."""
+    """The solution agrees with the analytic backend under the one tolerance policy, and
+    MuJoCo raised no warning while computing it (the models are well posed)."""
     assert_solution_close(case_of[sim.case], sim, complete=True)
+    assert "warnings" not in sim.diagnostics, sim.diagnostics["warnings"]
 
 
 MASSES_4 = (Mass(2, 0.5, (0.04, 0.0), 3e-4), Mass(3, 0.8, (0.05, 0.01), 7e-4),
@@ -299,7 +302,7 @@ def test_sweep_marks_change_point_singular() -> None:
 def test_unsettled_run_reports_no_forces(monkeypatch: pytest.MonkeyPatch) -> None:
     """With a step budget too small to settle, the backend says not_settled and reports no forces."""
     # The package exports the function ``settle``, which hides the module's name.
-    settle_module = importlib.import_module("sim_models.mujoco.settle")
+    settle_module = importlib.import_module("mechcheck.sim_models.mujoco.settle")
     monkeypatch.setattr(settle_module, "MAX_STEPS", 3)
     sim = settle_module.settle_static(fourbar_e1())
     assert sim.status == "not_settled"
@@ -314,7 +317,7 @@ def test_golden_xml_is_reproduced(name: str) -> None:
 
 def test_model_is_planar_fourbar() -> None:
     """The four-bar model has three z-hinges and one loop connect, and no contacts."""
-    from sim_models.mujoco.model import compile_model
+    from mechcheck.sim_models.mujoco.model import compile_model
 
     model, layout = compile_model(fourbar_e1())
     assert model.nv == 3 and model.neq == 2
@@ -326,3 +329,27 @@ def test_geometry_types_unchanged() -> None:
     """The seed cases use the shared Case geometry types (no private copies)."""
     assert isinstance(fourbar_e1().geometry, FourBarGeometry)
     assert isinstance(slidercrank_e2().geometry, SliderCrankGeometry)
+
+
+def test_mujoco_warnings_go_to_diagnostics_not_to_a_file(tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """A MuJoCo warning raised while a Solution is computed lands in its ``warnings``
+    diagnostic, and MuJoCo writes no MUJOCO_LOG.TXT into the working directory."""
+    import mujoco
+
+    from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
+
+    monkeypatch.chdir(tmp_path)
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><body><joint type="hinge"/><geom size="0.1"/></body></worldbody></mujoco>')
+    data = mujoco.MjData(model)
+
+    def unstable() -> Solution:
+        data.qfrc_applied[0] = math.nan  # MuJoCo warns: NaN in qacc
+        mujoco.mj_step(model, data)
+        return Solution("demo", "mujoco", {})
+
+    solution = noting_warnings(unstable)
+    assert "QACC" in str(solution.diagnostics["warnings"])
+    assert list(tmp_path.iterdir()) == []
+    assert "warnings" not in noting_warnings(lambda: Solution("demo", "mujoco", {})).diagnostics

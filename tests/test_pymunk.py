@@ -2,7 +2,7 @@
 
 Relative error measure: |sim − ref| / max(|ref|, scale), scale = the largest
 |ref| among the case's quantities of the same kind (forces, or torques).
-Expected values always come from ``analytic.forces``, never from pymunk.
+Expected values always come from ``mechcheck.analytic.forces``, never from pymunk.
 """
 
 from __future__ import annotations
@@ -11,16 +11,17 @@ import math
 
 import numpy as np
 import pytest
-from builtin import builtin
 
-from analytic.case import Case, Friction, Load, Mass, Motion, SliderCrankGeometry
-from analytic.forces import solve_poses
-from analytic.kinematics import pose_of
-from analytic.solution import Solution
-from compare.casefile import builtin_case_files, load_cases
-from compare.testing import assert_solution_close
-from sim_models.pymunk import settle, solve_at_pose, sweep
-from sim_models.pymunk.dynamics import DRIVEN, SMOOTHNESS, STEP_AGREEMENT, Drive, lead_window
+from mechcheck.analytic.case import Case, Friction, Load, Mass, Motion, SliderCrankGeometry
+from mechcheck.analytic.forces import solve_poses
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.solution import Solution
+from mechcheck.casefile import builtin_case_files, load_cases
+from mechcheck.sim_models.pymunk import settle, solve_at_pose, sweep
+from mechcheck.sim_models.pymunk.dynamics import DRIVEN, SMOOTHNESS, STEP_AGREEMENT, Drive, lead_window
+from mechcheck.testing import assert_solution_close
+
+from .builtin import builtin
 
 MASSES = (Mass(2, 1.0, (0.04, 0.0), 1e-3), Mass(3, 2.0, (0.05, 0.01), 2e-3),
           Mass(4, 1.5, (0.06, 0.0), 2e-3))
@@ -221,7 +222,7 @@ def test_sweep_with_constraint_solve_backend() -> None:
 
 def test_budget_exhausted_reports_not_settled_without_forces() -> None:
     """A run stopped by its step budget says not_settled and withholds every force."""
-    from sim_models.pymunk.settings import SETTLE
+    from mechcheck.sim_models.pymunk.settings import SETTLE
 
     sol = settle(e1(), SETTLE.with_(max_steps=3))
     assert sol.status == "not_settled"

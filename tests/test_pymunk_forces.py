@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import pymunk
 import pytest
-from builtin import builtin
 
-from analytic.case import Case
-from sim_models.pymunk import forces
-from sim_models.pymunk.loads import apply_loads
-from sim_models.pymunk.model import build_model
-from sim_models.pymunk.readout import reactions
-from sim_models.pymunk.settings import SETTLE
+from mechcheck.analytic.case import Case
+from mechcheck.sim_models.pymunk import forces
+from mechcheck.sim_models.pymunk.loads import apply_loads
+from mechcheck.sim_models.pymunk.model import build_model
+from mechcheck.sim_models.pymunk.readout import reactions
+from mechcheck.sim_models.pymunk.settings import SETTLE
+
+from .builtin import builtin
 
 #: Momentum balance over one step is exact arithmetic on the same doubles;
 #: the slack covers rounding of products of ~1e3 kg masses and ~1e2 N forces.

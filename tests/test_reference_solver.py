@@ -12,9 +12,8 @@ import math
 
 import numpy as np
 import pytest
-import reference_solver as ref
 
-from analytic.case import (
+from mechcheck.analytic.case import (
     Case,
     FourBarGeometry,
     Friction,
@@ -23,6 +22,8 @@ from analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
+
+from . import reference_solver as ref
 
 #: Printed answers carry 2 decimals (N, degrees, N·mm): half a unit of the last digit.
 PRINTED_2DP = 0.005

@@ -15,7 +15,7 @@ import matplotlib.image as mpimg
 import pytest
 from typer.testing import CliRunner
 
-from compare.cli import app
+from mechcheck.cli import app
 
 #: Chromium flags for a closed network and a root user (see the machine notes).
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -11,9 +11,10 @@ import math
 
 import numpy as np
 import pytest
-from builtin import builtin
 
-from analytic import forces, superposition, virtual_work
+from mechcheck.analytic import forces, superposition, virtual_work
+
+from .builtin import builtin
 
 #: Printed answers are rounded to 2 decimals (N, degrees, N·mm): half a unit.
 HALF_2DP = 0.005

@@ -7,14 +7,15 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from builtin import builtin
 from hypothesis import given, settings
-from strategies import cases
 
-from analytic import forces, superposition, virtual_work
-from analytic.case import Case
-from analytic.equilibrium import SINGULAR_CONDITION, coefficient_matrix, eliminate, known_vector
-from analytic.kinematics import pose_of
+from mechcheck.analytic import forces, superposition, virtual_work
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.equilibrium import SINGULAR_CONDITION, coefficient_matrix, eliminate, known_vector
+from mechcheck.analytic.kinematics import pose_of
+
+from .builtin import builtin
+from .strategies import cases
 
 #: Two routes to the same linear solve differ by rounding amplified by the
 #: condition number (< 1e4 here): 1e4 × 2.2e-16 ≈ 2e-12 ≪ 1e-9.

@@ -8,9 +8,9 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from compare.cli import app
-from compare.studies import run_study
-from compare.tolerance import rule
+from mechcheck.cli import app
+from mechcheck.studies import run_study
+from mechcheck.tolerance import rule
 
 pytestmark = pytest.mark.slow
 

@@ -9,9 +9,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from compare.studies import STUDIES, run_study
-from compare.studies.common import crossing
-from compare.tolerance import rule
+from mechcheck.studies import STUDIES, run_study
+from mechcheck.studies.common import crossing
+from mechcheck.tolerance import rule
 
 #: Simulator curves are compared point by point with the analytic curve; each point is
 #: one driven or settled run, so the policy's tolerance for that kind of run applies.

@@ -9,12 +9,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from builtin import builtin
 
-from analytic import forces
-from compare import sweep as sweep_module
-from compare.executors import executor_for
-from compare.sweep import LocalExecutor, parse_range, plan, run_sweep
+from mechcheck import sweep as sweep_module
+from mechcheck.analytic import forces
+from mechcheck.executors import executor_for
+from mechcheck.sweep import LocalExecutor, parse_range, plan, run_sweep
+
+from .builtin import builtin
 
 
 class Killed(RuntimeError):

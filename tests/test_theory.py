@@ -10,12 +10,12 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 from typer.testing import CliRunner
 
-from analytic import theory
-from analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
-from analytic.kinematics import pose_of
-from analytic.transmission import transmission_angle
-from compare.cli import app
-from compare.theory_cli import GRASHOF_CATALOGUE, MOBILITY_CATALOGUE, parse_joints
+from mechcheck.analytic import theory
+from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.transmission import transmission_angle
+from mechcheck.cli import app
+from mechcheck.theory_cli import GRASHOF_CATALOGUE, MOBILITY_CATALOGUE, parse_joints
 
 #: A brute-force search on a 0.001° grid locates an extreme to within the grid
 #: spacing; near an extreme the function is flat, so the value is exact to

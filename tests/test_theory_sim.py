@@ -3,7 +3,7 @@
 Each simulator turns the crank of the seed's examples with a bounded-torque
 velocity servo, or holds it against a torque on the rocker, and everything
 asserted here is measured from the simulator's own state (joint angles,
-actuator and constraint forces). The analytic side (:mod:`analytic.theory`,
+actuator and constraint forces). The analytic side (:mod:`mechcheck.analytic.theory`,
 the assembly intervals, the closed-form kinematics) supplies only the
 expected values and the first pose of each run.
 
@@ -30,12 +30,12 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
-from analytic import fourbar_kinematics, slidercrank_kinematics, theory
-from analytic.case import Case, FourBarGeometry, SliderCrankGeometry
-from analytic.kinematics import pose_of
-from sim_models.mujoco import turning as mujoco_turning
-from sim_models.pymunk import turning as pymunk_turning
-from sim_models.turning import Amplification, TurnResult
+from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics, theory
+from mechcheck.analytic.case import Case, FourBarGeometry, SliderCrankGeometry
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.sim_models.mujoco import turning as mujoco_turning
+from mechcheck.sim_models.pymunk import turning as pymunk_turning
+from mechcheck.sim_models.turning import Amplification, TurnResult
 
 SIMULATORS: dict[str, ModuleType] = {"mujoco": mujoco_turning, "pymunk": pymunk_turning}
 

@@ -3,22 +3,22 @@ and a one-line conclusion computed from the data.
 
 ``STUDIES`` maps a study's name to the module:function that runs it; each takes
 ``quick`` (fewer points, for tests) and returns a
-:class:`~compare.studies.common.StudyResult`.
+:class:`~mechcheck.studies.common.StudyResult`.
 """
 
 from __future__ import annotations
 
 import importlib
 
-from compare.studies.common import Study, StudyResult
+from mechcheck.studies.common import Study, StudyResult
 
 STUDIES: dict[str, str] = {
-    "quasi_static": "compare.studies.quasi_static:run",
-    "superposition_friction": "compare.studies.superposition_friction:run",
-    "friction_angle": "compare.studies.friction_angle:run",
-    "massless": "compare.studies.massless:run",
-    "rigid_joints": "compare.studies.rigid_joints:run",
-    "near_toggle": "compare.studies.near_toggle:run",
+    "quasi_static": "mechcheck.studies.quasi_static:run",
+    "superposition_friction": "mechcheck.studies.superposition_friction:run",
+    "friction_angle": "mechcheck.studies.friction_angle:run",
+    "massless": "mechcheck.studies.massless:run",
+    "rigid_joints": "mechcheck.studies.rigid_joints:run",
+    "near_toggle": "mechcheck.studies.near_toggle:run",
 }
 
 

@@ -18,10 +18,10 @@ import pandas as pd
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
-from analytic.case import Case, Mass
-from analytic.solution import Solution
-from compare import backends
-from compare.casefile import builtin_case_files, load_cases
+from mechcheck import backends
+from mechcheck.analytic.case import Case, Mass
+from mechcheck.analytic.solution import Solution
+from mechcheck.casefile import builtin_case_files, load_cases
 
 #: The simulators every study measures with (their settled or driven backends).
 SIMULATORS = ("mujoco", "pymunk")
@@ -42,7 +42,7 @@ class StudyResult:
 
 def simulate(backend: str, case: Case) -> Solution:
     """Run one simulator backend on a case (a crash becomes an ``error`` verdict)."""
-    from compare.run import call_backend
+    from mechcheck.run import call_backend
 
     return call_backend(backends.load(backend), backend, case)
 

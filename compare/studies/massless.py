@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from analytic import forces
-from compare.studies.common import (
+from mechcheck.analytic import forces
+from mechcheck.studies.common import (
     SIMULATORS,
     StudyResult,
     by_source,

@@ -9,10 +9,10 @@ from typing import cast
 import numpy as np
 import pandas as pd
 
-from analytic import forces
-from compare.studies.common import SIMULATORS, StudyResult, builtin, plt, png, simulate
-from compare.tables import comparison_rows
-from compare.tolerance import NEAR_SINGULAR_CONDITION
+from mechcheck.analytic import forces
+from mechcheck.studies.common import SIMULATORS, StudyResult, builtin, plt, png, simulate
+from mechcheck.tables import comparison_rows
+from mechcheck.tolerance import NEAR_SINGULAR_CONDITION
 
 
 def run(quick: bool = False) -> StudyResult:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from analytic import forces
-from analytic.case import Motion
-from compare.studies.common import (
+from mechcheck.analytic import forces
+from mechcheck.analytic.case import Motion
+from mechcheck.studies.common import (
     SIMULATORS,
     StudyResult,
     crossing,

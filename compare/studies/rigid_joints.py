@@ -16,11 +16,11 @@ import mujoco
 import numpy as np
 import pandas as pd
 
-from analytic import forces
-from analytic.case import Case, Motion
-from analytic.solution import Solution
-from compare.studies.common import StudyResult, builtin, plt, png, realistic_e1
-from compare.tables import comparison_rows
+from mechcheck.analytic import forces
+from mechcheck.analytic.case import Case, Motion
+from mechcheck.analytic.solution import Solution
+from mechcheck.studies.common import StudyResult, builtin, plt, png, realistic_e1
+from mechcheck.tables import comparison_rows
 
 #: MuJoCo's own defaults: solref = (0.02, 1), solimp[0] = 0.9.
 MUJOCO_DEFAULT_TIMECONST = 0.02
@@ -42,9 +42,9 @@ def worst_error(case: Case, values: dict[str, float]) -> float:
 
 
 def mujoco_rows(case: Case, quick: bool) -> list[dict[str, object]]:
-    from sim_models.mujoco.model import STATIC, Settings
-    from sim_models.mujoco.rig import Rig
-    from sim_models.mujoco.settle import run_until_settled, seed_at
+    from mechcheck.sim_models.mujoco.model import STATIC, Settings
+    from mechcheck.sim_models.mujoco.rig import Rig
+    from mechcheck.sim_models.mujoco.settle import run_until_settled, seed_at
 
     rows: list[dict[str, object]] = []
     grid = MUJOCO_SOLIMP[::3] if quick else MUJOCO_SOLIMP
@@ -70,9 +70,9 @@ def mujoco_rows(case: Case, quick: bool) -> list[dict[str, object]]:
 
 
 def pymunk_rows(case: Case, driven_case: Case, quick: bool) -> list[dict[str, object]]:
-    from sim_models.pymunk.dynamics import DRIVEN, drive
-    from sim_models.pymunk.settings import SETTLE
-    from sim_models.pymunk.settle import settle
+    from mechcheck.sim_models.pymunk.dynamics import DRIVEN, drive
+    from mechcheck.sim_models.pymunk.settings import SETTLE
+    from mechcheck.sim_models.pymunk.settle import settle
 
     rows: list[dict[str, object]] = []
     for bias, label in ((PYMUNK_DEFAULT_BIAS, "error_bias 0.9⁶⁰ (default)"), (0.0, "error_bias 0")):

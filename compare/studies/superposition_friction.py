@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from analytic import forces
-from analytic.case import Case, Friction
-from compare.studies.common import (
+from mechcheck.analytic import forces
+from mechcheck.analytic.case import Case, Friction
+from mechcheck.studies.common import (
     SIMULATORS,
     StudyResult,
     builtin,

@@ -10,13 +10,14 @@ read from MuJoCo's own constraint state.
 
 from __future__ import annotations
 
-from analytic.case import Case
-from analytic.forces import pose_verdicts, withheld_solution
-from analytic.solution import Solution
-from sim_models.mujoco import solve as exact
-from sim_models.mujoco.dynamics import driven
-from sim_models.mujoco.settle import settle_static
-from sim_models.mujoco.sweep import sweep
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.forces import pose_verdicts, withheld_solution
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco import solve as exact
+from mechcheck.sim_models.mujoco.dynamics import driven
+from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
+from mechcheck.sim_models.mujoco.settle import settle_static
+from mechcheck.sim_models.mujoco.sweep import sweep
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
 
@@ -32,8 +33,8 @@ def settle(case: Case) -> Solution:
     if verdict is not None:
         return withheld_solution(case, "mujoco", verdict)
     if case.kind == "static":
-        return settle_static(case)
-    return driven(case)
+        return noting_warnings(lambda: settle_static(case))
+    return noting_warnings(lambda: driven(case))
 
 
 def solve_at_pose(case: Case) -> Solution:
@@ -42,4 +43,4 @@ def solve_at_pose(case: Case) -> Solution:
     verdict = pose_verdicts(case)[0]
     if verdict is not None:
         return withheld_solution(case, "mujoco_solve", verdict)
-    return exact.solve_at_pose(case)
+    return noting_warnings(lambda: exact.solve_at_pose(case))

@@ -47,13 +47,13 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from analytic.case import Case
-from analytic.equilibrium import condition
-from analytic.kinematics import pose_of
-from analytic.solution import Solution, quantity_kind
-from sim_models.mujoco.friction import friction_loads, relative_speeds
-from sim_models.mujoco.model import Settings
-from sim_models.mujoco.rig import Rig, disagreement
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.equilibrium import condition
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.solution import Solution, quantity_kind
+from mechcheck.sim_models.mujoco.friction import friction_loads, relative_speeds
+from mechcheck.sim_models.mujoco.model import Settings
+from mechcheck.sim_models.mujoco.rig import Rig, disagreement
 
 #: Dynamics: first time step 2.5e-5 s (refined by halving, see the module doc).
 #: With dt = 1e-3 the clock-driven torque was 2–4e-2 off (SIMULATORS.md): the

@@ -58,7 +58,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from analytic.exam import (
+from mechcheck.analytic.exam import (
     Q1_DAMPING_RATIO as DAMPING_RATIO,
     Q1_FORCE_CHANGE_RTOL as FORCE_CHANGE_RTOL,
     Q1_VELOCITY_TOL as VELOCITY_TOL,
@@ -86,7 +86,7 @@ STIFF_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
 #: Newton's default tolerance (1e-8) stops with a residual acceleration that
 #: keeps the bodies creeping; 1e-16 lets the forces settle to rounding
-#: (as in :mod:`sim_models.mujoco.model`).
+#: (as in :mod:`mechcheck.sim_models.mujoco.model`).
 SOLVER_TOLERANCE = 1e-16
 
 #: Q1 step budget: 100 s of simulated time at the longest step; the exam
@@ -268,7 +268,7 @@ def settle_q1(system: Q1System, settings: Q1Settings = Q1Settings()) -> Q1Result
 
     Example
     -------
-    >>> from analytic.exam import exam_q1
+    >>> from mechcheck.analytic.exam import exam_q1
     >>> result = settle_q1(exam_q1())
     >>> result.status, round(math.degrees(result.values.phi), 1)
     ('ok', 34.2)

@@ -18,8 +18,8 @@ import math
 
 import numpy as np
 
-from analytic.case import Case
-from sim_models.mujoco.rig import Array, Rig
+from mechcheck.analytic.case import Case
+from mechcheck.sim_models.mujoco.rig import Array, Rig
 
 #: Links (i, j) of each pin, and the reaction whose magnitude loads it.
 PINS = {"A0": (1, 2, "F12"), "A": (2, 3, "F23"), "B": (3, 4, "F34"), "B0": (1, 4, "F14")}

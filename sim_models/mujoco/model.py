@@ -1,4 +1,4 @@
-"""Pure builders: :class:`~analytic.case.Case` → ``MjSpec`` / ``MjModel`` / XML.
+"""Pure builders: :class:`~mechcheck.analytic.case.Case` → ``MjSpec`` / ``MjModel`` / XML.
 
 The model is planar by construction: every hinge turns about z and the slider
 slides along the slide axis u, so nothing can leave the plane. Loop closure at
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import mujoco
 
-from analytic.case import Case, FourBarGeometry, SliderCrankGeometry
+from mechcheck.analytic.case import Case, FourBarGeometry, SliderCrankGeometry
 
 #: Fictitious mass of every link while settling statics, kg. Static forces do
 #: not depend on masses as long as weights are applied only to the real

@@ -37,10 +37,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from analytic.case import Case
-from analytic.kinematics import pose_of
-from analytic.solution import quantity_kind
-from sim_models.mujoco.model import STATIC, Layout, Settings, compile_model
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.solution import quantity_kind
+from mechcheck.sim_models.mujoco.model import STATIC, Layout, Settings, compile_model
 
 Array = NDArray[np.float64]
 

@@ -35,9 +35,9 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
-from analytic.case import Case
-from analytic.solution import Solution, quantity_kind
-from sim_models.mujoco.rig import Rig, disagreement
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import Solution, quantity_kind
+from mechcheck.sim_models.mujoco.rig import Rig, disagreement
 
 #: Settled when the forces' remaining change, estimated from their observed
 #: geometric decay, is below this fraction of the largest force (torques divided

@@ -23,11 +23,11 @@ import time
 import mujoco
 import numpy as np
 
-from analytic.case import Case
-from analytic.solution import Solution
-from sim_models.mujoco.friction import friction_loads, relative_speeds
-from sim_models.mujoco.model import EXACT, zero_fictitious_masses
-from sim_models.mujoco.rig import Rig
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco.friction import friction_loads, relative_speeds
+from mechcheck.sim_models.mujoco.model import EXACT, zero_fictitious_masses
+from mechcheck.sim_models.mujoco.rig import Rig
 
 #: The friction fixed point stops when no reaction changes by more than this
 #: fraction of the largest. Each pass contracts by about μ·r/L (≈ 0.03 on the

@@ -10,22 +10,24 @@ simulator there returns finite but meaningless numbers (SIMULATORS.md).
 from __future__ import annotations
 
 import time
+from functools import partial
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from analytic.case import Case, CaseError
-from analytic.forces import (
+from mechcheck.analytic.case import Case, CaseError
+from mechcheck.analytic.forces import (
     PoseVerdict,
     pose_verdicts,
     unassemblable_solution,
     withheld_solution,
 )
-from analytic.solution import Solution
-from sim_models.mujoco.dynamics import drive_motion, driven
-from sim_models.mujoco.rig import Rig
-from sim_models.mujoco.settle import settle_static
-from sim_models.mujoco.solve import exact_rig, solve_at_pose, solve_state
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco.dynamics import drive_motion, driven
+from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
+from mechcheck.sim_models.mujoco.rig import Rig
+from mechcheck.sim_models.mujoco.settle import settle_static
+from mechcheck.sim_models.mujoco.solve import exact_rig, solve_at_pose, solve_state
 
 BACKENDS = ("mujoco", "mujoco_solve")
 
@@ -77,7 +79,8 @@ def exact_sweep(case: Case, angles: np.ndarray, verdicts: list[PoseVerdict | Non
         if verdict is not None:
             out.append(withheld_solution(case, "mujoco_solve", verdict))
             continue
-        out.append(solve_state(case, rig, qpos[i], qvel[i], qacc[i], time.perf_counter()))
+        out.append(noting_warnings(
+            partial(solve_state, case, rig, qpos[i], qvel[i], qacc[i], time.perf_counter())))
     return out
 
 
@@ -93,7 +96,7 @@ def sweep_rig(case: Case, backend: str) -> Rig:
 
 def solve_one(case: Case, backend: str, rig: Rig) -> Solution:
     if backend == "mujoco_solve":
-        return solve_at_pose(case, rig)
+        return noting_warnings(lambda: solve_at_pose(case, rig))
     if case.kind == "static":
-        return settle_static(case, rig)
-    return driven(case, rig)
+        return noting_warnings(lambda: settle_static(case, rig))
+    return noting_warnings(lambda: driven(case, rig))

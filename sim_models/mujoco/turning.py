@@ -12,7 +12,7 @@ actuator and equality forces); the analytic side only seeds the first pose.
   the other sense, and the two rest angles are the **reachable range** of θ12.
   From a completed turn, :meth:`TurnResult.rocker_extremes` finds the
   extremes of θ14 and the crank angles where they occur (the dead positions
-  of :func:`analytic.theory.limit_positions`).
+  of :func:`mechcheck.analytic.theory.limit_positions`).
 - :func:`amplification` holds the crank (the model's ``drive`` joint equality)
   at each θ12 against a pure torque on the rocker (or a force along the slide)
   and lets the model settle; the equality's force is the holding torque T12,
@@ -20,8 +20,8 @@ actuator and equality forces); the analytic side only seeds the first pose.
   −ω4/ω2 (virtual work) and grows without bound toward a toggle.
 
 The simulator-independent parts (the run protocol, the result types and the
-extreme finder) are in :mod:`sim_models.turning`, shared with
-:mod:`sim_models.pymunk.turning` so that both simulators are judged by the
+extreme finder) are in :mod:`mechcheck.sim_models.turning`, shared with
+:mod:`mechcheck.sim_models.pymunk.turning` so that both simulators are judged by the
 same rules.
 """
 
@@ -35,9 +35,9 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from analytic.case import Case
-from sim_models.mujoco.model import SETTLE_MASS, Settings, build_spec
-from sim_models.turning import (
+from mechcheck.analytic.case import Case
+from mechcheck.sim_models.mujoco.model import SETTLE_MASS, Settings, build_spec
+from mechcheck.sim_models.turning import (
     CRANK_ARMATURE,
     JOINT_DAMPING,
     SERVO_GAIN,
@@ -73,7 +73,7 @@ def output_joint(case: Case) -> str:
 
 
 def turning_spec(case: Case) -> mujoco.MjSpec:
-    """The model of ``case`` (:func:`~sim_models.mujoco.model.build_spec`) with its crank
+    """The model of ``case`` (:func:`~mechcheck.sim_models.mujoco.model.build_spec`) with its crank
     lock switched off, a bounded-torque velocity servo on the crank hinge and damped
     passive joints."""
     spec = build_spec(case, TURN_SETTINGS)

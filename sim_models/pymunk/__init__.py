@@ -11,8 +11,8 @@ Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
 ``sweep``, ``study`` (solver-setting study), ``settings``.
 """
 
-from sim_models.pymunk.settle import settle
-from sim_models.pymunk.solve import solve_at_pose
-from sim_models.pymunk.sweep import sweep
+from mechcheck.sim_models.pymunk.settle import settle
+from mechcheck.sim_models.pymunk.solve import solve_at_pose
+from mechcheck.sim_models.pymunk.sweep import sweep
 
 __all__ = ["settle", "solve_at_pose", "sweep"]

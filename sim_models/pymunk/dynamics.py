@@ -53,19 +53,19 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from analytic.case import Case
-from analytic.kinematics import pose_of
-from analytic.solution import Solution
-from sim_models.pymunk.friction import (
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.pymunk.friction import (
     apply_viscous_pin_moments,
     sign,
     slide_friction_force,
     slide_speed,
     update_pin_friction,
 )
-from sim_models.pymunk.loads import apply_load_set
-from sim_models.pymunk.model import Model, build_model, slide_axes
-from sim_models.pymunk.readout import (
+from mechcheck.sim_models.pymunk.loads import apply_load_set
+from mechcheck.sim_models.pymunk.model import Model, build_model, slide_axes
+from mechcheck.sim_models.pymunk.readout import (
     Values,
     crank_angle,
     joint_separation,
@@ -74,8 +74,8 @@ from sim_models.pymunk.readout import (
     reactions,
     residual_velocity,
 )
-from sim_models.pymunk.settings import SolverSettings
-from sim_models.pymunk.verdict import singular_mask, singular_solution
+from mechcheck.sim_models.pymunk.settings import SolverSettings
+from mechcheck.sim_models.pymunk.verdict import singular_mask, singular_solution
 
 BACKEND = "pymunk"
 

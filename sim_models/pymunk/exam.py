@@ -4,7 +4,7 @@ Both spaces use ``Space.gravity = (0, −g)`` (every body is a real mass with
 its real weight), no collision shapes (nothing collides), and a constant dt
 per run, because every force is read as an accumulated impulse divided by
 the dt of the step that produced it. Force *vectors* come from the solver's
-accumulated impulses through :func:`sim_models.pymunk.forces.force_on_b`
+accumulated impulses through :func:`mechcheck.sim_models.pymunk.forces.force_on_b`
 (``Constraint.impulse`` is only a magnitude); that reader checks its struct
 layout against pymunk's public values before the first read.
 
@@ -50,7 +50,7 @@ import numpy as np
 import pymunk
 from numpy.typing import ArrayLike, NDArray
 
-from analytic.exam import (
+from mechcheck.analytic.exam import (
     Q1_DAMPING_RATIO as DAMPING_RATIO,
     Q1_FORCE_CHANGE_RTOL as FORCE_CHANGE_RTOL,
     Q1_VELOCITY_TOL as VELOCITY_TOL,
@@ -68,7 +68,7 @@ from analytic.exam import (
     reading_steps,
     unsteady_message,
 )
-from sim_models.pymunk.forces import force_on_b
+from mechcheck.sim_models.pymunk.forces import force_on_b
 
 BACKEND = "pymunk"
 
@@ -201,7 +201,7 @@ def settle_q1(system: Q1System, settings: Q1Settings = Q1Settings()) -> Q1Result
 
     Example
     -------
-    >>> from analytic.exam import exam_q1
+    >>> from mechcheck.analytic.exam import exam_q1
     >>> result = settle_q1(exam_q1())
     >>> result.status, round(math.degrees(result.values.phi), 1)
     ('ok', 34.2)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 
-from sim_models.pymunk.model import Model, pin_anchors, slide_axes
+from mechcheck.sim_models.pymunk.model import Model, pin_anchors, slide_axes
 
 
 def update_pin_friction(model: Model) -> None:

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import pymunk
 
-from analytic.case import Case
-from sim_models.pymunk.model import Model
+from mechcheck.analytic.case import Case
+from mechcheck.sim_models.pymunk.model import Model
 
 
 def apply_load_set(case: Case, bodies: dict[int, pymunk.Body]) -> None:

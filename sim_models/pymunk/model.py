@@ -29,9 +29,9 @@ from typing import Literal
 import numpy as np
 import pymunk
 
-from analytic.case import Case, FourBarGeometry
-from analytic.kinematics import Pose, pose_of
-from sim_models.pymunk.settings import SolverSettings
+from mechcheck.analytic.case import Case, FourBarGeometry
+from mechcheck.analytic.kinematics import Pose, pose_of
+from mechcheck.sim_models.pymunk.settings import SolverSettings
 
 Vec = tuple[float, float]
 MassMode = Literal["fictitious", "real"]
@@ -107,7 +107,7 @@ def body_inertia(case: Case, link: int, settings: SolverSettings,
     bar between its pins (statics: inertia is irrelevant at rest).
     ``real``: the Case's mass and inertia; a massless link (or a point
     mass with zero inertia) gets ``settings.driven_fictitious_mass`` (see
-    :class:`~sim_models.pymunk.settings.SolverSettings`), whose inertia
+    :class:`~mechcheck.sim_models.pymunk.settings.SolverSettings`), whose inertia
     forces are the price of pymunk refusing massless bodies.
     """
     length = link_lengths(case)[link]
@@ -171,7 +171,7 @@ def make_friction_motors(case: Case, static: pymunk.Body,
     """A SimpleMotor(rate = 0) at every pin with Coulomb friction, body a = link i.
 
     Its ``max_force`` is set every step to μ·r·|F_ij| (see
-    :mod:`sim_models.pymunk.friction`); it starts at 0 so it does nothing
+    :mod:`mechcheck.sim_models.pymunk.friction`); it starts at 0 so it does nothing
     before the first reaction is known.
     """
     f = case.friction

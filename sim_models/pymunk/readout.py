@@ -1,7 +1,7 @@
 """The model's reactions, drive torque and pose in CONVENTIONS quantities.
 
 Every force here comes from pymunk's accumulated impulses
-(:mod:`sim_models.pymunk.forces`) divided by the constant step; the only
+(:mod:`mechcheck.sim_models.pymunk.forces`) divided by the constant step; the only
 additions are the forces this backend itself applied on the slide (Coulomb
 and viscous slide friction), which are part of the guide's reaction F14.
 """
@@ -12,9 +12,9 @@ import math
 
 import pymunk
 
-from analytic.case import Case
-from sim_models.pymunk.forces import force_on_b, torque_on_b
-from sim_models.pymunk.model import Model, analytic_pose, link_lengths, slide_axes
+from mechcheck.analytic.case import Case
+from mechcheck.sim_models.pymunk.forces import force_on_b, torque_on_b
+from mechcheck.sim_models.pymunk.model import Model, analytic_pose, link_lengths, slide_axes
 
 Values = dict[str, float]
 

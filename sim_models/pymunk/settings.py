@@ -1,7 +1,7 @@
 """Solver settings and stopping thresholds of the pymunk backends, in one place.
 
 Every number a pymunk run depends on lives here, with the reason it has
-that value, so that the solver-setting study (:mod:`compare.studies.rigid_joints`)
+that value, so that the solver-setting study (:mod:`mechcheck.studies.rigid_joints`)
 can vary them and a reader can see what "settled" means.
 """
 
@@ -21,7 +21,7 @@ class SolverSettings:
         Chipmunk rescales its warm-start impulses by the step ratio. At rest
         the integration error vanishes, so statics can use a long step
         (0.1 s with 1 t links); driven runs use their own (see
-        :data:`sim_models.pymunk.dynamics.DRIVEN`).
+        :data:`mechcheck.sim_models.pymunk.dynamics.DRIVEN`).
     iterations : Gauss–Seidel iterations per step (``Space.iterations``).
         Warm starting carries the accumulated impulses from step to step, so
         the solver keeps converging over steps; more iterations per step
@@ -30,7 +30,7 @@ class SolverSettings:
         (``Constraint.error_bias``); per step 1 − error_bias^dt is corrected.
         Chipmunk's default 0.9⁶⁰ corrects only 1 % per 0.1 s step; 1e-6
         corrects 75 % per step, which removes the start-up drift in a few
-        steps (studied in :mod:`compare.studies.rigid_joints`).
+        steps (studied in :mod:`mechcheck.studies.rigid_joints`).
     damping : fraction of velocity kept after one second (``Space.damping``).
         It removes the kinetic energy of the settling transient and has no
         effect on a body at rest, so it cannot bias a settled force. Strong
@@ -51,7 +51,7 @@ class SolverSettings:
         (dynamic or friction) run, as a uniform bar between its pins. There
         its inertia force m·a does enter the reactions, so it is chosen small
         against the loads; the error it causes is measured, not hidden (see
-        :mod:`sim_models.pymunk.dynamics`).
+        :mod:`mechcheck.sim_models.pymunk.dynamics`).
     settle_speed : 1/s, settled when every body's largest point speed
         (|v| + |ω|·L), divided by the mechanism's length scale L, is below
         this. Relative, so that a case in metres and one of centimetre links

@@ -3,7 +3,7 @@
 The drive link is locked to the ground by a GearJoint at its analytic angle,
 the loads and weights are applied every step, and the space is stepped with
 a constant dt and some damping until it is at rest and its constraint forces
-have stopped changing (thresholds in :mod:`sim_models.pymunk.settings`).
+have stopped changing (thresholds in :mod:`mechcheck.sim_models.pymunk.settings`).
 The forces are then pymunk's accumulated impulses / dt.
 """
 
@@ -12,11 +12,11 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-from analytic.case import Case
-from analytic.solution import Solution
-from sim_models.pymunk.loads import apply_loads
-from sim_models.pymunk.model import Model, build_model
-from sim_models.pymunk.readout import (
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.pymunk.loads import apply_loads
+from mechcheck.sim_models.pymunk.model import Model, build_model
+from mechcheck.sim_models.pymunk.readout import (
     Values,
     crank_angle,
     joint_separation,
@@ -25,8 +25,8 @@ from sim_models.pymunk.readout import (
     reactions,
     residual_velocity,
 )
-from sim_models.pymunk.settings import SETTLE, SolverSettings
-from sim_models.pymunk.verdict import singular_solution, unsettled_solution
+from mechcheck.sim_models.pymunk.settings import SETTLE, SolverSettings
+from mechcheck.sim_models.pymunk.verdict import singular_solution, unsettled_solution
 
 BACKEND = "pymunk"
 
@@ -107,10 +107,10 @@ def solution_of(model: Model, run: Run, backend: str, method: str, elapsed: floa
 def settle(case: Case, settings: SolverSettings = SETTLE) -> Solution:
     """The ``pymunk`` backend: static equilibrium by simulation (driven motion if dynamic).
 
-    Dynamic and friction cases are dispatched to :func:`sim_models.pymunk.dynamics.drive`.
+    Dynamic and friction cases are dispatched to :func:`mechcheck.sim_models.pymunk.dynamics.drive`.
     """
     if case.kind != "static":
-        from sim_models.pymunk.dynamics import drive
+        from mechcheck.sim_models.pymunk.dynamics import drive
 
         return drive(case)
     start = time.perf_counter()

@@ -5,7 +5,7 @@ Nothing can drift, so each step is one more warm-started round of pymunk's
 Gauss–Seidel solver on the *same* constraint problem, and the accumulated
 impulses converge to the constraint forces of that pose. This checks the
 model itself (frames, anchors, load points, signs) to rounding, separately
-from the settling dynamics of :mod:`sim_models.pymunk.settle`.
+from the settling dynamics of :mod:`mechcheck.sim_models.pymunk.settle`.
 
 Only statics is meaningful here: with velocities the constraint forces
 depend on how the pose moves, which a re-posed step does not represent.
@@ -15,15 +15,15 @@ from __future__ import annotations
 
 import time
 
-from analytic.case import Case
-from analytic.kinematics import Pose
-from analytic.solution import Solution
-from sim_models.pymunk.loads import apply_loads
-from sim_models.pymunk.model import Model, analytic_pose, build_model, place
-from sim_models.pymunk.readout import Values, reactions
-from sim_models.pymunk.settings import SOLVE, SolverSettings
-from sim_models.pymunk.settle import Run, relative_change, solution_of
-from sim_models.pymunk.verdict import singular_solution
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.kinematics import Pose
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.pymunk.loads import apply_loads
+from mechcheck.sim_models.pymunk.model import Model, analytic_pose, build_model, place
+from mechcheck.sim_models.pymunk.readout import Values, reactions
+from mechcheck.sim_models.pymunk.settings import SOLVE, SolverSettings
+from mechcheck.sim_models.pymunk.settle import Run, relative_change, solution_of
+from mechcheck.sim_models.pymunk.verdict import singular_solution
 
 BACKEND = "pymunk_solve"
 

@@ -19,14 +19,14 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike
 
-from analytic.case import Case
-from analytic.forces import pose_verdicts, unassemblable_solution, withheld_solution
-from analytic.kinematics import pose_of
-from analytic.solution import Solution
-from sim_models.pymunk.model import build_model, place
-from sim_models.pymunk.settings import SETTLE, SOLVE
-from sim_models.pymunk.settle import solution_of, step_until_settled
-from sim_models.pymunk.solve import iterate_at_pose
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.forces import pose_verdicts, unassemblable_solution, withheld_solution
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.pymunk.model import build_model, place
+from mechcheck.sim_models.pymunk.settings import SETTLE, SOLVE
+from mechcheck.sim_models.pymunk.settle import solution_of, step_until_settled
+from mechcheck.sim_models.pymunk.solve import iterate_at_pose
 
 BACKENDS = ("pymunk", "pymunk_solve")
 
@@ -71,8 +71,8 @@ def sweep(case: Case, theta12: ArrayLike, backend: str = "pymunk") -> list[Solut
 
 def _driven_sweep(case: Case, angles: np.ndarray, backend: str) -> list[Solution]:
     """Dynamic/friction cases: an independent driven run per pose (``pymunk`` only)."""
-    from sim_models.pymunk.dynamics import drive
-    from sim_models.pymunk.solve import not_applicable
+    from mechcheck.sim_models.pymunk.dynamics import drive
+    from mechcheck.sim_models.pymunk.solve import not_applicable
 
     out = []
     for theta in angles:

@@ -1,7 +1,7 @@
 """Seed 001's mechanism theory measured in pymunk: turn the crank and see.
 
-The same two experiments as :mod:`sim_models.mujoco.turning`, judged by the
-same run protocol, result types and extreme finder (:mod:`sim_models.turning`):
+The same two experiments as :mod:`mechcheck.sim_models.mujoco.turning`, judged by the
+same run protocol, result types and extreme finder (:mod:`mechcheck.sim_models.turning`):
 
 - :func:`turn_crank` drives the crank with a :class:`pymunk.SimpleMotor` of
   bounded torque (``max_force``) — pymunk's velocity servo — in place of the
@@ -11,10 +11,10 @@ same run protocol, result types and extreme finder (:mod:`sim_models.turning`):
 - :func:`amplification` holds the crank with the model's own lock (a
   :class:`pymunk.GearJoint` to the ground) against a pure torque on the rocker
   (or a force along the slide) and steps until settled; the lock's signed
-  accumulated impulse / dt (:mod:`sim_models.pymunk.forces`) is T12.
+  accumulated impulse / dt (:mod:`mechcheck.sim_models.pymunk.forces`) is T12.
 
 Everything is read from pymunk's bodies and constraints; the analytic pose
-only seeds the first configuration (:func:`~sim_models.pymunk.model.build_model`).
+only seeds the first configuration (:func:`~mechcheck.sim_models.pymunk.model.build_model`).
 """
 
 from __future__ import annotations
@@ -26,12 +26,12 @@ import numpy as np
 import pymunk
 from numpy.typing import ArrayLike
 
-from analytic.case import Case, SliderCrankGeometry
-from sim_models.pymunk.forces import torque_on_b
-from sim_models.pymunk.model import Model, build_model, slide_axes
-from sim_models.pymunk.readout import joint_separation
-from sim_models.pymunk.settings import SolverSettings
-from sim_models.turning import (
+from mechcheck.analytic.case import Case, SliderCrankGeometry
+from mechcheck.sim_models.pymunk.forces import torque_on_b
+from mechcheck.sim_models.pymunk.model import Model, build_model, slide_axes
+from mechcheck.sim_models.pymunk.readout import joint_separation
+from mechcheck.sim_models.pymunk.settings import SolverSettings
+from mechcheck.sim_models.turning import (
     JOINT_DAMPING,
     SERVO_SPEED,
     TIMESTEP,
@@ -100,7 +100,7 @@ def joint_dampers(model: Model) -> list[pymunk.Constraint]:
 
 
 class PymunkTurner:
-    """The servo-driven pymunk model of a Case (a :class:`~sim_models.turning.Turner`)."""
+    """The servo-driven pymunk model of a Case (a :class:`~mechcheck.sim_models.turning.Turner`)."""
 
     def __init__(self, case: Case) -> None:
         self.case = case

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from analytic.case import Case
-from analytic.forces import pose_verdicts, solve_poses, withheld_solution
-from analytic.solution import Solution
-from sim_models.pymunk.model import Model
-from sim_models.pymunk.readout import pose_values
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.forces import pose_verdicts, solve_poses, withheld_solution
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.pymunk.model import Model
+from mechcheck.sim_models.pymunk.readout import pose_values
 
 
 def singular_mask(case: Case, theta12: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -24,7 +24,7 @@ def singular_mask(case: Case, theta12: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 def singular_solution(case: Case, backend: str) -> Solution | None:
     """A Solution without forces if the case's pose has none to measure (at or next to a
-    toggle, or where friction reverses: :func:`analytic.forces.pose_verdicts`), else None."""
+    toggle, or where friction reverses: :func:`mechcheck.analytic.forces.pose_verdicts`), else None."""
     verdict = pose_verdicts(case)[0]
     return None if verdict is None else withheld_solution(case, backend, verdict)
 
