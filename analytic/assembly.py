@@ -1,62 +1,108 @@
 """Can a Case be assembled at its θ12?  If not, say which θ12 can.
 
-A pose that cannot be assembled is unusable input, so the message must tell
-the user what would be usable: the θ12 range for that geometry and branch.
+A geometry that assembles at no θ12 is unusable input (:func:`check_geometry`).
+A θ12 outside the range that assembles is a property of the pose, like a toggle:
+every backend gives it the verdict ``no_solution``, naming the range that does
+assemble; a θ12 inside the range where the pose is still undefined is a change
+point (``singular``) (:func:`unassembled_verdict`).
 """
 
 from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
-from mechcheck.analytic.case import Case, CaseError, FourBarGeometry
+from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, Geometry
+from mechcheck.analytic.solution import Status
+
+#: Decimal places of the degrees in printed ranges (rounded inward, so that every
+#: printed value, an endpoint included, assembles).
+RANGE_DECIMALS = 4
 
 
 def _deg(rad: float) -> str:
-    return f"{math.degrees(rad):.4g}°"
+    return f"{math.degrees(rad):.{RANGE_DECIMALS}f}°"
+
+
+def _deg_range(lo: float, hi: float) -> str:
+    """[lo, hi] in degrees, rounded inward."""
+    scale = 10.0**RANGE_DECIMALS
+    a = math.ceil(round(math.degrees(lo) * scale, 6)) / scale
+    b = math.floor(round(math.degrees(hi) * scale, 6)) / scale
+    return f"[{a:.{RANGE_DECIMALS}f}°, {b:.{RANGE_DECIMALS}f}°]"
+
+
+def _never_assembles(g: Geometry) -> str | None:
+    """Why no θ12 assembles this geometry, or None if some does."""
+    if isinstance(g, FourBarGeometry):
+        if fourbar_kinematics.assembly_interval(g) is None:
+            return "a link is longer than the other three together"
+        return None
+    if slidercrank_kinematics.assembly_interval(g) is None:
+        return "the offset exceeds crank plus rod"
+    return None
+
+
+def check_geometry(g: Geometry) -> None:
+    """Raise :class:`CaseError` (key ``geometry``) if no θ12 assembles ``g``."""
+    why = _never_assembles(g)
+    if why is not None:
+        raise CaseError(f"cannot be assembled at any θ12: {why}", key="geometry")
 
 
 def assembly_range_text(case: Case) -> str:
     """Human description of the θ12 values (global, degrees) that assemble."""
     g = case.geometry
     gd = case.ground_angle
+    why = _never_assembles(g)
+    if why is not None:
+        return f"no θ12 assembles this geometry ({why})"
     if isinstance(g, FourBarGeometry):
         interval = fourbar_kinematics.assembly_interval(g)
-        if interval is None:
-            return "no θ12 assembles this geometry (a link is longer than the other three together)"
+        assert interval is not None
         lo, hi = interval
         if lo == 0.0 and hi == math.pi:
             return "every θ12 assembles (the crank turns fully)"
         if lo == 0.0:
-            return f"θ12 must lie in [{_deg(gd - hi)}, {_deg(gd + hi)}]"
+            return f"θ12 must lie in {_deg_range(gd - hi, gd + hi)}"
         if hi == math.pi:
-            return (f"θ12 must lie in [{_deg(gd + lo)}, {_deg(gd + 2 * math.pi - lo)}]")
-        return (f"θ12 must lie in [{_deg(gd + lo)}, {_deg(gd + hi)}] or "
-                f"[{_deg(gd - hi)}, {_deg(gd - lo)}]")
-    interval = slidercrank_kinematics.assembly_interval(g)
-    if interval is None:
-        return "no θ12 assembles this geometry (the offset exceeds crank plus rod)"
-    lo, hi = interval
+            return f"θ12 must lie in {_deg_range(gd + lo, gd + 2 * math.pi - lo)}"
+        return (f"θ12 must lie in {_deg_range(gd + lo, gd + hi)} or "
+                f"{_deg_range(gd - hi, gd - lo)}")
+    sin_range = slidercrank_kinematics.assembly_interval(g)
+    assert sin_range is not None
+    lo, hi = sin_range
     if lo <= -1.0 and hi >= 1.0:
         return "every θ12 assembles (the crank turns fully)"
     # sin φ in [lo, hi]: describe in φ, then shift by the ground angle.
     a_lo, a_hi = math.asin(lo), math.asin(hi)
     if lo <= -1.0:
-        return f"θ12 must lie in [{_deg(gd + math.pi - a_hi)}, {_deg(gd + 2 * math.pi + a_hi)}]"
+        return f"θ12 must lie in {_deg_range(gd + math.pi - a_hi, gd + 2 * math.pi + a_hi)}"
     if hi >= 1.0:
-        return f"θ12 must lie in [{_deg(gd + a_lo)}, {_deg(gd + math.pi - a_lo)}]"
-    return (f"θ12 must lie in [{_deg(gd + a_lo)}, {_deg(gd + a_hi)}] or "
-            f"[{_deg(gd + math.pi - a_hi)}, {_deg(gd + math.pi - a_lo)}]")
+        return f"θ12 must lie in {_deg_range(gd + a_lo, gd + math.pi - a_lo)}"
+    return (f"θ12 must lie in {_deg_range(gd + a_lo, gd + a_hi)} or "
+            f"{_deg_range(gd + math.pi - a_hi, gd + math.pi - a_lo)}")
 
 
-def check_assembly(case: Case) -> None:
-    """Raise :class:`CaseError` (key ``theta12``) if the case's pose cannot be assembled."""
-    from mechcheck.analytic.kinematics import pose_of
+def in_assembly_range(case: Case, theta12: float) -> bool:
+    """Whether θ12 (rad) lies in the range that assembles (endpoints included, to rounding)."""
+    g = case.geometry
+    phi = math.remainder(theta12 - case.ground_angle, math.tau)
+    slack = 1e-12
+    if isinstance(g, FourBarGeometry):
+        interval = fourbar_kinematics.assembly_interval(g)
+        return interval is not None and interval[0] - slack <= abs(phi) <= interval[1] + slack
+    sin_range = slidercrank_kinematics.assembly_interval(g)
+    return sin_range is not None and sin_range[0] - slack <= math.sin(phi) <= sin_range[1] + slack
 
-    p = pose_of(case, omega=0.0, alpha=0.0)
-    if not np.all(np.isfinite(p.theta14)) or not np.all(np.isfinite(p.theta13)):
-        raise CaseError(
-            f"the {case.mechanism} cannot be assembled at θ12 = {_deg(case.theta12)} "
-            f"({case.branch} branch): {assembly_range_text(case)}", key="theta12")
+
+def unassembled_verdict(case: Case, theta12: float) -> tuple[Status, str]:
+    """The verdict at a θ12 (rad) where the pose has no unique position: ``no_solution``
+    outside the range that assembles, ``singular`` at a change point inside it."""
+    at = f"θ12 = {math.degrees(theta12):.6g}°"
+    if in_assembly_range(case, theta12):
+        return ("singular", f"{at} is a change point of this {case.mechanism}: the links fold "
+                            "onto one line, where the branches meet and the position of the "
+                            "coupler is not determined; statics is singular there")
+    return ("no_solution", f"the {case.mechanism} cannot be assembled at {at} "
+                           f"({case.branch} branch): {assembly_range_text(case)}")

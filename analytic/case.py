@@ -33,7 +33,8 @@ Vec2 = tuple[float, float]
 FOUR_BAR_PINS = ("A0", "A", "B", "B0")
 SLIDER_CRANK_PINS = ("A0", "A", "B")
 MOVING_LINKS = (2, 3, 4)
-NAME_PATTERN = re.compile(r"^[A-Za-z0-9_-]+$")
+NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 class CaseError(ValueError):
@@ -64,26 +65,61 @@ class CaseError(ValueError):
             where.append(f"case '{self.case}'")
         if self.key:
             where.append(f"key '{self.key}'")
-        return (": ".join(where) + ": " if where else "") + self.message
+        text = (": ".join(where) + ": " if where else "") + self.message
+        # One line whatever the file held: control characters (a newline in a name) are escaped.
+        return _CONTROL.sub(lambda m: repr(m[0])[1:-1], text)
 
 
-def _finite(value: float, key: str) -> float:
+#: The largest magnitude of any value, in SI units (m, N, N·m, kg, kg·m², rad/s …): far
+#: beyond any machine, and far enough below float64's 1e308 that the products the
+#: equations form (m·ω²·length, force·length², length⁴) can neither overflow nor lose
+#: the 1e-9 agreement the backends are held to. A length of 1e155 overflowed; 1e200 N gave NaN.
+MAX_MAGNITUDE = 1e12
+#: The shortest link, m: below a micrometre a link is no drawing of a machine, and lengths
+#: near 1e-300 vanish when squared (the loop equations then divide by zero).
+MIN_LINK_LENGTH = 1e-6
+#: The largest angle, degrees (≈ 278 turns): beyond it sin and cos of a float64 angle lose
+#: the digits the 1e-9 agreement needs.
+MAX_ANGLE_DEG = 1e5
+
+
+def finite(value: float, key: str, limit: float = MAX_MAGNITUDE) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise CaseError(f"must be a number, got {value!r}", key=key)
     if not math.isfinite(value):
         raise CaseError(f"must be finite, got {value!r}", key=key)
+    if abs(value) > limit:
+        raise CaseError(f"must be at most {limit:g} in magnitude (SI units), got {value:g}: "
+                        "no machine is that large, and the arithmetic would overflow", key=key)
     return float(value)
 
 
+def bounded_angle(value: float, key: str) -> float:
+    """An angle in radians, refused (in the file's degrees) beyond ±MAX_ANGLE_DEG."""
+    value = finite(value, key, limit=math.inf)
+    if abs(value) > math.radians(MAX_ANGLE_DEG):
+        raise CaseError(f"must be within ±{MAX_ANGLE_DEG:g}°, got {math.degrees(value):g}°",
+                        key=key)
+    return value
+
+
 def _positive(value: float, key: str) -> float:
-    value = _finite(value, key)
+    value = finite(value, key)
     if value <= 0.0:
         raise CaseError(f"must be > 0, got {value:g}", key=key)
     return value
 
 
+def _link_length(value: float, key: str) -> float:
+    value = _positive(value, key)
+    if value < MIN_LINK_LENGTH:
+        raise CaseError(f"must be at least {MIN_LINK_LENGTH:g} m (a micrometre), got {value:g} m",
+                        key=key)
+    return value
+
+
 def _nonnegative(value: float, key: str) -> float:
-    value = _finite(value, key)
+    value = finite(value, key)
     if value < 0.0:
         raise CaseError(f"must be >= 0, got {value:g}", key=key)
     return value
@@ -92,7 +128,7 @@ def _nonnegative(value: float, key: str) -> float:
 def _vec2(value: Vec2, key: str) -> Vec2:
     if len(value) != 2:
         raise CaseError(f"must be a pair [x, y], got {value!r}", key=key)
-    return (_finite(value[0], f"{key}[0]"), _finite(value[1], f"{key}[1]"))
+    return (finite(value[0], f"{key}[0]"), finite(value[1], f"{key}[1]"))
 
 
 def _link(link: int, key: str) -> int:
@@ -113,7 +149,7 @@ class FourBarGeometry:
 
     def __post_init__(self) -> None:
         for key in ("a1", "a2", "a3", "a4"):
-            object.__setattr__(self, key, _positive(getattr(self, key), f"geometry.{key}"))
+            object.__setattr__(self, key, _link_length(getattr(self, key), f"geometry.{key}"))
 
     @property
     def scale(self) -> float:
@@ -130,9 +166,9 @@ class SliderCrankGeometry:
     offset: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "a2", _positive(self.a2, "geometry.a2"))
-        object.__setattr__(self, "a3", _positive(self.a3, "geometry.a3"))
-        object.__setattr__(self, "offset", _finite(self.offset, "geometry.offset"))
+        object.__setattr__(self, "a2", _link_length(self.a2, "geometry.a2"))
+        object.__setattr__(self, "a3", _link_length(self.a3, "geometry.a3"))
+        object.__setattr__(self, "offset", finite(self.offset, "geometry.offset"))
 
     @property
     def scale(self) -> float:
@@ -159,7 +195,7 @@ class Load:
         object.__setattr__(self, "link", _link(self.link, "link"))
         object.__setattr__(self, "at", _vec2(self.at, "at"))
         object.__setattr__(self, "force", _vec2(self.force, "force"))
-        object.__setattr__(self, "torque", _finite(self.torque, "torque"))
+        object.__setattr__(self, "torque", finite(self.torque, "torque"))
 
 
 @dataclass(frozen=True)
@@ -186,8 +222,8 @@ class Motion:
     alpha: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "omega", _finite(self.omega, "motion.omega"))
-        object.__setattr__(self, "alpha", _finite(self.alpha, "motion.alpha"))
+        object.__setattr__(self, "omega", finite(self.omega, "motion.omega"))
+        object.__setattr__(self, "alpha", finite(self.alpha, "motion.alpha"))
 
     @property
     def is_static(self) -> bool:
@@ -297,7 +333,7 @@ class Case:
             raise error.located(case=self.name, file=self.source) from None
 
     def _validate(self) -> None:
-        if not isinstance(self.name, str) or not NAME_PATTERN.match(self.name):
+        if not isinstance(self.name, str) or not NAME_PATTERN.fullmatch(self.name):
             raise CaseError(f"must use only letters, digits, '-' and '_', got {self.name!r}",
                             key="name")
         if not isinstance(self.geometry, (FourBarGeometry, SliderCrankGeometry)):
@@ -308,8 +344,8 @@ class Case:
         if self.branch not in branches:
             raise CaseError(f"must be one of {', '.join(map(repr, branches))} for a "
                             f"{self.mechanism}, got {self.branch!r}", key="branch")
-        object.__setattr__(self, "theta12", _finite(self.theta12, "theta12"))
-        object.__setattr__(self, "ground_angle", _finite(self.ground_angle, "ground_angle"))
+        object.__setattr__(self, "theta12", bounded_angle(self.theta12, "theta12"))
+        object.__setattr__(self, "ground_angle", bounded_angle(self.ground_angle, "ground_angle"))
         object.__setattr__(self, "gravity", _vec2(self.gravity, "gravity"))
         if self.drive_link not in (2, 4):
             raise CaseError(f"must be 2 or 4, got {self.drive_link!r}", key="drive_link")
@@ -324,9 +360,9 @@ class Case:
                 raise CaseError(f"link {m.link} has more than one mass entry", key=f"masses[{i}].link")
             seen.add(m.link)
         self._validate_friction()
-        from mechcheck.analytic.assembly import check_assembly  # late: assembly needs Case defined
+        from mechcheck.analytic.assembly import check_geometry  # late: assembly needs Case defined
 
-        check_assembly(self)
+        check_geometry(self.geometry)
 
     def _validate_friction(self) -> None:
         f = self.friction

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mechcheck.analytic.assembly import unassembled_verdict
 from mechcheck.analytic.case import Case, FourBarGeometry
 from mechcheck.analytic.equilibrium import (
     SINGULAR_CONDITION,
@@ -145,8 +146,12 @@ class PoseVerdict:
 
 
 def verdict_at(case: Case, results: PoseResults, index: int) -> PoseVerdict | None:
-    """The pose's verdict (singular, indeterminate friction, no solution), or None if regular."""
+    """The pose's verdict (unassembled, singular, indeterminate friction, no solution), or
+    None if regular."""
     cond = float(results.condition[index])
+    if not np.isfinite(results.values["theta13"][index]):
+        status, message = unassembled_verdict(case, float(results.theta12[index]))
+        return PoseVerdict(status, message, cond)
     if results.singular[index]:
         return PoseVerdict("singular", f"condition number {cond:.3g} exceeds "
                            f"{SINGULAR_CONDITION:.0e}: the pose is at or next to a toggle/change "
@@ -197,10 +202,9 @@ def withheld_solution(case: Case, backend: str, verdict: PoseVerdict) -> Solutio
 
 
 def unassemblable_solution(case: Case, backend: str, theta12: float) -> Solution:
-    """What any backend reports at a swept θ12 (rad) where the mechanism cannot be assembled."""
-    return Solution(case.name, backend, {}, status="no_solution",
-                    message=f"the {case.mechanism} cannot be assembled at θ12 = "
-                            f"{np.degrees(theta12):.6g}° ({case.branch} branch)",
+    """What any backend reports at a swept θ12 (rad) where the mechanism has no position."""
+    status, message = unassembled_verdict(case, theta12)
+    return Solution(case.name, backend, {}, status=status, message=message,
                     diagnostics={"theta12": theta12})
 
 

@@ -23,6 +23,15 @@ QUANTITY_UNITS: dict[str, tuple[str, float]] = {
     "s14": ("m", 1.0),
 }
 
+#: The smallest force level, N, against which errors and changes of forces are judged
+#: (times the longest link: of torques). A case without loads has zero forces, and its
+#: simulators report rounding noise instead (1e-13 to 3e-12 N, measured on unloaded
+#: four-bars and slider-cranks): judged against zero that noise would fail every
+#: tolerance and keep every settling run from stopping. A hundredth of a newton, about the
+#: weight of one gram, is below any force a machine's force analysis resolves, and the
+#: noise is below 1e-9 of it, the tightest tolerance of the policy.
+FORCE_FLOOR_N = 0.01
+
 #: The order quantities are written in.
 QUANTITY_ORDER = list(QUANTITY_UNITS)
 

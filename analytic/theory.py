@@ -77,10 +77,15 @@ def grashof(*, ground: float, crank: float, coupler: float, rocker: float) -> Gr
     """
     lengths = {"ground": ground, "crank": crank, "coupler": coupler, "rocker": rocker}
     for key, value in lengths.items():
-        if not value > 0:
-            raise CaseError(f"must be > 0, got {value}", key=key)
+        if not (math.isfinite(value) and value > 0):
+            raise CaseError(f"must be a finite length > 0, got {value}", key=key)
     ordered = sorted(lengths.values())
     s, p, q, l_ = ordered
+    longest = max(lengths, key=lambda k: lengths[k])
+    if l_ >= (s + p + q) * (1 - EQUALITY_RTOL):
+        raise CaseError(f"{l_:g} cannot close a loop with the other three ({s:g} + {p:g} + "
+                        f"{q:g} = {s + p + q:g}): the longest link must be shorter than the "
+                        "other three together", key=longest)
     shortest = min(lengths, key=lambda k: lengths[k])
     total = s + l_ - (p + q)
     if abs(total) <= EQUALITY_RTOL * (s + l_):

@@ -15,6 +15,7 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike
 
+from mechcheck.analytic.assembly import unassembled_verdict
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.equilibrium import JOINT_LINKS, SINGULAR_CONDITION, relative_omega
 from mechcheck.analytic.forces import PoseResults, drive_quantity, pose_values
@@ -105,6 +106,10 @@ def solve(case: Case) -> Solution:
         "method": "power equation", "condition_number": float(results.condition[0]),
         "wall_time_s": time.perf_counter() - start,
     }
+    if not np.isfinite(values["theta13"]):
+        status, message = unassembled_verdict(case, case.theta12)
+        return Solution(case.name, "virtual_work", {}, status=status, message=message,
+                        diagnostics=diagnostics)
     if results.singular[0]:
         del values[drive_quantity(case)]
         return Solution(case.name, "virtual_work", values, status="singular",

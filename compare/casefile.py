@@ -31,6 +31,8 @@ from mechcheck.analytic.case import (
     Mass,
     Motion,
     SliderCrankGeometry,
+    bounded_angle,
+    finite,
 )
 
 Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
@@ -145,7 +147,8 @@ def _force(spec: dict[str, Any] | None, key: str) -> tuple[float, float]:
         return (0.0, 0.0)
     if "magnitude" in spec or "angle" in spec:
         polar = _validated(PolarForceSpec, spec, key)
-        a = math.radians(polar.angle)
+        finite(polar.magnitude, f"{key}.magnitude")
+        a = bounded_angle(math.radians(polar.angle), f"{key}.angle")
         return (polar.magnitude * math.cos(a), polar.magnitude * math.sin(a))
     if "x" in spec or "y" in spec:
         xy = _validated(CartesianForceSpec, spec, key)
@@ -221,17 +224,41 @@ def parse_cases(data: dict[str, Any], source: str) -> list[tuple[Case, CaseSpec]
     return out
 
 
+def read_case_text(path: str | Path) -> str:
+    """The text of a case file: UTF-8 (a byte-order mark is accepted), or one clear error."""
+    source = str(path)
+    try:
+        raw = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise CaseError("no such file", file=source) from None
+    except IsADirectoryError:
+        raise CaseError("is a directory, not a case file", file=source) from None
+    except PermissionError:
+        raise CaseError("cannot be read: permission denied", file=source) from None
+    except OSError as error:  # a symlink loop, a name too long, an I/O error …
+        raise CaseError(f"cannot be read: {error.strerror or error}", file=source) from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise CaseError(f"is not UTF-8 text (byte 0x{raw[error.start]:02x} at offset "
+                        f"{error.start}); TOML files are UTF-8", file=source) from None
+
+
+def parse_toml(text: str, source: str) -> dict[str, Any]:
+    """A TOML document, or one clear error (broken syntax, arrays nested without end)."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise CaseError(f"not valid TOML: {error}", file=source) from None
+    except RecursionError:
+        raise CaseError("not usable TOML: arrays or tables are nested too deeply",
+                        file=source) from None
+
+
 def load_file(path: str | Path) -> list[tuple[Case, CaseSpec]]:
     """Read and validate one case file (all or nothing)."""
     source = str(path)
-    try:
-        with open(path, "rb") as handle:
-            data = tomllib.load(handle)
-    except FileNotFoundError:
-        raise CaseError("no such file", file=source) from None
-    except tomllib.TOMLDecodeError as error:
-        raise CaseError(f"not valid TOML: {error}", file=source) from None
-    return parse_cases(data, source)
+    return parse_cases(parse_toml(read_case_text(path), source), source)
 
 
 def load_specs(paths: Iterable[str | Path]) -> list[tuple[Case, CaseSpec]]:

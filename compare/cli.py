@@ -10,7 +10,9 @@ names the file, the case and the key.
 
 from __future__ import annotations
 
+import os
 import shutil
+import signal
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -25,7 +27,10 @@ from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
 # that need them, so that `mechcheck --help` and `mechcheck backends` start fast
 # (benchmarks/bench_startup.py).
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
+#: The exit status of a crash inside mechcheck (0 agree, 1 disagree, 2 unusable input).
+INTERNAL_ERROR = 3
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Validate planar force analysis against MuJoCo and pymunk.")
 
 
@@ -85,6 +90,7 @@ def run_command(
             registry.load(name)
     except registry.BackendUnavailable as error:
         raise fail_input(str(error)) from None
+    check_outputs(out, junit)
     cases = [case for case, _ in specs]
     progress = None if quiet else progress_printer()
     result = run(cases, names, progress=progress, fail_on=verdicts)
@@ -98,11 +104,20 @@ def run_command(
     })
     if junit is not None:
         write_all(junit.parent, {junit.name: junit_xml(result)})
-    failed = len(result.failed_comparisons)
-    typer.echo(f"{len(cases)} cases, {len(result.detail)} comparisons, {failed} outside "
-               f"tolerance, {len(result.failing_verdicts)} failing verdicts "
-               f"-> {out}/report.md ({'PASS' if result.exit_status == 0 else 'FAIL'})")
+    typer.echo(f"{result.summary} -> {out}/report.md")
     raise typer.Exit(result.exit_status)
+
+
+def check_outputs(out: Path, junit: Path | None) -> None:
+    """Refuse, before any computing, an ``--out`` or ``--junit`` that cannot be written."""
+    from mechcheck.output import OutputError, check_writable_directory, check_writable_file
+
+    try:
+        check_writable_directory(out, "--out")
+        if junit is not None:
+            check_writable_file(junit, "--junit")
+    except OutputError as error:
+        raise fail_input(str(error)) from None
 
 
 @app.command("sweep")
@@ -143,6 +158,10 @@ def sweep_command(
         tasks = plan([c for c, _ in specs], names, grid)
     except (CaseError, ValueError, registry.BackendUnavailable) as error:
         raise fail_input(str(error)) from None
+    check_outputs(out, junit)
+    # SIGTERM (a CI job cancelled, `kill`) unwinds like Ctrl-C: the pool is shut down and
+    # its workers terminated on the way out, instead of being orphaned.
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     if fresh:
         for folder in ("results", "status"):
             shutil.rmtree(out / folder, ignore_errors=True)
@@ -220,7 +239,19 @@ _add_theory()
 
 
 def main() -> None:
-    app()
+    """The console script. An exception that escapes a command is a bug in mechcheck: it
+    gets one line and exit status 3, so that CI never mistakes it for a disagreement (1)
+    or bad input (2). ``MECHCHECK_TRACEBACK=1`` shows the traceback instead."""
+    try:
+        app()
+    except KeyboardInterrupt:
+        sys.exit(130)
+    except Exception as error:
+        if os.environ.get("MECHCHECK_TRACEBACK"):
+            raise
+        sys.stderr.write(f"mechcheck: internal error: {type(error).__name__}: {error} (this is a "
+                         "bug; please report it; MECHCHECK_TRACEBACK=1 shows the traceback)\n")
+        sys.exit(INTERNAL_ERROR)
 
 
 if __name__ == "__main__":

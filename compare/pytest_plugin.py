@@ -78,7 +78,7 @@ def _may_hold_cases(path: Path) -> bool:
     try:
         with open(path, "rb") as handle:
             return "case" in tomllib.load(handle)
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+    except (OSError, ValueError, RecursionError):  # unreadable, not UTF-8, not TOML
         return True
 
 

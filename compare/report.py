@@ -19,9 +19,10 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import CaseSpec
+from mechcheck.output import file_stem
 from mechcheck.run import RunResult
 from mechcheck.seeds import SeedRow, derived_value
-from mechcheck.tables import in_table_units, ordered
+from mechcheck.tables import ordered, table_value
 from mechcheck.tolerance import policy_table
 
 _ENV = jinja2.Environment(
@@ -87,7 +88,7 @@ def case_view(case: Case, spec: CaseSpec | None, solutions: list[Solution],
         for s in solutions:
             hit = mine[(mine["quantity"] == q) & (mine["backend"] == s.backend)]
             cells.append({
-                "value": in_table_units(q, s.values[q]) if q in s.values else None,
+                "value": table_value(q, s.values[q]) if q in s.values else None,
                 "rel_err": float(hit["rel_err"].iloc[0]) if len(hit) else None,
                 "passed": bool(hit["passed"].iloc[0]) if len(hit) else None,
                 "tolerance": float(hit["tolerance"].iloc[0]) if len(hit) else None,
@@ -130,6 +131,7 @@ def view_model(result: RunResult, specs: dict[str, CaseSpec], title: str) -> dic
         "passed": result.exit_status == 0,
         "n_cases": len(result.cases),
         "n_comparisons": len(result.detail),
+        "nothing_compared": result.nothing_compared,
         "n_failed": len(failed),
         "wall_time_s": result.wall_time_s,
         "fail_on": ", ".join(result.fail_on),
@@ -196,7 +198,7 @@ def sweep_view_model(cases: list[Case], specs: dict[str, CaseSpec], statuses: pd
         case_views.append({
             "name": case.name, "description": spec.description if spec else "",
             "mechanism": case.mechanism, "kind": case.kind,
-            "figure": f"{case.name}.png",
+            "figure": f"{file_stem(case.name)}.png",
             "figure_b64": base64.b64encode(figures[case.name]).decode(),
             "singular": _pose_list(ref.loc[ref["status"] == "singular", "theta12"]),
             "indeterminate": _pose_list(ref.loc[ref["status"] == "indeterminate", "theta12"]),

@@ -6,6 +6,8 @@ not (or a backend verdict listed in ``fail_on``), 2 unusable input.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 import traceback
 from collections.abc import Sequence
@@ -47,14 +49,54 @@ class RunResult:
     def exit_status(self) -> int:
         return 1 if len(self.failed_comparisons) or self.failing_verdicts else 0
 
+    @property
+    def nothing_compared(self) -> str | None:
+        """Why no number was compared with the reference, or None when something was."""
+        if len(self.detail):
+            return None
+        if not {s.backend for s in self.solutions} - {registry.REFERENCE}:
+            return f"only the reference backend ({registry.REFERENCE}) ran"
+        return "no backend gave a number the reference gave too (see the verdicts)"
+
+    @property
+    def summary(self) -> str:
+        """The run in one line, as the command line prints it."""
+        word = "PASS" if self.exit_status == 0 else "FAIL"
+        n = f"{len(self.cases)} case{'s' if len(self.cases) != 1 else ''}"
+        verdicts = f"{len(self.failing_verdicts)} failing verdicts"
+        if self.nothing_compared:
+            return f"{n}, nothing compared: {self.nothing_compared}; {verdicts} ({word})"
+        return (f"{n}, {len(self.detail)} comparisons, {len(self.failed_comparisons)} outside "
+                f"tolerance, {verdicts} ({word})")
+
 
 def call_backend(backend: registry.Backend, name: str, case: Case) -> Solution:
-    """Run one backend; a crash becomes an ``error`` verdict, not a lost run."""
+    """Run one backend; a crash becomes an ``error`` verdict, not a lost run, and a number
+    that is not finite never passes (:func:`finite_only`)."""
     try:
-        return backend(case)
+        return finite_only(backend(case))
     except Exception as error:
         last = traceback.format_exception_only(error)[-1].strip()
         return Solution(case.name, name, {}, status="error", message=last)
+
+
+def finite_only(solution: Solution) -> Solution:
+    """A Solution whose every value is finite.
+
+    A backend that has a verdict simply has no number for what is not finite (the
+    contract writes no row rather than a NaN). A backend that claims ``ok`` with a
+    NaN or an infinity has failed: its verdict becomes ``error``, naming the quantities.
+    """
+    bad = [q for q, v in solution.values.items() if not math.isfinite(v)]
+    if not bad:
+        return solution
+    finite = {q: v for q, v in solution.values.items() if math.isfinite(v)}
+    if solution.status != "ok":
+        return dataclasses.replace(solution, values=finite)
+    return dataclasses.replace(
+        solution, values={}, status="error",
+        message=f"{solution.backend} produced non-finite {', '.join(bad)} (NaN or infinity): "
+                "the numbers overflowed or the method broke down; no number is reported")
 
 
 def run(cases: Sequence[Case], backend_names: Sequence[str], *,

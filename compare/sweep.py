@@ -18,6 +18,7 @@ import functools
 import hashlib
 import importlib
 import io
+import math
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass
@@ -28,10 +29,15 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from mechcheck.analytic.case import Case
+from mechcheck.analytic.case import MAX_ANGLE_DEG, Case
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
 from mechcheck.backends import REFERENCE, REGISTRY, BackendUnavailable
-from mechcheck.output import write_all
+from mechcheck.output import file_stem, write_all
+from mechcheck.tables import table_values
+
+#: The most poses a sweep takes per case: ten times the 10⁶-pose analytic sweep the
+#: benchmarks time (about 8 s); a larger grid is far more likely a typo than a plan.
+MAX_SWEEP_POSES = 10_000_000
 
 #: Bump when the part format or a backend's meaning changes: old parts are then ignored.
 PART_FORMAT = 1
@@ -73,7 +79,7 @@ class SweepTask:
 
     @property
     def part_name(self) -> str:
-        return f"{self.case.name}__{self.backend}__{self.chunk:05d}__{self.digest}"
+        return f"{file_stem(self.case.name)}__{self.backend}__{self.chunk:05d}__{self.digest}"
 
 
 @functools.cache
@@ -100,17 +106,29 @@ def task_digest(case: Case, backend: str, theta12_deg: np.ndarray) -> str:
 
 
 def parse_range(text: str) -> np.ndarray:
-    """``START:STOP:STEP`` in degrees, STOP excluded (``0:360:1`` → 360 poses)."""
+    """``START:STOP:STEP`` in degrees: START, START + STEP, … every value below STOP.
+
+    STOP itself is excluded (``0:360:1`` is 360 poses, and a whole turn does not
+    visit 0° twice), also where rounding puts it a hair inside; ``0:10:3`` is
+    0, 3, 6, 9. A grid of more than :data:`MAX_SWEEP_POSES` poses is refused.
+    """
+    option = f"--theta12 {text!r}"
     try:
         start, stop, step = (float(p) for p in text.split(":"))
     except ValueError:
-        raise ValueError(f"--theta12 must be START:STOP:STEP in degrees, got {text!r}") from None
+        raise ValueError(f"{option}: must be START:STOP:STEP in degrees, e.g. 0:360:1") from None
+    if not all(math.isfinite(v) for v in (start, stop, step)):
+        raise ValueError(f"{option}: START, STOP and STEP must be finite numbers")
     if step <= 0 or stop <= start:
-        raise ValueError(f"--theta12 {text!r}: need STOP > START and STEP > 0")
-    count = int(np.floor((stop - start) / step + 1e-9))
-    values: np.ndarray = start + step * np.arange(max(count, 1))
-    values = values[values < stop - 1e-12 * max(1.0, abs(stop))]
-    return values
+        raise ValueError(f"{option}: needs STOP > START and STEP > 0")
+    if max(abs(start), abs(stop)) > MAX_ANGLE_DEG:
+        raise ValueError(f"{option}: angles must lie within ±{MAX_ANGLE_DEG:g}°")
+    steps = (stop - start) / step
+    count = math.ceil(steps - 1e-9 * max(1.0, steps))
+    if count > MAX_SWEEP_POSES:
+        raise ValueError(f"{option}: {count:,} poses; a sweep takes at most "
+                         f"{MAX_SWEEP_POSES:,} per case (use a larger STEP)")
+    return start + step * np.arange(count, dtype=float)
 
 
 def _resolve(target: str) -> Callable[..., Any]:
@@ -152,10 +170,10 @@ def _long_frame(case: str, backend: str, theta_deg: np.ndarray,
     """
     thetas, vals, q_codes, u_codes = [], [], [], []
     for quantity, array in values.items():
-        unit, factor = QUANTITY_UNITS[quantity]
+        unit = QUANTITY_UNITS[quantity][0]
         ok = np.isfinite(array)
         thetas.append(theta_deg[ok])
-        vals.append(array[ok] * factor)
+        vals.append(table_values(quantity, array[ok]))
         q_codes.append(np.full(int(ok.sum()), QUANTITIES.index(quantity), dtype=np.int8))
         u_codes.append(np.full(int(ok.sum()), UNITS.index(unit), dtype=np.int8))
     if not thetas:
@@ -273,6 +291,24 @@ def part_paths(out_dir: Path, task: SweepTask) -> tuple[Path, Path]:
             out_dir / "status" / f"{task.part_name}.parquet")
 
 
+def prune_stale_parts(parts_dir: Path, tasks: Sequence[SweepTask]) -> int:
+    """Delete the parts that belong to no task of this sweep; returns how many.
+
+    Parts of an earlier run whose case, backend, angles or software changed would
+    otherwise sit beside the new ones, and ``pandas.read_parquet("DIR/results")``
+    would return both. What stays is this sweep's finished work, which it resumes
+    from; half-written temporary files of a killed run go too.
+    """
+    current = {t.part_name for t in tasks}
+    removed = 0
+    for folder in ("results", "status"):
+        for path in (parts_dir / folder).glob("*"):
+            if path.is_file() and (path.name.startswith(".") or path.stem not in current):
+                path.unlink()
+                removed += 1
+    return removed
+
+
 def is_done(parts_dir: Path, task: SweepTask) -> bool:
     """A task is done when its status part exists: it is renamed into place last."""
     return part_paths(parts_dir, task)[1].exists()
@@ -285,6 +321,7 @@ def run_sweep(tasks: Sequence[SweepTask], parts_dir: Path, executor: Executor, *
     An interrupted sweep keeps every part already written; running the same
     sweep again executes only the missing tasks.
     """
+    prune_stale_parts(parts_dir, tasks)
     todo = [t for t in tasks if not is_done(parts_dir, t)]
     total_poses = sum(len(t.theta12_deg) for t in tasks)
     done_poses = total_poses - sum(len(t.theta12_deg) for t in todo)

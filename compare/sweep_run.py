@@ -15,7 +15,7 @@ from mechcheck.casefile import CaseSpec
 from mechcheck.executors import executor_for
 from mechcheck.figures import sweep_figure
 from mechcheck.junit import junit_sweep_xml
-from mechcheck.output import write_all
+from mechcheck.output import file_stem, write_all
 from mechcheck.report import render_sweep, sweep_view_model
 from mechcheck.sweep import SweepOutcome, SweepTask, run_sweep
 from mechcheck.tables import sweep_comparison
@@ -67,7 +67,7 @@ def run_sweep_command(specs: list[tuple[Case, CaseSpec]], tasks: list[SweepTask]
                              executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)
     markdown, page = render_sweep(model)
     files: dict[str, str | bytes] = {"report.md": markdown, "report.html": page}
-    write_all(out / "figures", {f"{name}.png": png for name, png in figures.items()})
+    write_all(out / "figures", {f"{file_stem(name)}.png": png for name, png in figures.items()})
     comparison_buffer = comparison.to_parquet(index=False)
     assert comparison_buffer is not None
     files["comparison.parquet"] = comparison_buffer

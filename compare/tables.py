@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import QUANTITY_ORDER, QUANTITY_UNITS, Solution, quantity_kind
+from mechcheck.analytic.solution import FORCE_FLOOR_N, QUANTITY_ORDER, QUANTITY_UNITS, Solution, quantity_kind
 from mechcheck.backends import REFERENCE
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, case_kind, tolerance_for
 
@@ -21,13 +21,27 @@ COMPARISON_COLUMNS = ["case", "quantity", "backend", "value", "reference", "abs_
                       "rel_err", "tolerance", "passed"]
 DIAGNOSTIC_COLUMNS = ["case", "backend", "status", "key", "value"]
 
-#: Smallest scale an error is measured against (N, N·m): a case without loads
-#: has zero reactions, and its simulator noise must not divide by zero.
-SCALE_FLOOR = 1e-9
+#: Smallest scale a force error is measured against, N (torques: times the longest
+#: link): :data:`~mechcheck.analytic.solution.FORCE_FLOOR_N`, the weight of about a gram.
+SCALE_FLOOR = FORCE_FLOOR_N
 
 
 def in_table_units(quantity: str, value: float) -> float:
+    """A value or a difference in the unit of the tables (radians → degrees)."""
     return value * QUANTITY_UNITS[quantity][1]
+
+
+def table_values(quantity: str, values: np.ndarray) -> np.ndarray:
+    """Values as the tables show them: in table units, angles wrapped to [−180°, 180°)
+    (CONVENTIONS.md), so that every backend spells one angle one way."""
+    unit, factor = QUANTITY_UNITS[quantity]
+    out = np.asarray(values, dtype=float) * factor
+    return (out + 180.0) % 360.0 - 180.0 if unit == "deg" else out
+
+
+def table_value(quantity: str, value: float) -> float:
+    """:func:`table_values` for one number."""
+    return float(table_values(quantity, np.array(value)))
 
 
 def ordered(values: Iterable[str]) -> list[str]:
@@ -36,7 +50,7 @@ def ordered(values: Iterable[str]) -> list[str]:
 
 def results_frame(solutions: Sequence[Solution]) -> pd.DataFrame:
     """One row per reported number; absent quantities have no row."""
-    rows = [(s.case, s.backend, q, in_table_units(q, s.values[q]), QUANTITY_UNITS[q][0])
+    rows = [(s.case, s.backend, q, table_value(q, s.values[q]), QUANTITY_UNITS[q][0])
             for s in solutions for q in ordered(s.values)]
     return pd.DataFrame(rows, columns=RESULT_COLUMNS)
 
@@ -81,7 +95,7 @@ def comparison_rows(case: Case, reference: Solution, other: Solution) -> list[di
         tol = tolerance_for(case, other.backend, q, kind)
         rows.append({
             "case": case.name, "quantity": q, "backend": other.backend,
-            "value": in_table_units(q, val), "reference": in_table_units(q, ref),
+            "value": table_value(q, val), "reference": table_value(q, ref),
             "abs_err": in_table_units(q, abs_err), "rel_err": rel_err,
             "tolerance": tol.rtol,
             "passed": bool(rel_err <= tol.rtol or abs_err <= tol.atol),

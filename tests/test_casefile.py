@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -62,8 +63,8 @@ BAD_INPUTS = [
     ("bad-branch", FOURBAR.replace("theta12 = 60.0", "theta12 = 60.0\nbranch = 'left'"),
      "branch", "open"),
     ("bad-name", FOURBAR.replace('name = "bad"', 'name = "bad name!"'), "name", "letters"),
-    ("cannot-assemble", FOURBAR.replace("a1 = 140.0", "a1 = 340.0"), "theta12",
-     "cannot be assembled"),
+    ("never-assembles", FOURBAR.replace("a1 = 140.0", "a1 = 340.0"), "geometry",
+     "cannot be assembled at any θ12: a link is longer than the other three together"),
     ("bad-force-form", FOURBAR.replace("force = { magnitude = 100.0, angle = 20.0 }",
                                        "force = { r = 1.0 }"), "loads[0].force", "magnitude"),
 ]
@@ -91,18 +92,38 @@ def test_bad_input_exits_2_naming_file_case_and_key(tmp_path: Path, text: str, k
     assert not out.exists(), "a file with a bad case must produce no output at all"
 
 
-def test_unassemblable_pose_says_which_range_assembles(tmp_path: Path) -> None:
-    """The error for a pose that cannot be assembled states the θ12 range that can."""
+def test_unassemblable_pose_is_a_no_solution_verdict_naming_the_range(tmp_path: Path) -> None:
+    """A θ12 outside the range that assembles is a `no_solution` verdict for that case, stating
+    the θ12 range that does assemble (rounded inward), while the other cases of the run still run."""
     # a1 = 300, a2 = 100, a3 = 150, a4 = 100: d = |AB0| must lie in [50, 250];
     # d² = 300² + 100² − 2·300·100·cos θ12 = 100000 − 60000 cos θ12 ≤ 62500 needs
-    # cos θ12 ≥ 0.625, i.e. |θ12| ≤ acos(0.625) = 51.32° (d ≥ 50 always holds).
+    # cos θ12 ≥ 0.625, i.e. |θ12| ≤ acos(0.625) = 51.3178125°, printed inward as 51.3178°.
     path = tmp_path / "c.toml"
-    path.write_text(FOURBAR.replace("a1 = 140.0", "a1 = 300.0").replace("a2 = 80.0", "a2 = 100.0")
-                    .replace("a3 = 100.0", "a3 = 150.0").replace("a4 = 120.0", "a4 = 100.0")
-                    .replace("theta12 = 60.0", "theta12 = 120.0"))
-    code, err = run_cli(["run", str(path), "-q", "--out", str(tmp_path / "o")])
-    assert code == 2
-    assert "[-51.32°, 51.32°]" in err, err
+    path.write_text(GOOD + FOURBAR.replace("a1 = 140.0", "a1 = 300.0")
+                    .replace("a2 = 80.0", "a2 = 100.0").replace("a3 = 100.0", "a3 = 150.0")
+                    .replace("a4 = 120.0", "a4 = 100.0").replace("theta12 = 60.0", "theta12 = 120.0"))
+    out = tmp_path / "o"
+    code, _ = run_cli(["run", str(path), "-q", "-b", "virtual_work", "--out", str(out)])
+    assert code == 0
+    diagnostics = pd.read_csv(out / "diagnostics.csv")
+    bad = diagnostics[(diagnostics["case"] == "bad") & (diagnostics["key"] == "message")]
+    assert set(diagnostics[diagnostics["case"] == "bad"]["status"]) == {"no_solution"}
+    assert len(bad) == 2 and all("[-51.3178°, 51.3178°]" in m for m in bad["value"])
+    assert set(pd.read_csv(out / "comparison.csv")["case"]) == {"good"}
+    code, _ = run_cli(["run", str(path), "-q", "-b", "virtual_work", "--out", str(out),
+                       "--fail-on", "no_solution"])
+    assert code == 1
+
+
+def test_printed_range_endpoints_assemble(tmp_path: Path) -> None:
+    """Entering an endpoint of the printed range is accepted: the endpoints are rounded inward."""
+    path = tmp_path / "c.toml"
+    geometry = (FOURBAR.replace("a1 = 140.0", "a1 = 300.0").replace("a2 = 80.0", "a2 = 100.0")
+                .replace("a3 = 100.0", "a3 = 150.0").replace("a4 = 120.0", "a4 = 100.0"))
+    path.write_text(geometry.replace("theta12 = 60.0", "theta12 = 51.3178"))
+    out = tmp_path / "o"
+    assert run_cli(["run", str(path), "-q", "-b", "analytic", "--out", str(out)])[0] == 0
+    assert set(pd.read_csv(out / "diagnostics.csv")["status"]) == {"ok"}
 
 
 def test_duplicate_case_names_across_files(tmp_path: Path) -> None:

@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.kinematics import pose_of
-from mechcheck.analytic.solution import quantity_kind
+from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
 from mechcheck.sim_models.mujoco.model import STATIC, Layout, Settings, compile_model
 
 Array = NDArray[np.float64]
@@ -300,4 +300,4 @@ def disagreement(a: dict[str, float], b: dict[str, float], length: float) -> flo
         return np.array([x / length if quantity_kind(q) == "torque" else x
                          for q, x in v.items() if quantity_kind(q) != "pose"])
     va, vb = vector(a), vector(b)
-    return float(np.abs(va - vb).max()) / max(float(np.abs(vb).max()), 1e-300)
+    return float(np.abs(va - vb).max()) / max(float(np.abs(vb).max()), FORCE_FLOOR_N)

@@ -36,7 +36,7 @@ import mujoco
 import numpy as np
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import Solution, quantity_kind
+from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
 from mechcheck.sim_models.mujoco.rig import Rig, disagreement
 
 #: Settled when the forces' remaining change, estimated from their observed
@@ -172,7 +172,7 @@ class DecayWatch:
         # Plain floats: a handful of numbers per step, where numpy's call
         # overhead would dominate the step's cost.
         values = current.tolist()
-        size = max(max(map(abs, values)), 1e-300)
+        size = max(max(map(abs, values)), FORCE_FLOOR_N)  # an unloaded case settles too
         if self.readings:
             previous = self.readings[-1]
             self.changes.append(max(abs(a - b) for a, b in zip(values, previous, strict=True))

@@ -15,7 +15,7 @@ from functools import partial
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mechcheck.analytic.case import Case, CaseError
+from mechcheck.analytic.case import Case
 from mechcheck.analytic.forces import (
     PoseVerdict,
     pose_verdicts,
@@ -30,14 +30,6 @@ from mechcheck.sim_models.mujoco.settle import settle_static
 from mechcheck.sim_models.mujoco.solve import exact_rig, solve_at_pose, solve_state
 
 BACKENDS = ("mujoco", "mujoco_solve")
-
-
-def pose_case(case: Case, theta12: float) -> Case | None:
-    """The Case at another θ12, or None where it cannot be assembled."""
-    try:
-        return case.with_(theta12=float(theta12))
-    except CaseError:
-        return None
 
 
 def sweep(case: Case, theta12: ArrayLike, backend: str = "mujoco") -> list[Solution]:
@@ -57,13 +49,11 @@ def sweep(case: Case, theta12: ArrayLike, backend: str = "mujoco") -> list[Solut
         return exact_sweep(case, angles, verdicts, rig)
     out = []
     for t, verdict in zip(angles, verdicts, strict=True):
-        at = pose_case(case, t)
-        if at is None:
-            out.append(unassemblable_solution(case, backend, float(t)))
-        elif verdict is not None:
+        # Unassembled poses and change points have their verdict too (pose_verdicts).
+        if verdict is not None:
             out.append(withheld_solution(case, backend, verdict))
         else:
-            out.append(solve_one(at, backend, rig))
+            out.append(solve_one(case.with_(theta12=float(t)), backend, rig))
     return out
 
 

@@ -55,7 +55,7 @@ import pymunk
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.kinematics import pose_of
-from mechcheck.analytic.solution import Solution
+from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.pymunk.friction import (
     apply_viscous_pin_moments,
     sign,
@@ -371,7 +371,7 @@ def _force_table(readings: list[Reading], length: float) -> np.ndarray:
 
 def _relative_difference(readings: list[Reading], order: int, length: float) -> float:
     table = _force_table(readings, length)
-    scale = max(float(np.abs(table[-1]).max()), 1e-300)
+    scale = max(float(np.abs(table[-1]).max()), FORCE_FLOOR_N)  # an unloaded case is smooth too
     return float(np.abs(np.diff(table, n=order, axis=0)).max()) / scale
 
 
@@ -394,7 +394,7 @@ def force_change(new: Values, old: Values, length: float) -> float:
     """Largest difference of forces (torques / length) between two readings, relative to their scale."""
     names = [q for q in new if q[0] in "FTM"]
     unit = {q: length if q[0] in "TM" else 1.0 for q in names}
-    scale = max(max(abs(new[q]) / unit[q] for q in names), 1e-300)
+    scale = max(max(abs(new[q]) / unit[q] for q in names), FORCE_FLOOR_N)
     return max(abs(new[q] - old[q]) / unit[q] for q in names) / scale
 
 

@@ -13,7 +13,7 @@ import time
 from dataclasses import dataclass
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import Solution
+from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.pymunk.loads import apply_loads
 from mechcheck.sim_models.pymunk.model import Model, build_model
 from mechcheck.sim_models.pymunk.readout import (
@@ -45,7 +45,7 @@ class Run:
 def force_scale(values: Values, length: float) -> float:
     """The largest force, or torque / length, in a reading (N); the unit of 'change'."""
     sizes = [abs(v) / length if q.startswith(("T", "M")) else abs(v) for q, v in values.items()]
-    return max(max(sizes, default=0.0), 1e-300)
+    return max(max(sizes, default=0.0), FORCE_FLOOR_N)  # an unloaded case settles too
 
 
 def relative_change(new: Values, old: Values, length: float) -> float:
