@@ -108,13 +108,13 @@ def unknowns_to_values(case: Case, pose: Pose, x: Array) -> dict[str, Array]:
     return out
 
 
-def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
+def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults:
     """Static or dynamic force analysis of ``case`` at each θ12 (rad).
 
     Poses beyond :data:`~mechcheck.analytic.equilibrium.SINGULAR_CONDITION`, and
     friction poses whose Newton iteration did not converge, get NaN forces.
     """
-    angles = as_angles(case.theta12 if theta12 is None else theta12)
+    angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
     pose = pose_of(case, angles)
     cond = condition(case, pose)
     b = known_vector(case, pose)
@@ -168,9 +168,9 @@ def verdict_at(case: Case, results: PoseResults, index: int) -> PoseVerdict | No
     return None
 
 
-def pose_verdicts(case: Case, theta12: ArrayLike | None = None) -> list[PoseVerdict | None]:
+def pose_verdicts(case: Case, theta12_rad: ArrayLike | None = None) -> list[PoseVerdict | None]:
     """:func:`verdict_at` for every θ12 (rad); simulators use it to skip such poses."""
-    results = solve_poses(case, theta12)
+    results = solve_poses(case, theta12_rad)
     return [verdict_at(case, results, i) for i in range(results.theta12.shape[0])]
 
 

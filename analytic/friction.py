@@ -113,8 +113,11 @@ def residual_terms(case: Case, pose: Pose, terms: list[CoulombTerm],
         c0, c1 = PIN_COLUMNS[t.joint]
         mag = np.hypot(x[:, c0], x[:, c1])
         moment = -t.coefficient * mag * t.sense
+        # d|F|/dF = F/|F|; divided componentwise, so that a denormal |F| cannot overflow
+        # (1/|F| did, with a RuntimeWarning, in random identities).
         safe = np.where(mag > 0.0, mag, 1.0)
-        grad = (-t.coefficient * t.sense / safe)[:, None] * x[:, [c0, c1]]
+        gain = np.broadcast_to(-t.coefficient * t.sense, mag.shape)
+        grad = gain[:, None] * (x[:, [c0, c1]] / safe[:, None])
         for link, sign in ((j, 1.0), (i, -1.0)):
             if link == 1:
                 continue

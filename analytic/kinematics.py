@@ -90,7 +90,7 @@ def as_angles(theta12: ArrayLike) -> Array:
     return np.atleast_1d(np.asarray(theta12, dtype=float))
 
 
-def pose_of(case: Case, theta12: ArrayLike | None = None, *,
+def pose_of(case: Case, theta12_rad: ArrayLike | None = None, *,
             omega: float | None = None, alpha: float | None = None) -> Pose:
     """The pose of ``case`` at its own θ12, or at an array of them.
 
@@ -99,7 +99,7 @@ def pose_of(case: Case, theta12: ArrayLike | None = None, *,
     """
     from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
 
-    angles = as_angles(case.theta12 if theta12 is None else theta12)
+    angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
     w = case.motion.omega if omega is None else omega
     a = case.motion.alpha if alpha is None else alpha
     if isinstance(case.geometry, FourBarGeometry):

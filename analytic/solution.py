@@ -12,6 +12,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Literal
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 Status = Literal["ok", "singular", "indeterminate", "not_settled", "not_applicable", "no_solution",
                  "error"]
 
@@ -36,6 +39,19 @@ FORCE_FLOOR_N = 0.01
 QUANTITY_ORDER = list(QUANTITY_UNITS)
 
 
+def table_values(quantity: str, values: ArrayLike) -> np.ndarray:
+    """Values as the tables show them: in table units (degrees for angles), angles wrapped
+    to [−180°, 180°) (CONVENTIONS.md), so that every backend spells one angle one way."""
+    unit, factor = QUANTITY_UNITS[quantity]
+    out = np.asarray(values, dtype=float) * factor
+    return (out + 180.0) % 360.0 - 180.0 if unit == "deg" else out
+
+
+def table_value(quantity: str, value: float) -> float:
+    """:func:`table_values` for one number."""
+    return float(table_values(quantity, value))
+
+
 def quantity_kind(quantity: str) -> str:
     """``torque``, ``force`` or ``pose``: the tolerance policy's quantity kind."""
     if quantity in ("T12", "T14", "M14"):
@@ -58,6 +74,10 @@ class Solution:
     friction), ``no_solution`` (e.g. the friction equations lock).
     ``diagnostics`` says how trustworthy the numbers are (condition number,
     iterations, steps, wall time, residuals …).
+
+    ``values`` are SI with angles in **radians** (N, N·m, m, rad), as every
+    backend computes them; :meth:`in_table_units` gives them as the tables show
+    them (degrees).
     """
 
     case: str
@@ -66,6 +86,10 @@ class Solution:
     status: Status = "ok"
     message: str = ""
     diagnostics: Mapping[str, float | str] = field(default_factory=dict)
+
+    def in_table_units(self) -> dict[str, float]:
+        """``values`` as the tables show them: N, N·m, m, and degrees wrapped to [−180°, 180°)."""
+        return {q: table_value(q, v) for q, v in self.values.items()}
 
     def __post_init__(self) -> None:
         unknown = set(self.values) - set(QUANTITY_UNITS)

@@ -23,11 +23,11 @@ REFUSAL = ("superposition applies only to frictionless (linear) systems; this ca
            "single-load solutions would be wrong")
 
 
-def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
+def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults:
     """Sum of the single-load solutions at each θ12 (rad)."""
     if case.has_coulomb_friction:
         raise ValueError(REFUSAL)
-    angles = as_angles(case.theta12 if theta12 is None else theta12)
+    angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
     pose = pose_of(case, angles)
     x = np.zeros((angles.shape[0], 9))
     for _, b in known_vectors(case, pose):

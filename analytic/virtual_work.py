@@ -68,7 +68,7 @@ def transmission_sine(case: Case, pose: Pose) -> Array:
     return np.abs(np.cos(pose.theta13 - case.ground_angle))
 
 
-def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
+def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults:
     """The drive torque at each θ12 (rad); NaN where the power equation is singular.
 
     The power method's own measures of singularity: velocity ratios exist only
@@ -78,7 +78,7 @@ def solve_poses(case: Case, theta12: ArrayLike | None = None) -> PoseResults:
     """
     if case.has_coulomb_friction:
         raise ValueError(REFUSAL)
-    angles = as_angles(case.theta12 if theta12 is None else theta12)
+    angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
     torque, omega_d = drive_torque(case, angles)
     pose = pose_of(case, angles, omega=0.0, alpha=0.0)
     virtual = pose_of(case, angles, omega=1.0, alpha=0.0)

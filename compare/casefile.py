@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic_core import ErrorDetails
 
 from mechcheck.analytic.case import (
     Case,
@@ -132,6 +133,34 @@ def _key(loc: Sequence[int | str]) -> str:
     return out
 
 
+def _in_user_terms(error: ErrorDetails) -> str:
+    """pydantic's complaint, said in the terms of the case file (TOML keys, values, tables)."""
+    kind, ctx, given = error["type"], error.get("ctx") or {}, error.get("input")
+    if kind == "extra_forbidden":
+        return "unknown key: not part of the case-file format ('mechcheck new' writes an example)"
+    if kind == "missing":
+        return "is required but missing"
+    if kind in ("float_type", "float_parsing", "int_type", "int_parsing", "bool_type"):
+        return f"must be a number, got {given!r}"
+    if kind == "finite_number":
+        return f"must be finite, got {given!r}"
+    if kind == "string_type":
+        return f"must be a text in quotes, got {given!r}"
+    if kind == "literal_error":
+        return f"must be {ctx.get('expected')}, got {given!r}"
+    if kind in ("too_short", "too_long"):
+        bound = ctx.get("min_length", ctx.get("max_length"))
+        what = "a pair [x, y]" if bound == 2 else f"a list of {bound} values"
+        return f"must be {what}, got {ctx.get('actual_length')} value(s)"
+    if kind in ("model_type", "dict_type", "model_attributes_type"):
+        return f"must be a table ({{ key = value, … }} or a [section]), got {given!r}"
+    if kind == "list_type":
+        return f"must be a list ([ … ], or [[…]] tables), got {given!r}"
+    if kind == "greater_than_equal":
+        return f"must be >= {ctx.get('ge')}, got {given!r}"
+    return str(error["msg"])
+
+
 def _validated(model: type[_Strict], data: Any, prefix: str = "") -> Any:
     try:
         return model.model_validate(data)
@@ -139,7 +168,7 @@ def _validated(model: type[_Strict], data: Any, prefix: str = "") -> Any:
         first = error.errors()[0]
         key = _key(first["loc"])
         key = f"{prefix}.{key}" if prefix and key else (key or prefix)
-        raise CaseError(first["msg"], key=key) from None
+        raise CaseError(_in_user_terms(first), key=key) from None
 
 
 def _force(spec: dict[str, Any] | None, key: str) -> tuple[float, float]:

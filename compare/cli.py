@@ -34,6 +34,14 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
                   help="Validate planar force analysis against MuJoCo and pymunk.")
 
 
+#: The mechanisms `mechcheck new` has a commented example of (compare/examples/).
+EXAMPLES = ("four_bar", "slider_crank")
+
+
+def example_path(mechanism: str) -> Path:
+    return Path(__file__).parent / "examples" / f"{mechanism}.toml"
+
+
 def fail_input(message: str) -> typer.Exit:
     """One clear line on stderr, exit status 2."""
     typer.echo(f"mechcheck: error: {message}", err=True)
@@ -218,6 +226,18 @@ def reports_command(
     for line in run_studies(list(STUDIES), out / "studies"):
         typer.echo(line)
     raise typer.Exit(max(codes))
+
+
+@app.command("new")
+def new_command(
+    mechanism: Annotated[str, typer.Argument(
+        help=f"The mechanism of the example: {', '.join(EXAMPLES)}.")],
+) -> None:
+    """Print a commented example case file to start from: mechcheck new four_bar > my.toml"""
+    if mechanism not in EXAMPLES:
+        raise fail_input(f"mechcheck new: unknown mechanism {mechanism!r}; "
+                         f"choose from {', '.join(EXAMPLES)}")
+    typer.echo(example_path(mechanism).read_text(encoding="utf-8"), nl=False)
 
 
 @app.command("backends")

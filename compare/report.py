@@ -9,6 +9,7 @@ from __future__ import annotations
 import base64
 import html
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -76,33 +77,91 @@ def backend_summaries(result: RunResult) -> list[BackendSummary]:
     return out
 
 
+#: Above this many cases, the sections of passing cases are folded (<details>) so that a
+#: large run's page stays readable; the index at the top links to every case.
+FOLD_ABOVE = 50
+
+
+def case_inputs(case: Case, spec: CaseSpec | None) -> list[str]:
+    """The case's inputs as written in its file (file units), so a section reads alone."""
+    if spec is None:
+        return [f"{case.mechanism}, θ12 = {fmt(math.degrees(case.theta12))}° (SI: see the Case)"]
+    unit = spec.length_unit
+    lines = [f"{spec.mechanism}, θ12 = {fmt(spec.theta12)}°, {case.branch} branch, ground "
+             f"angle {fmt(spec.ground_angle)}°, drive on link {spec.drive_link}, lengths in {unit}",
+             "geometry: " + ", ".join(f"{k} = {fmt(v)}" for k, v in spec.geometry.items())]
+    for load in spec.loads:
+        force = ", ".join(f"{k} = {fmt(v)}" for k, v in (load.force or {}).items())
+        lines.append(f"load on link {load.link} at {_pair(load.at)}: force {{{force}}}, "
+                     f"torque {fmt(load.torque)} N·m")
+    for m in spec.masses:
+        lines.append(f"mass on link {m.link}: {fmt(m.mass)} kg at {_pair(m.com)}, inertia "
+                     f"{fmt(m.inertia)} kg·m²")
+    if any(spec.gravity):
+        lines.append(f"gravity {_pair(spec.gravity)} m/s²")
+    if spec.motion.omega or spec.motion.alpha:
+        lines.append(f"motion: ω = {fmt(spec.motion.omega)} rad/s, α = {fmt(spec.motion.alpha)} rad/s²")
+    if spec.friction is not None:
+        f = spec.friction
+        parts = [f"μ = {fmt(f.mu)}"]
+        parts += [f"pin radius {j} = {fmt(r)}" for j, r in f.pin_radius.items()]
+        parts += [f"slide μ = {fmt(f.slide_mu)}"] if f.slide_mu is not None else []
+        parts += [f"viscous {j} = {fmt(c)}" for j, c in f.viscous.items()]
+        parts += [f"direction {f.direction}"] if f.direction else []
+        lines.append("friction: " + ", ".join(parts))
+    return lines
+
+
+def _pair(p: list[float]) -> str:
+    return f"[{fmt(p[0])}, {fmt(p[1])}]"
+
+
 def case_view(case: Case, spec: CaseSpec | None, solutions: list[Solution],
-              detail: pd.DataFrame) -> dict[str, Any]:
-    """Values of every backend side by side, with errors, for one case."""
+              detail: list[dict[str, Any]], folded: bool) -> dict[str, Any]:
+    """Values of every backend side by side, with errors, for one case.
+
+    ``detail`` holds this case's comparison rows only, as records: the caller splits
+    the table once, so that the report is built in time linear in the number of cases.
+    """
     backends = [s.backend for s in solutions]
     quantities = ordered({q for s in solutions for q in s.values})
+    hits = {(r["quantity"], r["backend"]): r for r in detail}
     rows = []
-    mine = detail[detail["case"] == case.name]
     for q in quantities:
         cells = []
         for s in solutions:
-            hit = mine[(mine["quantity"] == q) & (mine["backend"] == s.backend)]
+            hit = hits.get((q, s.backend))
             cells.append({
                 "value": table_value(q, s.values[q]) if q in s.values else None,
-                "rel_err": float(hit["rel_err"].iloc[0]) if len(hit) else None,
-                "passed": bool(hit["passed"].iloc[0]) if len(hit) else None,
-                "tolerance": float(hit["tolerance"].iloc[0]) if len(hit) else None,
-                "overridden": bool(hit["overridden"].iloc[0]) if len(hit) else False,
+                "rel_err": float(hit["rel_err"]) if hit else None,
+                "passed": bool(hit["passed"]) if hit else None,
+                "tolerance": float(hit["tolerance"]) if hit else None,
+                "overridden": bool(hit["overridden"]) if hit else False,
             })
         rows.append({"quantity": q, "unit": QUANTITY_UNITS[q][0], "cells": cells})
+    failed = sum(not r["passed"] for r in detail)
+    verdicts = [s for s in solutions if s.status != "ok"]
     return {
-        "name": case.name, "description": spec.description if spec else "",
-        "mechanism": case.mechanism, "kind": str(mine["case_kind"].iloc[0]) if len(mine)
+        "name": case.name, "anchor": f"case-{case.name}",
+        "description": spec.description if spec else "",
+        "mechanism": case.mechanism, "kind": str(detail[0]["case_kind"]) if detail
         else case.kind, "source": case.source, "backends": backends, "rows": rows,
-        "verdicts": [s for s in solutions if s.status != "ok"],
+        "inputs": case_inputs(case, spec),
+        "compared": len(detail), "failed": failed,
+        "worst": max(float(r["rel_err"]) for r in detail) if detail else None,
+        "verdict_counts": _counts(s.status for s in verdicts),
+        "folded": folded and not failed and not verdicts,
+        "verdicts": verdicts,
         "diagnostics": [(s.backend, s.status, dict(s.diagnostics)) for s in solutions],
         "overrides": list(case.tolerance),
     }
+
+
+def _counts(statuses: Iterable[str]) -> str:
+    counts: dict[str, int] = {}
+    for status in statuses:
+        counts[status] = counts.get(status, 0) + 1
+    return ", ".join(f"{k} ×{v}" for k, v in counts.items())
 
 
 def seed_rows(result: RunResult, specs: dict[str, CaseSpec]) -> list[SeedRow]:
@@ -124,6 +183,9 @@ def view_model(result: RunResult, specs: dict[str, CaseSpec], title: str) -> dic
     for s in result.solutions:
         by_case.setdefault(s.case, []).append(s)
     failed = result.failed_comparisons
+    per_case: dict[str, list[dict[str, Any]]] = {}
+    for record in result.detail.to_dict("records"):
+        per_case.setdefault(str(record["case"]), []).append({str(k): v for k, v in record.items()})
     seeds = seed_rows(result, specs)
     notes = {r.case: r.note for r in seeds}
     return {
@@ -140,7 +202,8 @@ def view_model(result: RunResult, specs: dict[str, CaseSpec], title: str) -> dic
         "failing_verdicts": result.failing_verdicts,
         "seeds": seeds,
         "seed_notes": notes,
-        "cases": [case_view(c, specs.get(c.name), by_case.get(c.name, []), result.detail)
+        "cases": [case_view(c, specs.get(c.name), by_case.get(c.name, []),
+                            per_case.get(c.name, []), folded=len(result.cases) > FOLD_ABOVE)
                   for c in result.cases],
         "policy": policy_table(),
     }

@@ -54,6 +54,15 @@ class SeedRow:
     note: str
 
     @property
+    def unit(self) -> str:
+        """The unit of the printed value and of the deviation, as the tables write it."""
+        if self.key.endswith("_angle") or self.key == "theta31":
+            return "deg"
+        if self.key in QUANTITY_UNITS:
+            return QUANTITY_UNITS[self.key][0]
+        return "N"  # F34, N14: force magnitudes
+
+    @property
     def deviation(self) -> float | None:
         if self.computed is None:
             return None

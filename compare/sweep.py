@@ -30,10 +30,9 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from mechcheck.analytic.case import MAX_ANGLE_DEG, Case
-from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
+from mechcheck.analytic.solution import QUANTITY_UNITS, Solution, table_values
 from mechcheck.backends import REFERENCE, REGISTRY, BackendUnavailable
 from mechcheck.output import file_stem, write_all
-from mechcheck.tables import table_values
 
 #: The most poses a sweep takes per case: ten times the 10⁶-pose analytic sweep the
 #: benchmarks time (about 8 s); a larger grid is far more likely a typo than a plan.

@@ -12,7 +12,14 @@ import numpy as np
 import pandas as pd
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import FORCE_FLOOR_N, QUANTITY_ORDER, QUANTITY_UNITS, Solution, quantity_kind
+from mechcheck.analytic.solution import (
+    FORCE_FLOOR_N,
+    QUANTITY_ORDER,
+    QUANTITY_UNITS,
+    Solution,
+    quantity_kind,
+    table_value,
+)
 from mechcheck.backends import REFERENCE
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, case_kind, tolerance_for
 
@@ -29,19 +36,6 @@ SCALE_FLOOR = FORCE_FLOOR_N
 def in_table_units(quantity: str, value: float) -> float:
     """A value or a difference in the unit of the tables (radians → degrees)."""
     return value * QUANTITY_UNITS[quantity][1]
-
-
-def table_values(quantity: str, values: np.ndarray) -> np.ndarray:
-    """Values as the tables show them: in table units, angles wrapped to [−180°, 180°)
-    (CONVENTIONS.md), so that every backend spells one angle one way."""
-    unit, factor = QUANTITY_UNITS[quantity]
-    out = np.asarray(values, dtype=float) * factor
-    return (out + 180.0) % 360.0 - 180.0 if unit == "deg" else out
-
-
-def table_value(quantity: str, value: float) -> float:
-    """:func:`table_values` for one number."""
-    return float(table_values(quantity, np.array(value)))
 
 
 def ordered(values: Iterable[str]) -> list[str]:

@@ -32,9 +32,9 @@ FOURBAR = GOOD.replace('"good"', '"bad"')
 # (id, file text, expected key, a fragment of the message)
 BAD_INPUTS = [
     ("unknown-key", FOURBAR.replace("theta12 = 60.0", "theta12 = 60.0\ncolour = 'red'"),
-     "colour", "Extra inputs"),
+     "colour", "unknown key"),
     ("unknown-nested-key", FOURBAR.replace("link = 4", "link = 4\nlever = 2.0"),
-     "loads[0].lever", "Extra inputs"),
+     "loads[0].lever", "unknown key"),
     ("missing-key", FOURBAR.replace("theta12 = 60.0\n", ""), "theta12", "required"),
     ("missing-geometry-key", FOURBAR.replace("a4 = 120.0\n", ""), "geometry.a4", "required"),
     ("wrong-type", FOURBAR.replace("theta12 = 60.0", "theta12 = 'sixty'"), "theta12", "number"),

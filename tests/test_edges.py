@@ -435,3 +435,66 @@ def test_a_run_with_nothing_to_compare_says_so(tmp_path: Path) -> None:
     assert "nothing compared: only the reference backend (analytic) ran" in stdout
     assert "nothing compared" in (out / "report.md").read_text()
     assert "0 comparisons" not in stdout + (out / "report.md").read_text()
+
+
+# -- 17. the format reference and a starting file -----------------------------------------
+
+@pytest.mark.parametrize("mechanism", ["four_bar", "slider_crank"])
+def test_mechcheck_new_writes_a_commented_example_that_runs(tmp_path: Path, mechanism: str) -> None:
+    """`mechcheck new KIND > my.toml` gives a file that runs as it is, and whose commented-out
+    optional keys are valid too once uncommented."""
+    code, text, _ = run_cli(["new", mechanism])
+    assert code == 0 and text.count("#") > 20
+    path = case_file(tmp_path, text)
+    assert run_cli(["run", str(path), "-q", "-b", "analytic", "--out", str(tmp_path / "a")])[0] == 0
+    uncommented = "\n".join(line[2:] if line.startswith("# ") and ("=" in line or line.startswith("# ["))
+                            and not line.startswith("# A ") else line for line in text.splitlines())
+    full = case_file(tmp_path, uncommented, "full.toml")
+    code, _, err = run_cli(["run", str(full), "-q", "-b", "analytic", "--out", str(tmp_path / "b")])
+    assert code == 0, err
+    assert_refused(["new", "six_bar"], "four_bar, slider_crank")
+
+
+def test_readme_holds_the_case_file_reference() -> None:
+    """The case-file format is documented in the repository, not behind a link out of it."""
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    assert "../shared" not in readme
+    for key in ("length_unit", "pin_radius", "[case.seed]", "[[case.tolerance]]", "drive_link"):
+        assert key in readme, key
+
+
+# -- 18. units in the API -----------------------------------------------------------------
+
+def test_the_api_names_its_units() -> None:
+    """Vectorised solvers take ``theta12_rad``; a Solution's values are SI and radians, and
+    ``in_table_units`` gives the tables' degrees, wrapped."""
+    import mechcheck
+    from mechcheck.analytic import forces
+
+    case = mechcheck.load_cases()[0]
+    results = forces.solve_poses(case, theta12_rad=[case.theta12])
+    assert results.values["theta13"][0] == mechcheck.solve(case).values["theta13"]
+    solution = Solution("c", "b", {"theta14": 3.5, "T12": 2.0})
+    assert solution.in_table_units() == pytest.approx({"theta14": math.degrees(3.5) - 360.0,
+                                                       "T12": 2.0})
+
+
+# -- 22. a report that scales -------------------------------------------------------------
+
+def test_the_report_indexes_every_case_and_echoes_its_inputs(tmp_path: Path) -> None:
+    """The report starts with an index linking to every case; each case's section echoes its
+    inputs as written; past 50 cases passing sections fold; seed deviations carry units."""
+    lines = GOOD.strip().splitlines()
+    body = "\n".join(line for line in lines if not line.startswith("name"))
+    many = "\n".join(body.replace("[[case]]", f'[[case]]\nname = "c{i:03d}"') for i in range(60))
+    path = case_file(tmp_path, many)
+    out = tmp_path / "o"
+    assert run_cli(["run", str(path), "-q", "-b", "virtual_work", "--out", str(out)])[0] == 0
+    for report, link in (("report.md", "](#case-c{:03d})"), ("report.html", 'href="#case-c{:03d}"')):
+        text = (out / report).read_text()
+        assert all(link.format(i) in text for i in range(60)), report
+        assert text.count("<details><summary>Inputs and values") == 60
+        assert "geometry: a1 = 140, a2 = 80, a3 = 100, a4 = 120" in text
+    suite = tmp_path / "suite"
+    assert run_cli(["run", "-q", "-b", "analytic", "--out", str(suite)])[0] == 0
+    assert "| seed-E1-as-stated | F14 | N | 37.74 |" in (suite / "report.md").read_text()

@@ -390,6 +390,8 @@ def crank_rockers(draw: st.DrawFn) -> Case:
     whose transmission angle stays above MIN_TRANSMISSION."""
     long = st.floats(0.1, 0.4)
     g = FourBarGeometry(draw(long), draw(st.floats(0.02, 0.09)), draw(long), draw(long))
+    lengths = (g.a1, g.a2, g.a3, g.a4)
+    assume(2 * max(lengths) < sum(lengths))  # a loop that closes at all
     assume(theory.grashof(ground=g.a1, crank=g.a2, coupler=g.a3, rocker=g.a4).kind
            == "crank-rocker")
     ground = draw(st.floats(-math.pi, math.pi))
