@@ -24,12 +24,13 @@ threshold by a convergence check, never by a fixed setting:
   crank and the crank's sense is undetermined;
 - the time discretisation: a soft constraint holds its force with a violation
   ∝ R·f·(2·dt)² (R grows as the links touching it get lighter: massless links
-  carry only a fictitious 1e-5 of the real masses), and MuJoCo leaves out the
+  carry only a fictitious fraction of the real masses), and MuJoCo leaves out the
   constraints' J̇·v, which the same stiffness makes up with a violation ∝ dt².
   The pose error this makes is magnified by the inverse transmission ratio
   near a dead point (exam Q3: the crank follows the rocker at
-  1/|dθ14/dθ12| = 16 times its angle; 3.7e-3 of the forces at dt = 2.5e-5 s,
-  against ~1e-5 on ordinary cases). The run is repeated with half the step
+  1/|dθ14/dθ12| = 16 times its angle; 3.7e-3 of the forces at dt = 2.5e-5 s
+  with massless links at 1e-5 of the real masses, 1.7e-5 at 1e-2, against
+  ~1e-5 on ordinary cases). The run is repeated with half the step
   (and as many lead steps) until two answers agree within
   :data:`TIMESTEP_AGREEMENT_RTOL`.
 
@@ -37,12 +38,31 @@ Friction (:mod:`.friction`) is emulated from the current reactions every step
 with the senses of the simulator's own joint velocities. A static friction case
 is a quasi-static motion: heavy fictitious links driven at
 :data:`QUASI_STATIC_SPEED` in the stated sense.
+
+Fictitious inertia. MuJoCo refuses massless moving bodies, so a massless link
+gets :data:`~.model.FICTITIOUS_MASS_FRACTION` of the real masses, and every
+link of a quasi-static run :data:`~.model.SETTLE_MASS`; their inertia forces
+were reported as reactions (3e-3 of the force floor on an unloaded massless
+four-bar, 1.6e-2 on an unloaded quasi-static slider-crank). The motion is
+prescribed by the clock, so it does not depend on the masses, and the
+reactions, the solution of Jᵀλ = M(k)·q̈ + c(k) − loads, are affine in the
+fictitious inertia k: F(k) = F₀ + k·G. Every reading of such a model is
+therefore the same drive run on the model as built and on one with twice the
+fictitious inertia (:func:`driven_rigs`), reported as F₀ = 2·F(k) − F(2k)
+(:func:`massless_limit`), and the convergence checks below judge that
+extrapolated reading. With friction the pin moments μ·r·|F| are not linear in
+k, but the fictitious part is a small fraction of the real reactions, so the
+curvature is second order in it; with no load at all everything scales with
+k and the extrapolation is exact again (measured: an unloaded quasi-static
+slider-crank with pin and slide friction reads 1.1e-8 of the force floor). The
+driven hinge's armature is no fictitious inertia: it is subtracted exactly
+(:meth:`.rig.Rig.read`).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -52,7 +72,7 @@ from mechcheck.analytic.equilibrium import condition
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import Solution, quantity_kind
 from mechcheck.sim_models.mujoco.friction import friction_loads, relative_speeds
-from mechcheck.sim_models.mujoco.model import Settings
+from mechcheck.sim_models.mujoco.model import Settings, has_fictitious_inertia
 from mechcheck.sim_models.mujoco.rig import Rig, disagreement
 
 #: Dynamics: first time step 2.5e-5 s (refined by halving, see the module doc).
@@ -82,13 +102,15 @@ LEAD_AGREEMENT_RTOL = 1e-5
 LEAD_CONDITION_GROWTH = 2.0
 #: Runs with time steps dt and dt/2 (same number of lead steps) agree to this
 #: fraction of the largest force (or torque/scale). The error is O(dt²)
-#: (measured on exam Q3: 3.7e-3, 9.5e-4, 2.4e-4, 6.1e-5, 1.6e-5 from 2.5e-5 s
-#: down by halves): while the error at least halves per halving, the finer run's
+#: (measured on exam Q3 from 2.5e-5 s down by halves: 3.7e-3, 9.5e-4, 2.4e-4,
+#: 6.1e-5, 1.6e-5 with massless links at 1e-5 of the real masses; 1.7e-5,
+#: 4.3e-6, 1.0e-6 at 1e-2, extrapolated): while the error at least halves per halving, the finer run's
 #: error is at most the difference (a third of it at second order), so 1e-4
 #: keeps it ≥ 10× below the 1e-3 dynamic target.
 TIMESTEP_AGREEMENT_RTOL = 1e-4
 #: The time step may be halved this many times (2.5e-5 s → 7.8e-7 s); exam Q3,
-#: 6.7° from a rocker dead point, needs four.
+#: 6.7° from a rocker dead point, needed four with massless links at 1e-5 of the
+#: real masses, and needs one at 1e-2 (:data:`~.model.FICTITIOUS_MASS_FRACTION`).
 MAX_TIMESTEP_HALVINGS = 5
 #: Fixed-point passes at the final instant so that the friction couples match
 #: the reactions they were computed from.
@@ -203,6 +225,43 @@ def apply_friction(rig: Rig, values: dict[str, float]) -> None:
     rig.set_extra(*friction_loads(rig, values, speeds, viscous_speeds))
 
 
+@dataclass(frozen=True)
+class DrivenRigs:
+    """The model as built (``base``) and, when it has inertia the Case does not,
+    the same model with twice that fictitious inertia (``doubled``)."""
+
+    base: Rig
+    doubled: Rig | None = None
+
+    @property
+    def runs(self) -> int:
+        """Simulator runs per reading."""
+        return 1 if self.doubled is None else 2
+
+
+def driven_rigs(case: Case) -> DrivenRigs:
+    """The rigs a driven run of ``case`` (or of a case differing only in θ12) uses."""
+    settings, _, _ = drive_motion(case)
+    if not has_fictitious_inertia(case, settings):
+        return DrivenRigs(Rig(case, settings))
+    return DrivenRigs(Rig(case, settings), Rig(case, replace(settings, fictitious_scale=2.0)))
+
+
+def massless_limit(base: dict[str, float], doubled: dict[str, float]) -> dict[str, float]:
+    """Forces and torques extrapolated linearly to zero fictitious inertia, F₀ = 2·F(k) − F(2k);
+    the pose as the base run reached it (it is prescribed, not an inertia effect)."""
+    return {q: v if quantity_kind(q) == "pose" else 2.0 * v - doubled[q]
+            for q, v in base.items()}
+
+
+def read_drive(rigs: DrivenRigs, drive: Drive, friction: bool) -> dict[str, float]:
+    """The reading of one drive, free of fictitious inertia (see the module doc)."""
+    values = run_drive(rigs.base, drive, friction)
+    if rigs.doubled is None:
+        return values
+    return massless_limit(values, run_drive(rigs.doubled, drive, friction))
+
+
 def run_drive(rig: Rig, drive: Drive, friction: bool) -> dict[str, float]:
     """Simulate to the instant and return the values there."""
     m, d = rig.model, rig.data
@@ -261,13 +320,14 @@ class Convergence:
         return ""
 
 
-def converge_lead(rig: Rig, case: Case, omega: float, alpha: float, dt: float) -> Convergence:
+def converge_lead(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
+                  dt: float) -> Convergence:
     """Double the lead time until the start-up transient has died (or may not grow)."""
     friction = case.has_friction
     instant = float(condition(case, pose_of(case, np.array([case.theta12])))[0])
     steps = LEAD_STEPS
-    out = Convergence(run_drive(rig, Drive(case.theta12, omega, alpha, steps, dt), friction),
-                      steps, dt, total_steps=steps)
+    out = Convergence(read_drive(rigs, Drive(case.theta12, omega, alpha, steps, dt), friction),
+                      steps, dt, total_steps=rigs.runs * steps)
     while not out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
         steps *= 2
         drive = Drive(case.theta12, omega, alpha, steps, dt)
@@ -280,49 +340,62 @@ def converge_lead(rig: Rig, case: Case, omega: float, alpha: float, dt: float) -
                               f"condition number {worst:.3g} against {instant:.3g} at the instant "
                               "(a change point, or the rocker dead point of a rocker drive)")
             break
-        values = run_drive(rig, drive, friction)
-        residual = disagreement(values, out.values, rig.scale)
-        out.values, out.lead_steps, out.total_steps = values, steps, out.total_steps + steps
+        values = read_drive(rigs, drive, friction)
+        residual = disagreement(values, out.values, rigs.base.scale)
+        out.values, out.lead_steps = values, steps
+        out.total_steps += rigs.runs * steps
         out.lead_disagreement = residual if np.isfinite(residual) else np.inf
         if not np.isfinite(residual):
             break
     return out
 
 
-def refine_timestep(rig: Rig, case: Case, omega: float, alpha: float,
+def refine_timestep(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
                     out: Convergence) -> Convergence:
     """Halve the time step until two runs agree, keeping the number of lead steps.
 
     Every start-up transient of the soft model has time constants ∝ dt (the
     constraints' 2·dt, and the modes their compliance R/k ∝ dt² gives the
     links), so it dies in the same number of steps at any dt (measured on exam
-    Q3: ~1600 steps at 2.5e-5, 6.25e-6 and 1.56e-6 s alike).
+    Q3 with massless links at 1e-5 of the real masses: ~1600 steps at 2.5e-5,
+    6.25e-6 and 1.56e-6 s alike).
     """
     for _ in range(MAX_TIMESTEP_HALVINGS):
         dt = 0.5 * out.dt
         drive = Drive(case.theta12, omega, alpha, out.lead_steps, dt)
-        values = run_drive(rig, drive, case.has_friction)
-        residual = disagreement(values, out.values, rig.scale)
+        values = read_drive(rigs, drive, case.has_friction)
+        residual = disagreement(values, out.values, rigs.base.scale)
         out.values, out.dt = values, dt
-        out.total_steps += out.lead_steps
+        out.total_steps += rigs.runs * out.lead_steps
         out.timestep_disagreement = residual if np.isfinite(residual) else np.inf
         if not residual > TIMESTEP_AGREEMENT_RTOL:  # converged, or NaN: stop either way
             break
     return out
 
 
-def driven(case: Case, rig: Rig | None = None) -> Solution:
+def fictitious_correction(rigs: DrivenRigs, values: dict[str, float]) -> float:
+    """The largest change the extrapolation made to the base run's last reading:
+    the fictitious inertia removed, N (torques divided by the mechanism's scale)."""
+    if rigs.doubled is None:
+        return 0.0
+    base, length = rigs.base.read(), rigs.base.scale
+    return max(abs(base[q] - v) / (length if quantity_kind(q) == "torque" else 1.0)
+               for q, v in values.items() if quantity_kind(q) != "pose")
+
+
+def driven(case: Case, rigs: DrivenRigs | None = None) -> Solution:
     """The ``mujoco`` backend for a moving or friction case (method ``driven``).
 
-    ``rig`` (built with :func:`drive_motion`'s settings for a case differing
-    only in θ12) is reused by sweeps.
+    ``rigs`` (from :func:`driven_rigs` for a case differing only in θ12) are
+    reused by sweeps.
     """
     start = time.perf_counter()
     settings, omega, alpha = drive_motion(case)
-    rig = rig or Rig(case, settings)
-    out = converge_lead(rig, case, omega, alpha, settings.timestep)
+    rigs = rigs or driven_rigs(case)
+    rig = rigs.base
+    out = converge_lead(rigs, case, omega, alpha, settings.timestep)
     if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
-        out = refine_timestep(rig, case, omega, alpha, out)
+        out = refine_timestep(rigs, case, omega, alpha, out)
     values = out.values
     diagnostics: dict[str, float | str] = {
         "method": "driven", "steps": out.total_steps,
@@ -331,6 +404,7 @@ def driven(case: Case, rig: Rig | None = None) -> Solution:
         "loop_violation": rig.loop_violation(), "pose_drift": rig.pose_drift(case.theta12),
         "lead_disagreement": out.lead_disagreement, "lead_steps": out.lead_steps,
         "timestep": out.dt, "timestep_disagreement": out.timestep_disagreement,
+        "fictitious_inertia_correction": fictitious_correction(rigs, values),
     }
     if not out.converged:
         pose = {q: v for q, v in values.items() if quantity_kind(q) == "pose"}

@@ -23,7 +23,7 @@ from mechcheck.analytic.forces import (
     withheld_solution,
 )
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.mujoco.dynamics import drive_motion, driven
+from mechcheck.sim_models.mujoco.dynamics import DrivenRigs, driven, driven_rigs
 from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
 from mechcheck.sim_models.mujoco.rig import Rig
 from mechcheck.sim_models.mujoco.settle import settle_static
@@ -58,8 +58,9 @@ def sweep(case: Case, theta12: ArrayLike, backend: str = "mujoco") -> list[Solut
 
 
 def exact_sweep(case: Case, angles: np.ndarray, verdicts: list[PoseVerdict | None],
-                rig: Rig) -> list[Solution]:
+                rig: Rig | DrivenRigs) -> list[Solution]:
     """``mujoco_solve`` over many poses with the analytic states computed at once."""
+    assert isinstance(rig, Rig)
     qpos, qvel, qacc = rig.states(angles)
     out = []
     for i, verdict in enumerate(verdicts):
@@ -74,19 +75,19 @@ def exact_sweep(case: Case, angles: np.ndarray, verdicts: list[PoseVerdict | Non
     return out
 
 
-def sweep_rig(case: Case, backend: str) -> Rig:
-    """The one compiled model a sweep reuses."""
+def sweep_rig(case: Case, backend: str) -> Rig | DrivenRigs:
+    """The compiled model(s) a sweep reuses (a driven run may need two, see
+    :func:`~.dynamics.driven_rigs`)."""
     if backend == "mujoco_solve":
         return exact_rig(case)
     if case.kind == "static":
         return Rig(case)
-    settings, _, _ = drive_motion(case)
-    return Rig(case, settings)
+    return driven_rigs(case)
 
 
-def solve_one(case: Case, backend: str, rig: Rig) -> Solution:
+def solve_one(case: Case, backend: str, rig: Rig | DrivenRigs) -> Solution:
+    if isinstance(rig, DrivenRigs):
+        return noting_warnings(lambda: driven(case, rig))
     if backend == "mujoco_solve":
         return noting_warnings(lambda: solve_at_pose(case, rig))
-    if case.kind == "static":
-        return noting_warnings(lambda: settle_static(case, rig))
-    return noting_warnings(lambda: driven(case, rig))
+    return noting_warnings(lambda: settle_static(case, rig))
