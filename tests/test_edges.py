@@ -249,18 +249,7 @@ def test_a_changed_case_is_read_once(tmp_path: Path) -> None:
 
 # -- 8. a case without loads --------------------------------------------------------------
 
-UNLOADED = """
-[[case]]
-name = "unloaded-fourbar"
-mechanism = "four_bar"
-length_unit = "mm"
-theta12 = 60.0
-[case.geometry]
-a1 = 140.0
-a2 = 80.0
-a3 = 100.0
-a4 = 120.0
-
+UNLOADED = GOOD.split("[[case.loads]]")[0].replace('"demo"', '"unloaded-fourbar"') + """
 [[case]]
 name = "unloaded-slider"
 mechanism = "slider_crank"
