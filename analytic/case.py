@@ -25,10 +25,11 @@ import math
 import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import Literal, TypeVar
 
 Mechanism = Literal["four_bar", "slider_crank"]
 Vec2 = tuple[float, float]
+V = TypeVar("V")
 
 FOUR_BAR_PINS = ("A0", "A", "B", "B0")
 SLIDER_CRANK_PINS = ("A0", "A", "B")
@@ -253,7 +254,7 @@ class Friction:
         for name in ("pin_radius", "viscous"):
             values = {joint: _nonnegative(v, f"friction.{name}.{joint}")
                       for joint, v in dict(getattr(self, name)).items()}
-            object.__setattr__(self, name, _FrozenDict(values))
+            object.__setattr__(self, name, FrozenMap(values))
         if self.direction not in (-1, 0, 1):
             raise CaseError("must be 'cw' or 'ccw'", key="friction.direction")
 
@@ -265,13 +266,13 @@ class Friction:
         return self.mu if self.slide_mu is None else self.slide_mu
 
 
-class _FrozenDict(Mapping[str, float]):
-    """A read-only, hashable, picklable mapping, so that Friction stays immutable."""
+class FrozenMap(Mapping[str, V]):
+    """A read-only, hashable, picklable mapping, so that the values holding it stay immutable."""
 
-    def __init__(self, items: Mapping[str, float]) -> None:
+    def __init__(self, items: Mapping[str, V]) -> None:
         self._items = dict(items)
 
-    def __getitem__(self, key: str) -> float:
+    def __getitem__(self, key: str) -> V:
         return self._items[key]
 
     def __iter__(self) -> Iterator[str]:

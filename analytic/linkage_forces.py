@@ -1,0 +1,439 @@
+"""The member-equilibrium matrix method for any :class:`~mechcheck.analytic.linkage.Linkage`,
+vectorised over poses.
+
+Each moving link gives three D'Alembert equilibrium rows (ΣFx, ΣFy, ΣM about the global
+origin). The unknowns are, joint by joint in the file's order, the reaction of the joint
+— revolute: (Fx, Fy), the force by links[0] on links[1]; prismatic: (N, M), the force
+N along the normal n (fixed in links[0]) at ``at`` and the couple M on links[1] — and then
+each driver's effort Q (revolute: a couple on links[1]; prismatic: a force along the
+axis through ``at``). What acts on links[1] acts reversed on links[0]. The system is
+
+    K x + b + φ(x) = 0
+
+with b every known force (loads, weights, D'Alembert inertia, springs, viscous terms)
+and φ the Coulomb terms (friction circle μ·r·|F| at pins with a radius, μ·|N| along
+prismatic joints), which depend on the unknowns; without them x = −K⁻¹ b. With a
+square, regular K (as many drivers as degrees of freedom, no redundant constraint),
+this is exactly the seed's method: three equations per member, solved at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mechcheck.analytic.linkage import GROUND, Joint, LinearSpring, Linkage, TorsionSpring
+from mechcheck.analytic.linkage_kinematics import (
+    Array,
+    LinkagePose,
+    perp,
+    rotate,
+    solve_batched,
+    solve_pose,
+)
+
+#: Above this condition number of the scaled equilibrium matrix the pose is singular and
+#: its forces withheld (the same line as the closed-form presets, for the same reason).
+SINGULAR_CONDITION = 1.0e8
+#: Coulomb friction: Newton's convergence (relative to the largest unknown) and budget.
+FRICTION_RTOL = 1e-13
+FRICTION_ITERATIONS = 50
+#: A joint whose relative speed is below this fraction of the pose's speed scale counts
+#: as not moving: its Coulomb friction may take any value there (``indeterminate``).
+REVERSAL_RTOL = 1e-12
+
+
+def _cross(r: Array, f: Array) -> Array:
+    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+
+
+@dataclass(frozen=True)
+class ForceLayout:
+    """Columns of the unknowns and rows of the links."""
+
+    linkage: Linkage
+
+    def row(self, link: str) -> int:
+        """First of the link's three rows; −1 for the ground (no equations)."""
+        return -1 if link == GROUND else 3 * self.linkage.moving_links.index(link)
+
+    def joint_columns(self, joint: Joint) -> tuple[int, int]:
+        k = [j.name for j in self.linkage.joints].index(joint.name)
+        return 2 * k, 2 * k + 1
+
+    def driver_column(self, index: int) -> int:
+        return 2 * len(self.linkage.joints) + index
+
+    @property
+    def rows(self) -> int:
+        return 3 * len(self.linkage.moving_links)
+
+    @property
+    def columns(self) -> int:
+        return 2 * len(self.linkage.joints) + len(self.linkage.drivers)
+
+
+def _force_on(m: Array, layout: ForceLayout, link: str, col: int, direction: Array,
+              point: Array, sign: float) -> None:
+    """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
+    r = layout.row(link)
+    if r < 0:
+        return
+    m[:, r, col] += sign * direction[:, 0]
+    m[:, r + 1, col] += sign * direction[:, 1]
+    m[:, r + 2, col] += sign * _cross(point, direction)
+
+
+def _couple_on(m: Array, layout: ForceLayout, link: str, col: int, sign: float) -> None:
+    r = layout.row(link)
+    if r >= 0:
+        m[:, r + 2, col] += sign
+
+
+@dataclass(frozen=True)
+class JointFrame:
+    """A joint's point (current) and, for a prismatic joint, its axis u and normal n."""
+
+    point: Array
+    u: Array | None
+    n: Array | None
+
+
+def joint_frame(pose: LinkagePose, joint: Joint) -> JointFrame:
+    point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
+    if joint.kind == "revolute":
+        return JointFrame(point, None, None)
+    assert joint.axis is not None
+    u = rotate(pose.angle(joint.links[0])[0], np.array(joint.axis))
+    return JointFrame(point, u, perp(u))
+
+
+def coefficient_matrix(pose: LinkagePose) -> Array:
+    """K (N, 3n, 2j + d): how each unknown enters each link's equilibrium."""
+    linkage = pose.linkage
+    layout = ForceLayout(linkage)
+    n = pose.q.shape[0]
+    k = np.zeros((n, layout.rows, layout.columns))
+    ones = np.ones(n)
+    ex = np.stack([ones, 0 * ones], axis=1)
+    ey = np.stack([0 * ones, ones], axis=1)
+    frames = {j.name: joint_frame(pose, j) for j in linkage.joints}
+    for joint in linkage.joints:
+        i, j = joint.links
+        c0, c1 = layout.joint_columns(joint)
+        frame = frames[joint.name]
+        for link, sign in ((j, 1.0), (i, -1.0)):
+            if joint.kind == "revolute":
+                _force_on(k, layout, link, c0, ex, frame.point, sign)
+                _force_on(k, layout, link, c1, ey, frame.point, sign)
+            else:
+                assert frame.n is not None
+                _force_on(k, layout, link, c0, frame.n, frame.point, sign)
+                _couple_on(k, layout, link, c1, sign)
+    for index, driver in enumerate(linkage.drivers):
+        joint = linkage.joint(driver.joint)
+        col = layout.driver_column(index)
+        frame = frames[joint.name]
+        for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
+            if joint.kind == "revolute":
+                _couple_on(k, layout, link, col, sign)
+            else:
+                assert frame.u is not None
+                _force_on(k, layout, link, col, frame.u, frame.point, sign)
+    return k
+
+
+def _add_force(b: Array, layout: ForceLayout, link: str, force: Array, point: Array) -> None:
+    r = layout.row(link)
+    if r < 0:
+        return
+    b[:, r] += force[:, 0]
+    b[:, r + 1] += force[:, 1]
+    b[:, r + 2] += _cross(point, force)
+
+
+def _add_couple(b: Array, layout: ForceLayout, link: str, torque: Array) -> None:
+    r = layout.row(link)
+    if r >= 0:
+        b[:, r + 2] += torque
+
+
+def known_vector(pose: LinkagePose) -> Array:
+    """b (N, 3n): every force that does not depend on the unknowns, on each link."""
+    linkage = pose.linkage
+    layout = ForceLayout(linkage)
+    n = pose.q.shape[0]
+    b = np.zeros((n, layout.rows))
+    for load in linkage.loads:
+        at = pose.point(load.link, load.at)[0]
+        _add_force(b, layout, load.link, np.broadcast_to(np.array(load.force), (n, 2)), at)
+        _add_couple(b, layout, load.link, np.full(n, load.torque))
+    g = np.array(linkage.gravity)
+    for m in linkage.masses:
+        com, _, acc = pose.point(m.link, m.com)
+        _add_force(b, layout, m.link, m.mass * (g[None, :] - acc), com)
+        _add_couple(b, layout, m.link, -m.inertia * pose.angle(m.link)[2])
+    for spring in linkage.springs:
+        _add_spring(b, layout, pose, spring)
+    _add_viscous(b, layout, pose)
+    return b
+
+
+def spring_force(pose: LinkagePose, spring: LinearSpring | TorsionSpring) -> Array:
+    """S (N,): tension k(L − L0) + c·L̇ of a linear spring, k(q − q0) + c·q̇ of a torsional one."""
+    if isinstance(spring, TorsionSpring):
+        q, qdot, _ = pose.joint_coordinate(pose.linkage.joint(spring.joint))
+        return spring.stiffness * (q - spring.free_rotation) + spring.damping * qdot
+    (la, pa), (lb, pb) = spring.ends
+    a, va, _ = pose.point(la, pa)
+    bb, vb, _ = pose.point(lb, pb)
+    d = bb - a
+    length = np.hypot(d[:, 0], d[:, 1])
+    rate = np.einsum("ni,ni->n", d, vb - va) / length
+    return spring.stiffness * (length - spring.free_length) + spring.damping * rate
+
+
+def _add_spring(b: Array, layout: ForceLayout, pose: LinkagePose,
+                spring: LinearSpring | TorsionSpring) -> None:
+    s = spring_force(pose, spring)
+    if isinstance(spring, TorsionSpring):
+        i, j = pose.linkage.joint(spring.joint).links
+        _add_couple(b, layout, j, -s)
+        _add_couple(b, layout, i, s)
+        return
+    (la, pa), (lb, pb) = spring.ends
+    a = pose.point(la, pa)[0]
+    bb = pose.point(lb, pb)[0]
+    d = bb - a
+    e = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    _add_force(b, layout, la, s[:, None] * e, a)    # tension pulls a toward b
+    _add_force(b, layout, lb, -s[:, None] * e, bb)
+
+
+def _add_viscous(b: Array, layout: ForceLayout, pose: LinkagePose) -> None:
+    """−c·q̇ on links[1] (and the reverse on links[0]) at every joint with a viscous term."""
+    f = pose.linkage.friction
+    if f is None:
+        return
+    for name, c in f.viscous.items():
+        joint = pose.linkage.joint(name)
+        _, rate, _ = pose.joint_coordinate(joint)
+        i, j = joint.links
+        if joint.kind == "revolute":
+            _add_couple(b, layout, j, -c * rate)
+            _add_couple(b, layout, i, c * rate)
+        else:
+            frame = joint_frame(pose, joint)
+            assert frame.u is not None
+            force = -c * rate[:, None] * frame.u
+            _add_force(b, layout, j, force, frame.point)
+            _add_force(b, layout, i, -force, frame.point)
+
+
+@dataclass(frozen=True)
+class CoulombTerm:
+    """One Coulomb friction term: a pin (moment arm μ·r) or a prismatic joint (μ), and the
+    sense of its relative motion per pose (+1, −1, or 0 where the motion reverses)."""
+
+    joint: Joint
+    coefficient: float
+    sense: Array
+
+
+def coulomb_terms(pose: LinkagePose) -> list[CoulombTerm]:
+    """The Coulomb terms, with the senses of the joints' relative motion: from the drivers'
+    velocities, or, for a driver at rest, from its quasi-static ``sense``."""
+    linkage = pose.linkage
+    f = linkage.friction
+    if f is None or not linkage.has_coulomb_friction:
+        return []
+    senses = np.array([d.velocity if d.velocity else float(d.sense) for d in linkage.drivers])
+    moving = solve_pose(linkage, pose.drivers, senses, np.zeros_like(senses))
+    terms = []
+    for joint in linkage.joints:
+        if joint.kind == "revolute":
+            coefficient = f.coefficient(joint.name) * f.pin_radius.get(joint.name, 0.0)
+        else:
+            coefficient = f.coefficient(joint.name)
+        if coefficient <= 0.0:
+            continue
+        _, rate, _ = moving.joint_coordinate(joint)
+        speed = np.abs(moving.qdot).max(axis=1) * max(1.0, linkage.scale)
+        sense = np.where(np.abs(rate) > REVERSAL_RTOL * speed, np.sign(rate), 0.0)
+        terms.append(CoulombTerm(joint, coefficient, sense))
+    return terms
+
+
+def friction_residual(pose: LinkagePose, terms: list[CoulombTerm], x: Array) -> tuple[Array, Array]:
+    """φ(x) (N, 3n) and ∂φ/∂x (N, 3n, 2j + d) of the Coulomb terms."""
+    linkage = pose.linkage
+    layout = ForceLayout(linkage)
+    n = x.shape[0]
+    phi = np.zeros((n, layout.rows))
+    dphi = np.zeros((n, layout.rows, layout.columns))
+    for t in terms:
+        i, j = t.joint.links
+        c0, c1 = layout.joint_columns(t.joint)
+        if t.joint.kind == "revolute":
+            mag = np.hypot(x[:, c0], x[:, c1])
+            safe = np.where(mag > 0.0, mag, 1.0)
+            moment = -t.coefficient * t.sense * mag
+            grad = (-t.coefficient * t.sense)[:, None] * (x[:, [c0, c1]] / safe[:, None])
+            for link, sign in ((j, 1.0), (i, -1.0)):
+                r = layout.row(link)
+                if r < 0:
+                    continue
+                phi[:, r + 2] += sign * moment
+                dphi[:, r + 2, c0] += sign * grad[:, 0]
+                dphi[:, r + 2, c1] += sign * grad[:, 1]
+            continue
+        frame = joint_frame(pose, t.joint)
+        assert frame.u is not None
+        along = -t.coefficient * t.sense * np.abs(x[:, c0])
+        d_along = -t.coefficient * t.sense * np.sign(x[:, c0])
+        for link, sign in ((j, 1.0), (i, -1.0)):
+            r = layout.row(link)
+            if r < 0:
+                continue
+            lever = _cross(frame.point, frame.u)
+            for row_offset, coef in ((0, frame.u[:, 0]), (1, frame.u[:, 1]), (2, lever)):
+                phi[:, r + row_offset] += sign * coef * along
+                dphi[:, r + row_offset, c0] += sign * coef * d_along
+    return phi, dphi
+
+
+def solve_with_friction(pose: LinkagePose, k: Array, b: Array, x: Array,
+                        terms: list[CoulombTerm]) -> tuple[Array, NDArray[np.bool_]]:
+    """Newton's method on K x + b + φ(x) = 0 from the frictionless x; (x, converged)."""
+    converged = np.zeros(x.shape[0], dtype=bool)
+    for _ in range(FRICTION_ITERATIONS):
+        phi, dphi = friction_residual(pose, terms, x)
+        residual = np.einsum("nij,nj->ni", k, x) + b + phi
+        step = solve_batched(k + dphi, residual)
+        x = x - step
+        size = np.maximum(np.abs(x).max(axis=1), 1e-300)
+        converged = np.abs(step).max(axis=1) <= FRICTION_RTOL * size
+        if converged.all():
+            break
+    return x, converged
+
+
+def condition(pose: LinkagePose, k: Array) -> Array:
+    """2-norm condition number of K with couples made forces (÷ the linkage's size) and
+    rows scaled to unit length: dimensionless, and independent of units."""
+    linkage = pose.linkage
+    layout = ForceLayout(linkage)
+    scaled = k.copy()
+    for joint in linkage.joints:
+        if joint.kind == "prismatic":
+            scaled[:, :, layout.joint_columns(joint)[1]] /= linkage.scale
+    for index, driver in enumerate(linkage.drivers):
+        if linkage.joint(driver.joint).kind == "revolute":
+            scaled[:, :, layout.driver_column(index)] /= linkage.scale
+    scaled[:, 2::3, :] /= linkage.scale
+    norms = np.linalg.norm(scaled, axis=2, keepdims=True)
+    scaled = scaled / np.where(norms > 0.0, norms, 1.0)
+    if scaled.shape[1] != scaled.shape[2] or scaled.shape[1] == 0:
+        return np.full(k.shape[0], np.inf if scaled.shape[1] else 1.0)
+    with np.errstate(all="ignore"):
+        s = np.linalg.svd(scaled, compute_uv=False)
+        return np.where(s[:, -1] > 0.0, s[:, 0] / s[:, -1], np.inf)
+
+
+@dataclass(frozen=True)
+class LinkageResults:
+    """Every output quantity (LINKAGES.md names; SI, radians) at N poses, the condition
+    number, Newton's iterations and convergence, and per pose why forces are withheld
+    (empty string: they are not)."""
+
+    pose: LinkagePose
+    values: dict[str, Array]
+    condition: Array
+    converged: NDArray[np.bool_]
+    reversing: NDArray[np.str_]
+
+    @property
+    def singular(self) -> NDArray[np.bool_]:
+        return ~(self.condition <= SINGULAR_CONDITION) & self.pose.assembled
+
+    @property
+    def indeterminate(self) -> NDArray[np.bool_]:
+        return self.reversing != ""
+
+
+def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
+    """x_/y_ of every point, phi_ of every moving link, q_ of every joint."""
+    linkage = pose.linkage
+    out: dict[str, Array] = {}
+    for name, drawn in linkage.points.items():
+        carrier = next(link.name for link in linkage.links if name in link.points)
+        position = pose.point(carrier, drawn)[0]
+        out[f"x_{name}"], out[f"y_{name}"] = position[:, 0], position[:, 1]
+    for link in linkage.moving_links:
+        out[f"phi_{link}"] = pose.angle(link)[0]
+    for joint in linkage.joints:
+        out[f"q_{joint.name}"] = pose.joint_coordinate(joint)[0]
+    return out
+
+
+def force_quantities(pose: LinkagePose, x: Array, terms: list[CoulombTerm]) -> dict[str, Array]:
+    """F_<joint>_x/_y (prismatic: N·n plus the friction and viscous force along the axis),
+    M_<joint>, Q_<joint> and S_<spring>, from the unknowns x."""
+    linkage = pose.linkage
+    layout = ForceLayout(linkage)
+    sliding = {t.joint.name: t for t in terms if t.joint.kind == "prismatic"}
+    f = linkage.friction
+    out: dict[str, Array] = {}
+    for joint in linkage.joints:
+        c0, c1 = layout.joint_columns(joint)
+        if joint.kind == "revolute":
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = x[:, c0], x[:, c1]
+            continue
+        frame = joint_frame(pose, joint)
+        assert frame.u is not None and frame.n is not None
+        along = np.zeros(x.shape[0])
+        if joint.name in sliding:
+            t = sliding[joint.name]
+            along = along - t.coefficient * t.sense * np.abs(x[:, c0])
+        if f is not None and f.viscous.get(joint.name, 0.0):
+            along = along - f.viscous[joint.name] * pose.joint_coordinate(joint)[1]
+        force = x[:, c0][:, None] * frame.n + along[:, None] * frame.u
+        out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = force[:, 0], force[:, 1]
+        out[f"M_{joint.name}"] = x[:, c1]
+    for index, driver in enumerate(linkage.drivers):
+        out[f"Q_{driver.joint}"] = x[:, layout.driver_column(index)]
+    for spring in linkage.springs:
+        out[f"S_{spring.name}"] = spring_force(pose, spring)
+    return out
+
+
+def solve_linkage(linkage: Linkage, values: Array | None = None,
+                  velocities: Array | None = None,
+                  accelerations: Array | None = None) -> LinkageResults:
+    """The force analysis of ``linkage`` at each row of driver values (default: its own).
+
+    Poses that lock have NaN everything; singular poses, and friction poses whose Newton
+    iteration did not converge or whose friction reverses, have NaN forces.
+    """
+    pose = solve_pose(linkage, values, velocities, accelerations)
+    k = coefficient_matrix(pose)
+    b = known_vector(pose)
+    cond = condition(pose, k)
+    with np.errstate(all="ignore"):
+        x = solve_batched(k, -b)
+    terms = coulomb_terms(pose)
+    converged = np.ones(x.shape[0], dtype=bool)
+    reversing = np.full(x.shape[0], "", dtype=object)
+    if terms:
+        x, converged = solve_with_friction(pose, k, b, x, terms)
+        for t in terms:
+            stops = t.sense == 0.0
+            reversing[stops] = np.where(reversing[stops] == "", t.joint.name,
+                                        reversing[stops] + ", " + t.joint.name)
+    reversing = reversing.astype(str)
+    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "")
+    x[withheld] = np.nan
+    return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms), cond,
+                          converged, reversing)

@@ -1,0 +1,393 @@
+"""Positions, velocities and accelerations of any :class:`~mechcheck.analytic.linkage.Linkage`,
+vectorised over poses.
+
+Each moving link k has coordinates (t_x, t_y, φ): its rigid displacement from the drawn
+pose, so a point P0 it carries is at R(φ)·P0 + t. The constraints are
+
+- revolute joint (i, j) at P0: p_i(P0) − p_j(P0) = 0 (two rows);
+- prismatic joint (i, j) at A0 along u0 (normal n0): φ_j − φ_i = 0 and
+  n_i·(p_j(A0) − p_i(A0)) = 0, n_i = R(φ_i)·n0 (two rows);
+- driver on a revolute joint: φ_j − φ_i = q; on a prismatic one: u_i·(p_j(A0) − p_i(A0)) = q.
+
+The pose is the one reached **continuously from the drawn pose**: every driver moves from
+0 to its value along s ∈ [0, 1] in small steps, each closed by Newton's method from the
+last (LINKAGES.md "Which assembly"); the drawn pose picks the branch. Where Newton can no
+longer close the loop, the linkage locks, and the value where it does is found by
+bisection on s. Velocities and accelerations follow from J·q̇ = [0, v] and
+J·q̈ = [0, a] − (J̇·q̇), with J̇·q̇ written out per constraint.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from mechcheck.analytic.linkage import GROUND, Joint, Linkage
+
+Array = NDArray[np.float64]
+
+#: Largest driver step of the continuation: 2° of rotation, or 2 % of the linkage's size
+#: of displacement. Small enough that Newton, started from the last pose, converges in a
+#: few iterations and never jumps to another branch away from a singular pose.
+STEP_ROTATION = math.radians(2.0)
+STEP_DISPLACEMENT = 0.02
+#: Newton's closure, relative to the linkage's size, and its iteration budget per step.
+CLOSURE_RTOL = 1e-13
+NEWTON_ITERATIONS = 25
+#: Bisection steps on s when locating where a linkage locks: 2⁻⁴⁰ of the driver's travel.
+LOCK_BISECTIONS = 40
+
+
+def perp(v: Array) -> Array:
+    """v turned +90°."""
+    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
+
+
+def rotate(angle: Array, v: Array) -> Array:
+    """R(angle)·v for arrays of angles (N,) and a vector (2,) or vectors (N, 2)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where each moving link's three coordinates sit in q, and the constraint rows."""
+
+    linkage: Linkage
+
+    def index(self, link: str) -> int:
+        """Column of the link's t_x (t_y and φ follow); −1 for the ground."""
+        return -1 if link == GROUND else 3 * self.linkage.moving_links.index(link)
+
+    @property
+    def size(self) -> int:
+        return 3 * len(self.linkage.moving_links)
+
+    @property
+    def rows(self) -> int:
+        return 2 * len(self.linkage.joints) + len(self.linkage.drivers)
+
+
+@dataclass(frozen=True)
+class LinkagePose:
+    """Every link's displacement from the drawn pose at N poses: q, q̇, q̈ of shape (N, 3n),
+    the driver values (N, d), and where the linkage locked (NaN rows; ``locked_at`` holds
+    the fraction s of the drivers' travel where it locked, else NaN)."""
+
+    linkage: Linkage
+    drivers: Array
+    q: Array
+    qdot: Array
+    qddot: Array
+    locked_at: Array
+
+    def link_state(self, link: str, which: Array) -> tuple[Array, Array]:
+        """(t (N, 2), φ (N,)) of ``link`` from one of q, q̇, q̈."""
+        k = Layout(self.linkage).index(link)
+        n = which.shape[0]
+        if k < 0:
+            return np.zeros((n, 2)), np.zeros(n)
+        return which[:, k:k + 2], which[:, k + 2]
+
+    def point(self, link: str, drawn: ArrayLike) -> tuple[Array, Array, Array]:
+        """Global position, velocity and acceleration of a point fixed to ``link`` that was
+        at ``drawn`` in the drawn pose."""
+        p0 = np.asarray(drawn, dtype=float)
+        t, phi = self.link_state(link, self.q)
+        v, omega = self.link_state(link, self.qdot)
+        a, alpha = self.link_state(link, self.qddot)
+        r = rotate(phi, p0)
+        position = t + r
+        velocity = v + omega[:, None] * perp(r)
+        acceleration = a + alpha[:, None] * perp(r) - (omega**2)[:, None] * r
+        return position, velocity, acceleration
+
+    def angle(self, link: str) -> tuple[Array, Array, Array]:
+        """φ, ω, α of ``link`` (rotation from the drawn pose)."""
+        return (self.link_state(link, self.q)[1], self.link_state(link, self.qdot)[1],
+                self.link_state(link, self.qddot)[1])
+
+    def joint_coordinate(self, joint: Joint) -> tuple[Array, Array, Array]:
+        """q, q̇, q̈ of a joint: relative rotation (rad) or displacement along the axis (m)."""
+        i, j = joint.links
+        if joint.kind == "revolute":
+            (pi, wi, ai), (pj, wj, aj) = self.angle(i), self.angle(j)
+            return pj - pi, wj - wi, aj - ai
+        a0 = self.linkage.points[joint.at]
+        assert joint.axis is not None
+        phi_i, w_i, a_i = self.angle(i)
+        u = rotate(phi_i, np.array(joint.axis))
+        pj, vj, accj = self.point(j, a0)
+        pi, vi, acci = self.point(i, a0)
+        d, dd, ddd = pj - pi, vj - vi, accj - acci
+        du = w_i[:, None] * perp(u)
+        ddu = a_i[:, None] * perp(u) - (w_i**2)[:, None] * u
+        return (_dot(u, d), _dot(du, d) + _dot(u, dd),
+                _dot(ddu, d) + 2 * _dot(du, dd) + _dot(u, ddd))
+
+    @property
+    def assembled(self) -> NDArray[np.bool_]:
+        return np.all(np.isfinite(self.q), axis=1)
+
+
+def _dot(a: Array, b: Array) -> Array:
+    return np.einsum("...i,...i->...", a, b)
+
+
+# -- constraints ------------------------------------------------------------------------
+
+def _link_point(layout: Layout, q: Array, link: str, p0: Array) -> tuple[Array, Array]:
+    """(position (N, 2), ∂position/∂φ (N, 2)) of a drawn point on ``link`` at coordinates q."""
+    k = layout.index(link)
+    if k < 0:
+        return np.broadcast_to(p0, (q.shape[0], 2)).copy(), np.zeros((q.shape[0], 2))
+    r = rotate(q[:, k + 2], p0)
+    return q[:, k:k + 2] + r, perp(r)
+
+
+def _put(jac: Array, row: int, layout: Layout, link: str, d_t: Array, d_phi: Array) -> None:
+    """Add ∂(row)/∂(t_x, t_y, φ) of ``link`` (nothing for the ground)."""
+    k = layout.index(link)
+    if k >= 0:
+        jac[:, row, k:k + 2] += d_t
+        jac[:, row, k + 2] += d_phi
+
+
+def residual_and_jacobian(linkage: Linkage, q: Array, targets: Array, *,
+                          drivers: bool = True) -> tuple[Array, Array]:
+    """Φ (N, m) and J = ∂Φ/∂q (N, m, 3n) for coordinates q and driver targets (N, d);
+    without ``drivers``, the joints' rows only."""
+    layout = Layout(linkage)
+    n = q.shape[0]
+    rows = layout.rows if drivers else 2 * len(linkage.joints)
+    phi = np.zeros((n, rows))
+    jac = np.zeros((n, rows, layout.size))
+    row = 0
+    for joint in linkage.joints:
+        i, j = joint.links
+        p0 = np.array(linkage.points[joint.at])
+        if joint.kind == "revolute":
+            pi, dpi = _link_point(layout, q, i, p0)
+            pj, dpj = _link_point(layout, q, j, p0)
+            phi[:, row:row + 2] = pi - pj
+            for c in range(2):
+                eye = np.zeros((n, 2))
+                eye[:, c] = 1.0
+                _put(jac, row + c, layout, i, eye, dpi[:, c])
+                _put(jac, row + c, layout, j, -eye, -dpj[:, c])
+        else:
+            _angle_lock(layout, q, jac, phi, row, i, j)
+            _slide_row(layout, q, jac, phi, row + 1, joint, linkage, normal=True)
+        row += 2
+    joints = {jt.name: jt for jt in linkage.joints}
+    for k, driver in enumerate(linkage.drivers if drivers else ()):
+        joint = joints[driver.joint]
+        i, j = joint.links
+        if joint.kind == "revolute":
+            _angle_lock(layout, q, jac, phi, row, i, j)
+        else:
+            _slide_row(layout, q, jac, phi, row, joint, linkage, normal=False)
+        phi[:, row] -= targets[:, k]
+        row += 1
+    return phi, jac
+
+
+def _angle_lock(layout: Layout, q: Array, jac: Array, phi: Array, row: int, i: str, j: str) -> None:
+    """Row φ_j − φ_i."""
+    n = q.shape[0]
+    for link, sign in ((j, 1.0), (i, -1.0)):
+        k = layout.index(link)
+        if k >= 0:
+            phi[:, row] += sign * q[:, k + 2]
+        _put(jac, row, layout, link, np.zeros((n, 2)), np.full(n, sign))
+
+
+def _slide_row(layout: Layout, q: Array, jac: Array, phi: Array, row: int, joint: Joint,
+               linkage: Linkage, *, normal: bool) -> None:
+    """Row w_i·(p_j(A0) − p_i(A0)), w = n (the slide's normal) or u (its axis), fixed in i."""
+    i, j = joint.links
+    assert joint.axis is not None
+    a0 = np.array(linkage.points[joint.at])
+    w0 = perp(np.array(joint.axis)) if normal else np.array(joint.axis)
+    ki = layout.index(i)
+    phi_i = q[:, ki + 2] if ki >= 0 else np.zeros(q.shape[0])
+    w = rotate(phi_i, w0)
+    pj, dpj = _link_point(layout, q, j, a0)
+    pi, dpi = _link_point(layout, q, i, a0)
+    d = pj - pi
+    phi[:, row] += _dot(w, d)
+    _put(jac, row, layout, j, w, _dot(w, dpj))
+    _put(jac, row, layout, i, -w, _dot(perp(w), d) - _dot(w, dpi))
+
+
+def quadratic_terms(linkage: Linkage, q: Array, qdot: Array) -> Array:
+    """J̇·q̇ (N, m): the part of Φ̈ that does not hold q̈, for J·q̈ = a − J̇·q̇."""
+    layout = Layout(linkage)
+    n = q.shape[0]
+    out = np.zeros((n, layout.rows))
+
+    def spin(link: str) -> Array:
+        k = layout.index(link)
+        return qdot[:, k + 2] if k >= 0 else np.zeros(n)
+
+    def rotated(link: str, p0: Array) -> Array:
+        k = layout.index(link)
+        return rotate(q[:, k + 2], p0) if k >= 0 else np.zeros((n, 2))
+
+    def velocity(link: str, p0: Array) -> Array:
+        k = layout.index(link)
+        return qdot[:, k:k + 2] + spin(link)[:, None] * perp(rotated(link, p0)) if k >= 0 \
+            else np.zeros((n, 2))
+
+    def slide(joint: Joint, w0: Array) -> Array:
+        i, j = joint.links
+        a0 = np.array(linkage.points[joint.at])
+        ki = layout.index(i)
+        w = rotate(q[:, ki + 2], w0) if ki >= 0 else np.broadcast_to(w0, (n, 2))
+        pos_j = _link_point(layout, q, j, a0)[0]
+        pos_i = _link_point(layout, q, i, a0)[0]
+        d = pos_j - pos_i
+        dd = velocity(j, a0) - velocity(i, a0)
+        wi = spin(i)
+        ddd = -(spin(j) ** 2)[:, None] * rotated(j, a0) + (wi**2)[:, None] * rotated(i, a0)
+        return (-(wi**2) * _dot(w, d) + 2 * wi * _dot(perp(w), dd) + _dot(w, ddd))
+
+    row = 0
+    for joint in linkage.joints:
+        i, j = joint.links
+        if joint.kind == "revolute":
+            p0 = np.array(linkage.points[joint.at])
+            out[:, row:row + 2] = (-(spin(i) ** 2)[:, None] * rotated(i, p0)
+                                   + (spin(j) ** 2)[:, None] * rotated(j, p0))
+        else:
+            assert joint.axis is not None
+            out[:, row + 1] = slide(joint, perp(np.array(joint.axis)))
+        row += 2
+    joints = {jt.name: jt for jt in linkage.joints}
+    for driver in linkage.drivers:
+        joint = joints[driver.joint]
+        if joint.kind == "prismatic":
+            assert joint.axis is not None
+            out[:, row] = slide(joint, np.array(joint.axis))
+        row += 1
+    return out
+
+
+def joint_jacobian_at_drawn_pose(linkage: Linkage) -> Array:
+    """∂(joint constraints)/∂q at the drawn pose, (2j, 3n): its rank gives the mobility."""
+    layout = Layout(linkage)
+    _, jac = residual_and_jacobian(linkage, np.zeros((1, layout.size)), np.zeros((1, 0)),
+                                   drivers=False)
+    return jac[0]
+
+
+# -- solving ----------------------------------------------------------------------------
+
+def solve_batched(a: Array, b: Array) -> Array:
+    """a·x = b for every pose: exact where a is square and regular, else least squares."""
+    with np.errstate(all="ignore"):
+        if a.shape[1] == a.shape[2]:
+            try:
+                return np.asarray(np.linalg.solve(a, b[..., None])[..., 0], dtype=np.float64)
+            except np.linalg.LinAlgError:
+                pass
+        return np.asarray(np.einsum("nij,nj->ni", np.linalg.pinv(a), b), dtype=np.float64)
+
+
+def _newton(linkage: Linkage, q: Array, targets: Array) -> tuple[Array, NDArray[np.bool_]]:
+    """Close the loops from q at the driver targets; returns (q, converged)."""
+    tol = CLOSURE_RTOL * max(1.0, linkage.scale)
+    q = q.copy()
+    converged = np.zeros(q.shape[0], dtype=bool)
+    with np.errstate(all="ignore"):
+        for _ in range(NEWTON_ITERATIONS):
+            phi, jac = residual_and_jacobian(linkage, q, targets)
+            err = np.abs(phi).max(axis=1) if phi.shape[1] else np.zeros(q.shape[0])
+            converged = np.isfinite(err) & (err <= tol)
+            if converged.all():
+                break
+            step = solve_batched(jac, phi)
+            step[converged] = 0.0
+            q = q - step
+    return q, converged & np.all(np.isfinite(q), axis=1)
+
+
+def _steps(linkage: Linkage, values: Array) -> int:
+    """Continuation steps so that no driver moves more than one step at a time."""
+    joints = {j.name: j for j in linkage.joints}
+    count = 1
+    for k, driver in enumerate(linkage.drivers):
+        kind = joints[driver.joint].kind
+        size = STEP_ROTATION if kind == "revolute" else STEP_DISPLACEMENT * linkage.scale
+        travel = float(np.abs(values[:, k]).max()) if values.size else 0.0
+        count = max(count, math.ceil(travel / size))
+    return count
+
+
+def positions(linkage: Linkage, values: Array) -> tuple[Array, Array]:
+    """q (N, 3n) at each row of driver values (N, d), reached from the drawn pose; rows that
+    lock are NaN, with the fraction s of their travel where they locked (else NaN)."""
+    n = values.shape[0]
+    q = np.zeros((n, Layout(linkage).size))
+    locked = np.full(n, np.nan)
+    alive = np.ones(n, dtype=bool)
+    steps = _steps(linkage, values)
+    previous = 0.0
+    for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
+        trial, ok = _newton(linkage, q[alive], s * values[alive])
+        if not ok.all():
+            where = np.flatnonzero(alive)[~ok]
+            locked[where] = _lock_fraction(linkage, q[where], values[where], previous, s)
+            alive[where] = False
+            q[where] = np.nan
+        q[alive] = trial[ok]
+        previous = s
+    return q, locked
+
+
+def _lock_fraction(linkage: Linkage, q: Array, values: Array, lo: float, hi: float) -> Array:
+    """Bisection on s between a pose that closes (lo) and one that does not (hi)."""
+    lo_s, hi_s = np.full(q.shape[0], lo), np.full(q.shape[0], hi)
+    good = q.copy()
+    for _ in range(LOCK_BISECTIONS):
+        mid = 0.5 * (lo_s + hi_s)
+        trial, ok = _newton(linkage, good, mid[:, None] * values)
+        lo_s = np.where(ok, mid, lo_s)
+        hi_s = np.where(ok, hi_s, mid)
+        good[ok] = trial[ok]
+    return lo_s
+
+
+def solve_pose(linkage: Linkage, values: ArrayLike | None = None,
+               velocities: ArrayLike | None = None,
+               accelerations: ArrayLike | None = None) -> LinkagePose:
+    """The pose, velocity and acceleration of every link at each row of driver values.
+
+    Without arguments: the linkage's own drivers (one pose). Values are per driver in
+    driver units (rad or m from the drawn pose), shape (N, d) or (d,).
+    """
+    d = len(linkage.drivers)
+    own = np.array([[drv.value for drv in linkage.drivers]]).reshape(1, d)
+    vals = own if values is None else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, d)
+    n = vals.shape[0]
+    vel = np.broadcast_to(np.array([drv.velocity for drv in linkage.drivers]) if velocities is None
+                          else np.asarray(velocities, dtype=float), (n, d))
+    acc = np.broadcast_to(np.array([drv.acceleration for drv in linkage.drivers])
+                          if accelerations is None else np.asarray(accelerations, dtype=float), (n, d))
+    q, locked = positions(linkage, vals)
+    joints_rows = 2 * len(linkage.joints)
+    with np.errstate(all="ignore"):
+        _, jac = residual_and_jacobian(linkage, np.nan_to_num(q), vals)
+        rhs = np.zeros((n, Layout(linkage).rows))
+        rhs[:, joints_rows:] = vel
+        qdot = solve_batched(jac, rhs)
+        rhs = -quadratic_terms(linkage, np.nan_to_num(q), qdot)
+        rhs[:, joints_rows:] += acc
+        qddot = solve_batched(jac, rhs)
+    bad = ~np.all(np.isfinite(q), axis=1)
+    qdot[bad] = np.nan
+    qddot[bad] = np.nan
+    return LinkagePose(linkage, vals, q, qdot, qddot, locked)

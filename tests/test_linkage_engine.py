@@ -1,0 +1,86 @@
+"""The generic linkage engine (analytic/linkage*.py) against the closed-form presets and
+against known lock positions: the four-bar and the slider-crank written as linkages must
+give the same numbers as their own closed forms, independent code paths."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+
+from mechcheck.analytic import forces
+from mechcheck.analytic.case import Case, FourBarGeometry
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.linkage_forces import solve_linkage
+from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.presets import FOUR_BAR_NAMES, SLIDER_CRANK_NAMES, linkage_of
+
+from .strategies import MAX_CONDITION, cases
+
+#: Two methods for the same rigid-body equations: only rounding separates them (the
+#: tolerance policy's analytic-family 1e-9, relative to the case's force and torque scale).
+RTOL = 1e-9
+
+
+def scales(values: dict[str, float], length: float) -> tuple[float, float]:
+    force = max([abs(v) for q, v in values.items() if q.startswith("F")] + [1e-2])
+    torque = max([abs(v) for q, v in values.items() if q[0] in "TM"] + [force * length])
+    return force, torque
+
+
+@settings(max_examples=80, deadline=None)
+@given(cases(friction=None, dynamic=None, gravity=None))
+def test_presets_through_the_generic_engine_equal_the_closed_forms(case: Case) -> None:
+    """A random four-bar or slider-crank (static, dynamic, friction; any branch, ground
+    angle, offset) written as a linkage has the closed form's reactions and drive torque."""
+    assume(case.drive_link == 2)
+    closed = forces.solve(case)
+    generic = solve_linkage(linkage_of(case))
+    names = FOUR_BAR_NAMES if case.mechanism == "four_bar" else SLIDER_CRANK_NAMES
+    force, torque = scales(dict(closed.values), case.geometry.scale)
+    for legacy, name in names.items():
+        expected = closed.values[legacy]
+        got = float(generic.values[name][0])
+        scale = force if legacy.startswith("F") else torque
+        assert abs(got - expected) <= RTOL * scale, (legacy, got, expected)
+    pose = pose_of(case)
+    assert float(generic.values["phi_coupler"][0]) == pytest.approx(0.0, abs=1e-12)
+    drawn_theta13 = math.atan2(*(pose.joints["B"][0] - pose.joints["A"][0])[::-1])
+    assert math.remainder(drawn_theta13 - closed.values["theta13"], math.tau) == pytest.approx(
+        0.0, abs=1e-9)
+
+
+@settings(max_examples=40, deadline=None)
+@given(cases(friction=False, dynamic=True))
+def test_a_driven_preset_reaches_the_closed_form_pose_and_motion(case: Case) -> None:
+    """Driving the crank 40° on from the drawn pose reaches the closed form's coupler angle,
+    angular velocity and acceleration at θ12 + 40° on the same branch (continuation)."""
+    assume(case.drive_link == 2)
+    later = case.with_(theta12=case.theta12 + math.radians(40.0))
+    assume(forces.solve(later).status == "ok")
+    # No lock or branch point on the way: where the path passes a singular pose (an
+    # isosceles slider-crank's B through A0) the branches meet and either may follow.
+    path = forces.solve_poses(case, np.linspace(case.theta12, later.theta12, 81))
+    assume(bool(np.all(path.condition < MAX_CONDITION)))
+    linkage = linkage_of(case)
+    moved = solve_pose(linkage, [math.radians(40.0)])
+    start, end = pose_of(case), pose_of(later)
+    phi, omega, alpha = (float(v[0]) for v in moved.angle("coupler"))
+    assert math.remainder(start.theta13[0] + phi - end.theta13[0], math.tau) == pytest.approx(
+        0.0, abs=1e-9)
+    assert omega == pytest.approx(float(end.links[3].omega[0]), rel=1e-9, abs=1e-9)
+    assert alpha == pytest.approx(float(end.links[3].alpha[0]), rel=1e-9, abs=1e-7)
+
+
+def test_a_non_grashof_crank_locks_where_the_theory_says() -> None:
+    """The non-Grashof four-bar (100, 229, 99, 300) drawn at θ12 = 0 locks at ±97.2616°
+    (|A B0| reaches a3 + a4 = 328: cos θ12 = (300² + 100² − 328²)/(2·300·100))."""
+    case = Case("jam", FourBarGeometry(0.300, 0.100, 0.229, 0.099), 0.0)
+    limit = math.degrees(math.acos((0.300**2 + 0.100**2 - 0.328**2) / (2 * 0.300 * 0.100)))
+    assert limit == pytest.approx(97.2616, abs=1e-4)
+    pose = solve_pose(linkage_of(case), np.radians([[50.0], [120.0], [-150.0]]), [0.0], [0.0])
+    assert pose.assembled.tolist() == [True, False, False]
+    reached = np.degrees(pose.locked_at[1:] * np.radians([120.0, -150.0]))
+    assert reached == pytest.approx([limit, -limit], abs=1e-6)
