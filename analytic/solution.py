@@ -8,6 +8,7 @@ reports are drawn (:data:`QUANTITY_UNITS`).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Literal
@@ -38,27 +39,52 @@ FORCE_FLOOR_N = 0.01
 #: The order quantities are written in.
 QUANTITY_ORDER = list(QUANTITY_UNITS)
 
+#: The quantities of a linkage (LINKAGES.md "What comes out"); their units depend on the
+#: joint or spring they name, so a Solution states them (:attr:`Solution.units`).
+LINKAGE_QUANTITY = re.compile(r"F_\w+_[xy]|M_\w+|Q_\w+|S_\w+|[xy]_\w+|phi_\w+|q_\w+")
+#: Order of a linkage's quantities in tables: by family, then by name.
+LINKAGE_FAMILIES = ("Q_", "F_", "M_", "S_", "x_", "y_", "phi_", "q_")
 
-def table_values(quantity: str, values: ArrayLike) -> np.ndarray:
+DEGREES_PER_RADIAN = 57.29577951308232
+
+
+def unit_factor(unit: str) -> float:
+    """From the stored SI/radian value to the table unit."""
+    return DEGREES_PER_RADIAN if unit == "deg" else 1.0
+
+
+def kind_of_unit(unit: str) -> str:
+    """``force`` (N), ``torque`` (N*m) or ``pose`` (deg, m): the policy's quantity kind."""
+    return {"N": "force", "N*m": "torque"}.get(unit, "pose")
+
+
+def order_key(quantity: str) -> tuple[int, int, str]:
+    """Sort key: the CONVENTIONS order for the four-bar and slider-crank, then linkages'
+    quantities by family and name."""
+    if quantity in QUANTITY_UNITS:
+        return (0, QUANTITY_ORDER.index(quantity), "")
+    family = next((i for i, f in enumerate(LINKAGE_FAMILIES) if quantity.startswith(f)),
+                  len(LINKAGE_FAMILIES))
+    return (1, family, quantity)
+
+
+def table_values(quantity: str, values: ArrayLike, unit: str | None = None) -> np.ndarray:
     """Values as the tables show them: in table units (degrees for angles), angles wrapped
-    to [−180°, 180°) (CONVENTIONS.md), so that every backend spells one angle one way."""
-    unit, factor = QUANTITY_UNITS[quantity]
-    out = np.asarray(values, dtype=float) * factor
+    to [−180°, 180°) (CONVENTIONS.md), so that every backend spells one angle one way.
+    ``unit`` is needed for a linkage's quantities (see :meth:`Solution.unit`)."""
+    unit = unit or QUANTITY_UNITS[quantity][0]
+    out = np.asarray(values, dtype=float) * unit_factor(unit)
     return (out + 180.0) % 360.0 - 180.0 if unit == "deg" else out
 
 
-def table_value(quantity: str, value: float) -> float:
+def table_value(quantity: str, value: float, unit: str | None = None) -> float:
     """:func:`table_values` for one number."""
-    return float(table_values(quantity, value))
+    return float(table_values(quantity, value, unit))
 
 
-def quantity_kind(quantity: str) -> str:
+def quantity_kind(quantity: str, unit: str | None = None) -> str:
     """``torque``, ``force`` or ``pose``: the tolerance policy's quantity kind."""
-    if quantity in ("T12", "T14", "M14"):
-        return "torque"
-    if quantity.startswith("F"):
-        return "force"
-    return "pose"
+    return kind_of_unit(unit or QUANTITY_UNITS[quantity][0])
 
 
 @dataclass(frozen=True)
@@ -86,12 +112,21 @@ class Solution:
     status: Status = "ok"
     message: str = ""
     diagnostics: Mapping[str, float | str] = field(default_factory=dict)
+    #: The table unit (N, N*m, m, deg) of each linkage quantity; the four-bar's and
+    #: slider-crank's are fixed (QUANTITY_UNITS).
+    units: Mapping[str, str] = field(default_factory=dict)
+
+    def unit(self, quantity: str) -> str:
+        return self.units.get(quantity) or QUANTITY_UNITS[quantity][0]
 
     def in_table_units(self) -> dict[str, float]:
         """``values`` as the tables show them: N, N·m, m, and degrees wrapped to [−180°, 180°)."""
-        return {q: table_value(q, v) for q, v in self.values.items()}
+        return {q: table_value(q, v, self.unit(q)) for q, v in self.values.items()}
 
     def __post_init__(self) -> None:
-        unknown = set(self.values) - set(QUANTITY_UNITS)
+        unknown = {q for q in self.values
+                   if q not in QUANTITY_UNITS and not (LINKAGE_QUANTITY.fullmatch(q)
+                                                       and q in self.units)}
         if unknown:
-            raise ValueError(f"unknown quantities {sorted(unknown)}")
+            raise ValueError(f"unknown quantities, or linkage quantities without a unit: "
+                             f"{sorted(unknown)}")

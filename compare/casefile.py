@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import math
 import tomllib
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
-from pydantic_core import ErrorDetails
+from pydantic import Field
 
 from mechcheck.analytic.case import (
     Case,
@@ -32,60 +31,43 @@ from mechcheck.analytic.case import (
     Mass,
     Motion,
     SliderCrankGeometry,
-    bounded_angle,
-    finite,
 )
-
-Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, validated
 
 
-class FourBarGeometrySpec(_Strict):
+class FourBarGeometrySpec(Strict):
     a1: float
     a2: float
     a3: float
     a4: float
 
 
-class SliderCrankGeometrySpec(_Strict):
+class SliderCrankGeometrySpec(Strict):
     a2: float
     a3: float
     offset: float = 0.0
 
 
-class PolarForceSpec(_Strict):
-    magnitude: Annotated[float, Field(ge=0.0)]
-    angle: float
-
-
-class CartesianForceSpec(_Strict):
-    x: float
-    y: float
-
-
-class LoadSpec(_Strict):
+class LoadSpec(Strict):
     link: int
     at: Pair = [0.0, 0.0]
     force: dict[str, Any] | None = None
     torque: float = 0.0
 
 
-class MassSpec(_Strict):
+class MassSpec(Strict):
     link: int
     mass: float
     com: Pair = [0.0, 0.0]
     inertia: float = 0.0
 
 
-class MotionSpec(_Strict):
+class MotionSpec(Strict):
     omega: float = 0.0
     alpha: float = 0.0
 
 
-class FrictionSpec(_Strict):
+class FrictionSpec(Strict):
     mu: Annotated[float, Field(ge=0.0)] = 0.0
     pin_radius: dict[str, float] = {}
     slide_mu: Annotated[float, Field(ge=0.0)] | None = None
@@ -93,20 +75,7 @@ class FrictionSpec(_Strict):
     direction: Literal["cw", "ccw"] | None = None
 
 
-class SeedSpec(_Strict):
-    source: str
-    note: str = ""
-    printed: dict[str, float] = {}
-
-
-class ToleranceSpec(_Strict):
-    backend: str = "*"
-    quantity: str = "*"
-    rtol: Annotated[float, Field(ge=0.0)]
-    atol: Annotated[float, Field(ge=0.0)] = 0.0
-
-
-class CaseSpec(_Strict):
+class CaseSpec(Strict):
     name: str
     mechanism: Literal["four_bar", "slider_crank"]
     length_unit: Literal["m", "mm"] = "m"
@@ -125,66 +94,6 @@ class CaseSpec(_Strict):
     tolerance: list[ToleranceSpec] = []
 
 
-def _key(loc: Sequence[int | str]) -> str:
-    """pydantic's location tuple as a TOML-ish key: ``loads[1].force.x``."""
-    out = ""
-    for part in loc:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
-    return out
-
-
-def _in_user_terms(error: ErrorDetails) -> str:
-    """pydantic's complaint, said in the terms of the case file (TOML keys, values, tables)."""
-    kind, ctx, given = error["type"], error.get("ctx") or {}, error.get("input")
-    if kind == "extra_forbidden":
-        return "unknown key: not part of the case-file format ('mechcheck new' writes an example)"
-    if kind == "missing":
-        return "is required but missing"
-    if kind in ("float_type", "float_parsing", "int_type", "int_parsing", "bool_type"):
-        return f"must be a number, got {given!r}"
-    if kind == "finite_number":
-        return f"must be finite, got {given!r}"
-    if kind == "string_type":
-        return f"must be a text in quotes, got {given!r}"
-    if kind == "literal_error":
-        return f"must be {ctx.get('expected')}, got {given!r}"
-    if kind in ("too_short", "too_long"):
-        bound = ctx.get("min_length", ctx.get("max_length"))
-        what = "a pair [x, y]" if bound == 2 else f"a list of {bound} values"
-        return f"must be {what}, got {ctx.get('actual_length')} value(s)"
-    if kind in ("model_type", "dict_type", "model_attributes_type"):
-        return f"must be a table ({{ key = value, … }} or a [section]), got {given!r}"
-    if kind == "list_type":
-        return f"must be a list ([ … ], or [[…]] tables), got {given!r}"
-    if kind == "greater_than_equal":
-        return f"must be >= {ctx.get('ge')}, got {given!r}"
-    return str(error["msg"])
-
-
-def _validated(model: type[_Strict], data: Any, prefix: str = "") -> Any:
-    try:
-        return model.model_validate(data)
-    except ValidationError as error:
-        first = error.errors()[0]
-        key = _key(first["loc"])
-        key = f"{prefix}.{key}" if prefix and key else (key or prefix)
-        raise CaseError(_in_user_terms(first), key=key) from None
-
-
-def _force(spec: dict[str, Any] | None, key: str) -> tuple[float, float]:
-    if spec is None:
-        return (0.0, 0.0)
-    if "magnitude" in spec or "angle" in spec:
-        polar = _validated(PolarForceSpec, spec, key)
-        finite(polar.magnitude, f"{key}.magnitude")
-        a = bounded_angle(math.radians(polar.angle), f"{key}.angle")
-        return (polar.magnitude * math.cos(a), polar.magnitude * math.sin(a))
-    if "x" in spec or "y" in spec:
-        xy = _validated(CartesianForceSpec, spec, key)
-        return (xy.x, xy.y)
-    raise CaseError("must be { magnitude = .., angle = .. } or { x = .., y = .. }", key=key)
-
-
 def _built(factory: Any, key: str, *args: Any, **kwargs: Any) -> Any:
     """Construct a Case value, prefixing its key with where it sits in the file."""
     try:
@@ -201,14 +110,14 @@ def case_from_spec(spec: CaseSpec, source: str = "") -> Case:
         return (p[0] * scale, p[1] * scale)
 
     if spec.mechanism == "four_bar":
-        g = _validated(FourBarGeometrySpec, spec.geometry, "geometry")
+        g = validated(FourBarGeometrySpec, spec.geometry, "geometry")
         geometry: FourBarGeometry | SliderCrankGeometry = _built(
             FourBarGeometry, "", g.a1 * scale, g.a2 * scale, g.a3 * scale, g.a4 * scale)
     else:
-        g = _validated(SliderCrankGeometrySpec, spec.geometry, "geometry")
+        g = validated(SliderCrankGeometrySpec, spec.geometry, "geometry")
         geometry = _built(SliderCrankGeometry, "", g.a2 * scale, g.a3 * scale, g.offset * scale)
     loads = tuple(_built(Load, f"loads[{i}]", link=ld.link, at=pt(ld.at),
-                         force=_force(ld.force, f"loads[{i}].force"), torque=ld.torque)
+                         force=force_vector(ld.force, f"loads[{i}].force"), torque=ld.torque)
                   for i, ld in enumerate(spec.loads))
     masses = tuple(_built(Mass, f"masses[{i}]", link=m.link, mass=m.mass, com=pt(m.com),
                           inertia=m.inertia) for i, m in enumerate(spec.masses))
@@ -246,7 +155,7 @@ def parse_cases(data: dict[str, Any], source: str) -> list[tuple[Case, CaseSpec]
         name = table.get("name") if isinstance(table, dict) else None
         label = name if isinstance(name, str) else f"#{i + 1}"
         try:
-            spec = _validated(CaseSpec, table)
+            spec = validated(CaseSpec, table)
             out.append((case_from_spec(spec, source), spec))
         except CaseError as error:
             raise error.located(file=source, case=label) from None

@@ -17,7 +17,7 @@ import jinja2
 import pandas as pd
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
+from mechcheck.analytic.solution import Solution
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import CaseSpec
 from mechcheck.output import file_stem
@@ -132,13 +132,14 @@ def case_view(case: Case, spec: CaseSpec | None, solutions: list[Solution],
         for s in solutions:
             hit = hits.get((q, s.backend))
             cells.append({
-                "value": table_value(q, s.values[q]) if q in s.values else None,
+                "value": table_value(q, s.values[q], s.unit(q)) if q in s.values else None,
                 "rel_err": float(hit["rel_err"]) if hit else None,
                 "passed": bool(hit["passed"]) if hit else None,
                 "tolerance": float(hit["tolerance"]) if hit else None,
                 "overridden": bool(hit["overridden"]) if hit else False,
             })
-        rows.append({"quantity": q, "unit": QUANTITY_UNITS[q][0], "cells": cells})
+        unit = next(s.unit(q) for s in solutions if q in s.values)
+        rows.append({"quantity": q, "unit": unit, "cells": cells})
     failed = sum(not r["passed"] for r in detail)
     verdicts = [s for s in solutions if s.status != "ok"]
     return {

@@ -14,11 +14,13 @@ import pandas as pd
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import (
     FORCE_FLOOR_N,
-    QUANTITY_ORDER,
     QUANTITY_UNITS,
     Solution,
+    kind_of_unit,
+    order_key,
     quantity_kind,
     table_value,
+    unit_factor,
 )
 from mechcheck.backends import REFERENCE
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, case_kind, tolerance_for
@@ -33,18 +35,13 @@ DIAGNOSTIC_COLUMNS = ["case", "backend", "status", "key", "value"]
 SCALE_FLOOR = FORCE_FLOOR_N
 
 
-def in_table_units(quantity: str, value: float) -> float:
-    """A value or a difference in the unit of the tables (radians → degrees)."""
-    return value * QUANTITY_UNITS[quantity][1]
-
-
 def ordered(values: Iterable[str]) -> list[str]:
-    return sorted(values, key=QUANTITY_ORDER.index)
+    return sorted(values, key=order_key)
 
 
 def results_frame(solutions: Sequence[Solution]) -> pd.DataFrame:
     """One row per reported number; absent quantities have no row."""
-    rows = [(s.case, s.backend, q, table_value(q, s.values[q]), QUANTITY_UNITS[q][0])
+    rows = [(s.case, s.backend, q, table_value(q, s.values[q], s.unit(q)), s.unit(q))
             for s in solutions for q in ordered(s.values)]
     return pd.DataFrame(rows, columns=RESULT_COLUMNS)
 
@@ -60,18 +57,19 @@ def kind_scales(case: Case, reference: Solution) -> dict[str, float]:
     scales = {"force": SCALE_FLOOR, "torque": SCALE_FLOOR, "angle": 1.0,
               "length": case.geometry.scale}
     for q, v in reference.values.items():
-        kind = quantity_kind(q)
+        kind = kind_of_unit(reference.unit(q))
         if kind in ("force", "torque"):
             scales[kind] = max(scales[kind], abs(v))
     scales["torque"] = max(scales["torque"], scales["force"] * case.geometry.scale)
     return scales
 
 
-def error_scale(quantity: str, scales: dict[str, float]) -> float:
-    """What a quantity's error is measured against (angles: 1 rad; s14: the longest link)."""
-    kind = quantity_kind(quantity)
+def error_scale(unit: str, scales: dict[str, float]) -> float:
+    """What an error in ``unit`` is measured against (angles: 1 rad; lengths and positions:
+    the longest link; forces and torques: their kind's scale)."""
+    kind = kind_of_unit(unit)
     if kind == "pose":
-        return scales["length"] if quantity == "s14" else scales["angle"]
+        return scales["length"] if unit == "m" else scales["angle"]
     return scales[kind]
 
 
@@ -81,16 +79,16 @@ def comparison_rows(case: Case, reference: Solution, other: Solution) -> list[di
     kind = case_kind(case, float(reference.diagnostics.get("condition_number", 0.0)))
     rows: list[dict[str, object]] = []
     for q in ordered(set(reference.values) & set(other.values)):
-        ref, val = reference.values[q], other.values[q]
+        ref, val, unit = reference.values[q], other.values[q], reference.unit(q)
         abs_err = abs(val - ref)
-        if quantity_kind(q) == "pose" and q != "s14":
+        if unit == "deg":
             abs_err = abs(math.remainder(val - ref, math.tau))  # angles wrap
-        rel_err = abs_err / error_scale(q, scales)
-        tol = tolerance_for(case, other.backend, q, kind)
+        rel_err = abs_err / error_scale(unit, scales)
+        tol = tolerance_for(case, other.backend, q, kind, kind_of_unit(unit))
         rows.append({
             "case": case.name, "quantity": q, "backend": other.backend,
-            "value": table_value(q, val), "reference": table_value(q, ref),
-            "abs_err": in_table_units(q, abs_err), "rel_err": rel_err,
+            "value": table_value(q, val, unit), "reference": table_value(q, ref, unit),
+            "abs_err": abs_err * unit_factor(unit), "rel_err": rel_err,
             "tolerance": tol.rtol,
             "passed": bool(rel_err <= tol.rtol or abs_err <= tol.atol),
             # Not written to comparison.csv (the contract fixes its columns); the report uses them.

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
+from mechcheck.analytic.solution import Solution
 from mechcheck.tables import comparison_rows
 
 
@@ -39,7 +39,7 @@ def assert_solution_close(case: Case, solution: Solution, reference: Solution | 
     if bad:
         lines = [f"{where}: {len(bad)} of {len(rows)} quantities outside tolerance"]
         for r in bad:
-            unit = QUANTITY_UNITS[str(r["quantity"])][0]
+            unit = reference.unit(str(r["quantity"]))
             lines.append(
                 f"  {r['quantity']}: {r['value']:.12g} {unit} vs analytic {r['reference']:.12g} "
                 f"{unit}; relative error {r['rel_err']:.2e} > tolerance {r['tolerance']:.1e} "

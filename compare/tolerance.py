@@ -83,12 +83,12 @@ def _matches(pattern: str, value: str) -> bool:
     return pattern == "*" or fnmatch(value, pattern)
 
 
-def override(case: Case, backend: str, quantity: str) -> tuple[float, float] | None:
+def override(case: Case, backend: str, quantity: str, kind: str) -> tuple[float, float] | None:
     """The case file's own tolerance for this comparison, if it sets one (last wins)."""
     found = None
     for selector, rtol, atol in case.tolerance:
         b, q = selector.split(":", 1)
-        if _matches(b, backend) and (_matches(q, quantity) or q == quantity_kind(quantity)):
+        if _matches(b, backend) and (_matches(q, quantity) or q == kind):
             found = (rtol, atol)
     return found
 
@@ -102,12 +102,15 @@ def rule(backend: str, quantity_kind: str, case_kind: str) -> Tolerance:
     raise LookupError(backend)  # unreachable: the last rule matches everything
 
 
-def tolerance_for(case: Case, backend: str, quantity: str, kind: str) -> Tolerance:
-    """The tolerance of one comparison row: the case's override or the policy's rule."""
-    own = override(case, backend, quantity)
+def tolerance_for(case: Case, backend: str, quantity: str, kind: str,
+                  quantity_kind_: str | None = None) -> Tolerance:
+    """The tolerance of one comparison row: the case's override or the policy's rule.
+    ``quantity_kind_`` (force, torque, pose) defaults to the four-bar's names' kinds."""
+    qkind = quantity_kind_ or quantity_kind(quantity)
+    own = override(case, backend, quantity, qkind)
     if own is not None:
         return Tolerance(own[0], own[1], "set in the case file", overridden=True)
-    return rule(backend, quantity_kind(quantity), kind)
+    return rule(backend, qkind, kind)
 
 
 def policy_table() -> list[dict[str, str | float]]:

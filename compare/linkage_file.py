@@ -1,0 +1,174 @@
+"""``mechanism = "linkage"`` case tables (LINKAGES.md) → a validated
+:class:`~mechcheck.analytic.linkage.Linkage`.
+
+pydantic checks the structure (unknown and missing keys, types); the Linkage value checks
+the rules of LINKAGES.md itself. Lengths and points are converted from ``length_unit`` to
+metres and angles from degrees to radians here, at the border; velocities and
+accelerations are already SI (rad/s, m/s).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Annotated, Any, Literal
+
+from pydantic import Field
+
+from mechcheck.analytic.case import CaseError, Vec2
+from mechcheck.analytic.linkage import (
+    Driver,
+    Joint,
+    JointFriction,
+    LinearSpring,
+    Link,
+    Linkage,
+    LinkMass,
+    PointLoad,
+    TorsionSpring,
+)
+from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, validated
+
+PointRef = str | Pair
+
+
+class LinkSpec(Strict):
+    name: str
+    points: list[str]
+
+
+class JointSpec(Strict):
+    name: str
+    kind: Literal["revolute", "prismatic"]
+    links: Annotated[list[str], Field(min_length=2, max_length=2)]
+    at: str
+    axis: Pair | None = None
+
+
+class DriverSpec(Strict):
+    joint: str
+    rotation: float | None = None
+    displacement: float | None = None
+    velocity: float = 0.0
+    acceleration: float = 0.0
+    sense: Literal["increasing", "decreasing"] | None = None
+
+
+class LinkageLoadSpec(Strict):
+    link: str
+    at: PointRef
+    force: dict[str, Any] | None = None
+    torque: float = 0.0
+
+
+class LinkageMassSpec(Strict):
+    link: str
+    mass: float
+    com: PointRef
+    inertia: float = 0.0
+
+
+class LinearSpringSpec(Strict):
+    name: str
+    ends: Annotated[list[tuple[str, PointRef]], Field(min_length=2, max_length=2)]
+    stiffness: float
+    free_length: float
+    damping: float = 0.0
+
+
+class TorsionSpringSpec(Strict):
+    name: str
+    joint: str
+    stiffness: float
+    free_rotation: float = 0.0
+    damping: float = 0.0
+
+
+class LinkageFrictionSpec(Strict):
+    mu: Annotated[float, Field(ge=0.0)] = 0.0
+    pin_radius: dict[str, Annotated[float, Field(ge=0.0)]] = {}
+    joint_mu: dict[str, Annotated[float, Field(ge=0.0)]] = {}
+    viscous: dict[str, Annotated[float, Field(ge=0.0)]] = {}
+
+
+class LinkageCaseSpec(Strict):
+    """One ``mechanism = "linkage"`` table, structurally valid."""
+
+    name: str
+    mechanism: Literal["linkage"]
+    length_unit: Literal["m", "mm"] = "m"
+    gravity: Pair = [0.0, 0.0]
+    points: dict[str, Pair]
+    links: list[LinkSpec]
+    joints: list[JointSpec]
+    drivers: list[DriverSpec] = []
+    loads: list[LinkageLoadSpec] = []
+    masses: list[LinkageMassSpec] = []
+    springs: list[dict[str, Any]] = []
+    friction: LinkageFrictionSpec | None = None
+    description: str = ""
+    seed: SeedSpec | None = None
+    tolerance: list[ToleranceSpec] = []
+
+
+def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
+    """The Linkage of a validated table: lengths to metres, degrees to radians."""
+    scale = 1e-3 if spec.length_unit == "mm" else 1.0
+    points = {name: (p[0] * scale, p[1] * scale) for name, p in spec.points.items()}
+
+    def where(ref: PointRef, key: str) -> Vec2:
+        if isinstance(ref, str):
+            if ref not in points:
+                raise CaseError(f"unknown point {ref!r}", key=key)
+            return points[ref]
+        return (ref[0] * scale, ref[1] * scale)
+
+    kinds = {j.name: j.kind for j in spec.joints}
+    springs: list[LinearSpring | TorsionSpring] = []
+    for i, table in enumerate(spec.springs):
+        if "joint" in table:
+            t = validated(TorsionSpringSpec, table, f"springs[{i}]")
+            springs.append(TorsionSpring(t.name, t.joint, t.stiffness, math.radians(t.free_rotation),
+                                         t.damping))
+        else:
+            s = validated(LinearSpringSpec, table, f"springs[{i}]")
+            ends = tuple((link, where(ref, f"springs[{i}].ends[{k}]"))
+                         for k, (link, ref) in enumerate(s.ends))
+            springs.append(LinearSpring(s.name, (ends[0], ends[1]), s.stiffness,
+                                        s.free_length * scale, s.damping))
+    f = spec.friction
+    return Linkage(
+        points=points,
+        links=tuple(Link(link.name, tuple(link.points)) for link in spec.links),
+        joints=tuple(Joint(j.name, j.kind, (j.links[0], j.links[1]), j.at,
+                           None if j.axis is None else (j.axis[0], j.axis[1])) for j in spec.joints),
+        drivers=tuple(_driver(d, i, kinds, scale) for i, d in enumerate(spec.drivers)),
+        loads=tuple(PointLoad(ld.link, where(ld.at, f"loads[{i}].at"),
+                              force_vector(ld.force, f"loads[{i}].force"), ld.torque)
+                    for i, ld in enumerate(spec.loads)),
+        masses=tuple(LinkMass(m.link, m.mass, where(m.com, f"masses[{i}].com"), m.inertia)
+                     for i, m in enumerate(spec.masses)),
+        springs=tuple(springs),
+        gravity=(spec.gravity[0], spec.gravity[1]),
+        friction=None if f is None else JointFriction(
+            f.mu, {k: v * scale for k, v in f.pin_radius.items()}, dict(f.joint_mu),
+            dict(f.viscous)),
+    )
+
+
+def _driver(d: DriverSpec, i: int, kinds: Mapping[str, str], scale: float) -> Driver:
+    """A driver's value in its joint's unit: ``rotation`` (deg) for a revolute joint,
+    ``displacement`` (length_unit) for a prismatic one."""
+    key = f"drivers[{i}]"
+    kind = kinds.get(d.joint)
+    if kind is None:
+        raise CaseError(f"unknown joint {d.joint!r}", key=f"{key}.joint")
+    wanted, other = ("rotation", "displacement") if kind == "revolute" else ("displacement",
+                                                                              "rotation")
+    if getattr(d, other) is not None:
+        raise CaseError(f"a {kind} joint is driven by '{wanted}', not '{other}'",
+                        key=f"{key}.{other}")
+    value = getattr(d, wanted) or 0.0
+    value = math.radians(value) if kind == "revolute" else value * scale
+    sense = {"increasing": 1, "decreasing": -1, None: 0}[d.sense]
+    return Driver(d.joint, value, d.velocity, d.acceleration, sense)
