@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
-from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, Geometry
+from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, PresetGeometry, preset_geometry
 from mechcheck.analytic.solution import Status
 
 #: Decimal places of the degrees in printed ranges (rounded inward, so that every
@@ -32,7 +32,7 @@ def _deg_range(lo: float, hi: float) -> str:
     return f"[{a:.{RANGE_DECIMALS}f}°, {b:.{RANGE_DECIMALS}f}°]"
 
 
-def _never_assembles(g: Geometry) -> str | None:
+def _never_assembles(g: PresetGeometry) -> str | None:
     """Why no θ12 assembles this geometry, or None if some does."""
     if isinstance(g, FourBarGeometry):
         if fourbar_kinematics.assembly_interval(g) is None:
@@ -43,7 +43,7 @@ def _never_assembles(g: Geometry) -> str | None:
     return None
 
 
-def check_geometry(g: Geometry) -> None:
+def check_geometry(g: PresetGeometry) -> None:
     """Raise :class:`CaseError` (key ``geometry``) if no θ12 assembles ``g``."""
     why = _never_assembles(g)
     if why is not None:
@@ -52,7 +52,7 @@ def check_geometry(g: Geometry) -> None:
 
 def assembly_range_text(case: Case) -> str:
     """Human description of the θ12 values (global, degrees) that assemble."""
-    g = case.geometry
+    g = preset_geometry(case)
     gd = case.ground_angle
     why = _never_assembles(g)
     if why is not None:
@@ -86,7 +86,7 @@ def assembly_range_text(case: Case) -> str:
 
 def in_assembly_range(case: Case, theta12: float) -> bool:
     """Whether θ12 (rad) lies in the range that assembles (endpoints included, to rounding)."""
-    g = case.geometry
+    g = preset_geometry(case)
     phi = math.remainder(theta12 - case.ground_angle, math.tau)
     slack = 1e-12
     if isinstance(g, FourBarGeometry):

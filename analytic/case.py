@@ -25,9 +25,12 @@ import math
 import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Literal, TypeVar
+from typing import TYPE_CHECKING, Literal, TypeVar, Union
 
-Mechanism = Literal["four_bar", "slider_crank"]
+if TYPE_CHECKING:
+    from mechcheck.analytic.linkage import Linkage
+
+Mechanism = Literal["four_bar", "slider_crank", "linkage"]
 Vec2 = tuple[float, float]
 V = TypeVar("V")
 
@@ -176,7 +179,25 @@ class SliderCrankGeometry:
         return max(self.a2, self.a3, abs(self.offset))
 
 
-Geometry = FourBarGeometry | SliderCrankGeometry
+Geometry = Union[FourBarGeometry, SliderCrankGeometry, "Linkage"]
+
+
+PresetGeometry = FourBarGeometry | SliderCrankGeometry
+
+
+def preset_geometry(case: Case) -> PresetGeometry:
+    """The four-bar's or slider-crank's geometry, for code that has a closed form for them."""
+    g = case.geometry
+    if isinstance(g, (FourBarGeometry, SliderCrankGeometry)):
+        return g
+    raise TypeError(f"case {case.name!r} is a linkage: it has no four-bar or slider-crank "
+                    "geometry")
+
+
+def _linkage_type() -> type:
+    from mechcheck.analytic.linkage import Linkage
+
+    return Linkage
 
 
 @dataclass(frozen=True)
@@ -334,11 +355,18 @@ class Case:
             raise error.located(case=self.name, file=self.source) from None
 
     def _validate(self) -> None:
+        from mechcheck.analytic.linkage import Linkage  # late: linkage needs CaseError
+
         if not isinstance(self.name, str) or not NAME_PATTERN.fullmatch(self.name):
             raise CaseError(f"must use only letters, digits, '-' and '_', got {self.name!r}",
                             key="name")
+        if isinstance(self.geometry, Linkage):
+            # A linkage carries its own drivers, loads, masses and friction (LINKAGES.md).
+            object.__setattr__(self, "gravity", _vec2(self.geometry.gravity, "gravity"))
+            return
         if not isinstance(self.geometry, (FourBarGeometry, SliderCrankGeometry)):
-            raise CaseError("must be a FourBarGeometry or SliderCrankGeometry", key="geometry")
+            raise CaseError("must be a FourBarGeometry, SliderCrankGeometry or Linkage",
+                            key="geometry")
         branches = ("open", "crossed") if self.mechanism == "four_bar" else ("right", "left")
         if self.branch == "":
             object.__setattr__(self, "branch", branches[0])
@@ -392,7 +420,18 @@ class Case:
     # -- derived facts ----------------------------------------------------------------
     @property
     def mechanism(self) -> Mechanism:
-        return "four_bar" if isinstance(self.geometry, FourBarGeometry) else "slider_crank"
+        if isinstance(self.geometry, FourBarGeometry):
+            return "four_bar"
+        return "slider_crank" if isinstance(self.geometry, SliderCrankGeometry) else "linkage"
+
+    @property
+    def linkage(self) -> Linkage:
+        """The mechanism as a linkage: a linkage case's own, or a preset drawn at this pose."""
+        from mechcheck.analytic.presets import linkage_of
+
+        if isinstance(self.geometry, (FourBarGeometry, SliderCrankGeometry)):
+            return linkage_of(self)
+        return self.geometry
 
     @property
     def input_sense(self) -> int:
@@ -404,6 +443,8 @@ class Case:
     @property
     def has_coulomb_friction(self) -> bool:
         """True when any Coulomb term is present (the equations are then nonlinear)."""
+        if self.mechanism == "linkage":
+            return self.linkage.has_coulomb_friction
         f = self.friction
         if f is None:
             return False
@@ -414,7 +455,8 @@ class Case:
 
     @property
     def has_viscous_friction(self) -> bool:
-        return self.friction is not None and any(c > 0.0 for c in self.friction.viscous.values())
+        f = self.linkage.friction if self.mechanism == "linkage" else self.friction
+        return f is not None and any(c > 0.0 for c in f.viscous.values())
 
     @property
     def has_friction(self) -> bool:
@@ -425,7 +467,8 @@ class Case:
         """``static``, ``dynamic`` or ``friction``: keys the tolerance policy."""
         if self.has_friction:
             return "friction"
-        return "static" if self.motion.is_static else "dynamic"
+        moving = self.linkage.is_moving if self.mechanism == "linkage" else not self.motion.is_static
+        return "dynamic" if moving else "static"
 
     def mass_of(self, link: int) -> Mass | None:
         return next((m for m in self.masses if m.link == link), None)

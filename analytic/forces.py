@@ -210,6 +210,10 @@ def unassemblable_solution(case: Case, backend: str, theta12: float) -> Solution
 
 def solve(case: Case) -> Solution:
     """The ``analytic`` backend: the full force analysis of one Case."""
+    if case.mechanism == "linkage":  # no closed form: the generic engine
+        from mechcheck.analytic import linkage_backends
+
+        return linkage_backends.solve(case)
     start = time.perf_counter()
     results = solve_poses(case)
     return solution_from(case, "analytic", results, method="member-equilibrium matrix method",

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mechcheck.analytic.case import Case, FourBarGeometry, Vec2
+from mechcheck.analytic.case import Case, FourBarGeometry, Vec2, preset_geometry
 
 Array = NDArray[np.float64]
 
@@ -102,8 +102,9 @@ def pose_of(case: Case, theta12_rad: ArrayLike | None = None, *,
     angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
     w = case.motion.omega if omega is None else omega
     a = case.motion.alpha if alpha is None else alpha
-    if isinstance(case.geometry, FourBarGeometry):
-        return fourbar_kinematics.pose(case.geometry, angles, w, a,
+    g = preset_geometry(case)
+    if isinstance(g, FourBarGeometry):
+        return fourbar_kinematics.pose(g, angles, w, a,
                                        branch=case.branch, ground_angle=case.ground_angle)
-    return slidercrank_kinematics.pose(case.geometry, angles, w, a,
+    return slidercrank_kinematics.pose(g, angles, w, a,
                                        branch=case.branch, ground_angle=case.ground_angle)

@@ -41,6 +41,10 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
 
 def solve(case: Case) -> Solution:
     """The ``superposition`` backend for one Case (refuses friction cases)."""
+    if case.mechanism == "linkage":  # no closed form: the generic engine
+        from mechcheck.analytic import linkage_backends
+
+        return linkage_backends.superposition(case)
     if case.has_coulomb_friction:
         return Solution(case.name, "superposition", {}, status="not_applicable", message=REFUSAL)
     start = time.perf_counter()

@@ -97,6 +97,10 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
 
 def solve(case: Case) -> Solution:
     """The ``virtual_work`` backend: the drive torque alone, plus the pose."""
+    if case.mechanism == "linkage":  # no closed form: the generic engine
+        from mechcheck.analytic import linkage_backends
+
+        return linkage_backends.virtual_work(case)
     if case.has_coulomb_friction:
         return Solution(case.name, "virtual_work", {}, status="not_applicable", message=REFUSAL)
     start = time.perf_counter()

@@ -32,6 +32,7 @@ from mechcheck.analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
+from mechcheck.linkage_file import LinkageCaseSpec, linkage_from_spec
 from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, validated
 
 
@@ -76,6 +77,8 @@ class FrictionSpec(Strict):
 
 
 class CaseSpec(Strict):
+    """One ``four_bar`` or ``slider_crank`` table, structurally valid."""
+
     name: str
     mechanism: Literal["four_bar", "slider_crank"]
     length_unit: Literal["m", "mm"] = "m"
@@ -141,7 +144,19 @@ def case_from_spec(spec: CaseSpec, source: str = "") -> Case:
     )
 
 
-def parse_cases(data: dict[str, Any], source: str) -> list[tuple[Case, CaseSpec]]:
+#: The spec of any case table: either format.
+AnySpec = CaseSpec | LinkageCaseSpec
+
+
+def linkage_case(spec: LinkageCaseSpec, source: str = "") -> Case:
+    """A ``mechanism = "linkage"`` table as a Case holding its Linkage."""
+    return Case(name=spec.name, geometry=linkage_from_spec(spec), theta12=0.0,
+                tolerance=tuple((f"{t.backend}:{t.quantity}", t.rtol, t.atol)
+                                for t in spec.tolerance),
+                source=source)
+
+
+def parse_cases(data: dict[str, Any], source: str) -> list[tuple[Case, AnySpec]]:
     """Every ``[[case]]`` of a parsed TOML document, validated."""
     unknown = sorted(set(data) - {"case"})
     if unknown:
@@ -155,8 +170,12 @@ def parse_cases(data: dict[str, Any], source: str) -> list[tuple[Case, CaseSpec]
         name = table.get("name") if isinstance(table, dict) else None
         label = name if isinstance(name, str) else f"#{i + 1}"
         try:
-            spec = validated(CaseSpec, table)
-            out.append((case_from_spec(spec, source), spec))
+            if isinstance(table, dict) and table.get("mechanism") == "linkage":
+                linkage_spec = validated(LinkageCaseSpec, table)
+                out.append((linkage_case(linkage_spec, source), linkage_spec))
+            else:
+                spec = validated(CaseSpec, table)
+                out.append((case_from_spec(spec, source), spec))
         except CaseError as error:
             raise error.located(file=source, case=label) from None
     return out
@@ -193,13 +212,13 @@ def parse_toml(text: str, source: str) -> dict[str, Any]:
                         file=source) from None
 
 
-def load_file(path: str | Path) -> list[tuple[Case, CaseSpec]]:
+def load_file(path: str | Path) -> list[tuple[Case, AnySpec]]:
     """Read and validate one case file (all or nothing)."""
     source = str(path)
     return parse_cases(parse_toml(read_case_text(path), source), source)
 
 
-def load_specs(paths: Iterable[str | Path]) -> list[tuple[Case, CaseSpec]]:
+def load_specs(paths: Iterable[str | Path]) -> list[tuple[Case, AnySpec]]:
     """Every case of every file, with case names unique across the run."""
     seen: dict[str, str] = {}
     out = []

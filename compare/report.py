@@ -9,7 +9,7 @@ from __future__ import annotations
 import base64
 import html
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,7 +19,8 @@ import pandas as pd
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
 from mechcheck.backends import REFERENCE
-from mechcheck.casefile import CaseSpec
+from mechcheck.casefile import AnySpec
+from mechcheck.linkage_file import LinkageCaseSpec
 from mechcheck.output import file_stem
 from mechcheck.run import RunResult
 from mechcheck.seeds import SeedRow, derived_value
@@ -82,10 +83,12 @@ def backend_summaries(result: RunResult) -> list[BackendSummary]:
 FOLD_ABOVE = 50
 
 
-def case_inputs(case: Case, spec: CaseSpec | None) -> list[str]:
+def case_inputs(case: Case, spec: AnySpec | None) -> list[str]:
     """The case's inputs as written in its file (file units), so a section reads alone."""
+    if isinstance(spec, LinkageCaseSpec):
+        return linkage_inputs(spec)
     if spec is None:
-        return [f"{case.mechanism}, θ12 = {fmt(math.degrees(case.theta12))}° (SI: see the Case)"]
+        return [f"{case.mechanism} (built in code; no file to echo)"]
     unit = spec.length_unit
     lines = [f"{spec.mechanism}, θ12 = {fmt(spec.theta12)}°, {case.branch} branch, ground "
              f"angle {fmt(spec.ground_angle)}°, drive on link {spec.drive_link}, lengths in {unit}",
@@ -112,11 +115,42 @@ def case_inputs(case: Case, spec: CaseSpec | None) -> list[str]:
     return lines
 
 
+def linkage_inputs(spec: LinkageCaseSpec) -> list[str]:
+    """A linkage table's inputs, one line per kind of entry, in the file's units."""
+    lines = [f"linkage of {len(spec.links)} links and {len(spec.joints)} joints, lengths in "
+             f"{spec.length_unit}",
+             "points: " + ", ".join(f"{n} {_pair(p)}" for n, p in spec.points.items()),
+             "links: " + "; ".join(f"{link.name} ({', '.join(link.points)})" for link in spec.links),
+             "joints: " + "; ".join(f"{j.name} {j.kind} {j.links[0]}–{j.links[1]} at {j.at}"
+                                    + (f" along {_pair(j.axis)}" if j.axis else "")
+                                    for j in spec.joints)]
+    for d in spec.drivers:
+        move = (f"rotation {fmt(d.rotation)}°" if d.rotation is not None
+                else f"displacement {fmt(d.displacement or 0.0)}")
+        lines.append(f"driver {d.joint}: {move}, velocity {fmt(d.velocity)}, acceleration "
+                     f"{fmt(d.acceleration)}" + (f", sense {d.sense}" if d.sense else ""))
+    for ld in spec.loads:
+        force = ", ".join(f"{k} = {fmt(v)}" for k, v in (ld.force or {}).items())
+        lines.append(f"load on {ld.link} at {ld.at if isinstance(ld.at, str) else _pair(ld.at)}: "
+                     f"force {{{force}}}, torque {fmt(ld.torque)} N·m")
+    for m in spec.masses:
+        lines.append(f"mass on {m.link}: {fmt(m.mass)} kg at "
+                     f"{m.com if isinstance(m.com, str) else _pair(m.com)}, inertia "
+                     f"{fmt(m.inertia)} kg·m²")
+    for s in spec.springs:
+        lines.append("spring " + ", ".join(f"{k} = {v}" for k, v in s.items()))
+    if any(spec.gravity):
+        lines.append(f"gravity {_pair(spec.gravity)} m/s²")
+    if spec.friction is not None:
+        lines.append(f"friction: {spec.friction.model_dump()}")
+    return lines
+
+
 def _pair(p: list[float]) -> str:
     return f"[{fmt(p[0])}, {fmt(p[1])}]"
 
 
-def case_view(case: Case, spec: CaseSpec | None, solutions: list[Solution],
+def case_view(case: Case, spec: AnySpec | None, solutions: list[Solution],
               detail: list[dict[str, Any]], folded: bool) -> dict[str, Any]:
     """Values of every backend side by side, with errors, for one case.
 
@@ -165,7 +199,7 @@ def _counts(statuses: Iterable[str]) -> str:
     return ", ".join(f"{k} ×{v}" for k, v in counts.items())
 
 
-def seed_rows(result: RunResult, specs: dict[str, CaseSpec]) -> list[SeedRow]:
+def seed_rows(result: RunResult, specs: Mapping[str, AnySpec]) -> list[SeedRow]:
     """Printed seed answers beside the reference backend's values."""
     out = []
     for case in result.cases:
@@ -179,7 +213,7 @@ def seed_rows(result: RunResult, specs: dict[str, CaseSpec]) -> list[SeedRow]:
     return out
 
 
-def view_model(result: RunResult, specs: dict[str, CaseSpec], title: str) -> dict[str, Any]:
+def view_model(result: RunResult, specs: Mapping[str, AnySpec], title: str) -> dict[str, Any]:
     by_case: dict[str, list[Solution]] = {}
     for s in result.solutions:
         by_case.setdefault(s.case, []).append(s)
@@ -210,7 +244,7 @@ def view_model(result: RunResult, specs: dict[str, CaseSpec], title: str) -> dic
     }
 
 
-def render(result: RunResult, specs: dict[str, CaseSpec],
+def render(result: RunResult, specs: Mapping[str, AnySpec],
            title: str = "mechcheck accuracy report") -> tuple[str, str]:
     """(Markdown, HTML) of a run."""
     model = view_model(result, specs, title)
@@ -224,7 +258,7 @@ def _pose_list(values: pd.Series, limit: int = 20) -> str:
     return ", ".join(items) + (f" … ({more} more)" if more > 0 else "")
 
 
-def sweep_view_model(cases: list[Case], specs: dict[str, CaseSpec], statuses: pd.DataFrame,
+def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: pd.DataFrame,
                      comparison: pd.DataFrame, figures: dict[str, bytes], *, title: str,
                      n_poses: int, wall_time_s: float, executed: int, reused: int,
                      fail_on: tuple[str, ...]) -> dict[str, Any]:

@@ -11,7 +11,7 @@ from tqdm import tqdm
 
 from mechcheck.analytic.case import Case
 from mechcheck.backends import REFERENCE
-from mechcheck.casefile import CaseSpec
+from mechcheck.casefile import AnySpec
 from mechcheck.executors import executor_for
 from mechcheck.figures import sweep_figure
 from mechcheck.junit import junit_sweep_xml
@@ -39,7 +39,7 @@ def compare_sweep(cases: list[Case], outcome: SweepOutcome) -> pd.DataFrame:
                  "rel_err", "tolerance", "passed", "case_kind"])
 
 
-def run_sweep_command(specs: list[tuple[Case, CaseSpec]], tasks: list[SweepTask], n_poses: int,
+def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask], n_poses: int,
                       out: Path, *, workers: int | None, dask: str | None,
                       fail_on: tuple[str, ...], junit: Path | None, quiet: bool) -> int:
     """Run, compare and report a sweep; returns the exit status."""

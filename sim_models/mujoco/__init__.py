@@ -13,6 +13,7 @@ from __future__ import annotations
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.forces import pose_verdicts, withheld_solution
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models import unmodelled_linkage
 from mechcheck.sim_models.mujoco import solve as exact
 from mechcheck.sim_models.mujoco.dynamics import driven
 from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
@@ -29,6 +30,9 @@ def settle(case: Case) -> Solution:
     the analytic backend's singular line, a friction reversal) is not
     simulated: a soft model would settle to whatever its bending allows.
     """
+    refused = unmodelled_linkage(case, "mujoco")
+    if refused is not None:
+        return refused
     verdict = pose_verdicts(case)[0]
     if verdict is not None:
         return withheld_solution(case, "mujoco", verdict)
@@ -40,6 +44,9 @@ def settle(case: Case) -> Solution:
 def solve_at_pose(case: Case) -> Solution:
     """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose
     (not at a pose whose forces do not exist or are not unique, as :func:`settle`)."""
+    refused = unmodelled_linkage(case, "mujoco_solve")
+    if refused is not None:
+        return refused
     verdict = pose_verdicts(case)[0]
     if verdict is not None:
         return withheld_solution(case, "mujoco_solve", verdict)

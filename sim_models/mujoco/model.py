@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import mujoco
 
-from mechcheck.analytic.case import Case, FourBarGeometry, SliderCrankGeometry
+from mechcheck.analytic.case import Case, FourBarGeometry, SliderCrankGeometry, preset_geometry
 
 #: Fictitious mass of every link while settling statics, kg. Static forces do
 #: not depend on masses as long as weights are applied only to the real
@@ -153,7 +153,7 @@ class Layout:
 
 def link_length(case: Case, link: int) -> float:
     """A link's length (for fictitious inertias); the slider gets the crank's."""
-    g = case.geometry
+    g = preset_geometry(case)
     if link == 2:
         return g.a2
     if link == 3:
@@ -229,7 +229,7 @@ def build_spec(case: Case, settings: Settings = STATIC) -> mujoco.MjSpec:
     # still stops after one iteration (the problem is quadratic).
     opt.tolerance = SOLVER_TOLERANCE
     world = spec.worldbody
-    g = case.geometry
+    g = preset_geometry(case)
     crank = add_link_body(world, case, 2, settings, "link2", (0.0, 0.0))
     add_hinge(crank, "A0", settings.armature)
     coupler = add_link_body(crank, case, 3, settings, "link3", (g.a2, 0.0))

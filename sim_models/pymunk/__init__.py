@@ -11,8 +11,21 @@ Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
 ``sweep``, ``study`` (solver-setting study), ``settings``.
 """
 
-from mechcheck.sim_models.pymunk.settle import settle
-from mechcheck.sim_models.pymunk.solve import solve_at_pose
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models import unmodelled_linkage
+from mechcheck.sim_models.pymunk import settle as settling, solve as solving
+from mechcheck.sim_models.pymunk.settings import SETTLE, SOLVE, SolverSettings
 from mechcheck.sim_models.pymunk.sweep import sweep
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
+
+
+def settle(case: Case, settings: SolverSettings = SETTLE) -> Solution:
+    """The ``pymunk`` backend (:func:`mechcheck.sim_models.pymunk.settle.settle`)."""
+    return unmodelled_linkage(case, "pymunk") or settling.settle(case, settings)
+
+
+def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
+    """The ``pymunk_solve`` backend (:func:`mechcheck.sim_models.pymunk.solve.solve_at_pose`)."""
+    return unmodelled_linkage(case, "pymunk_solve") or solving.solve_at_pose(case, settings)

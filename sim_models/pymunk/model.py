@@ -29,7 +29,7 @@ from typing import Literal
 import numpy as np
 import pymunk
 
-from mechcheck.analytic.case import Case, FourBarGeometry
+from mechcheck.analytic.case import Case, FourBarGeometry, preset_geometry
 from mechcheck.analytic.kinematics import Pose, pose_of
 from mechcheck.sim_models.pymunk.settings import SolverSettings
 
@@ -77,7 +77,7 @@ def slide_axes(case: Case) -> tuple[Vec, Vec]:
 
 def link_lengths(case: Case) -> dict[int, float]:
     """Pin-to-pin length of each moving link (the slider gets the rod length)."""
-    g = case.geometry
+    g = preset_geometry(case)
     if isinstance(g, FourBarGeometry):
         return {2: g.a2, 3: g.a3, 4: g.a4}
     return {2: g.a2, 3: g.a3, 4: g.a3}
@@ -85,7 +85,7 @@ def link_lengths(case: Case) -> dict[int, float]:
 
 def pin_anchors(case: Case) -> dict[str, tuple[int, Vec, int, Vec]]:
     """(link i, anchor on i, link j, anchor on j) per pin; link 1 anchors are world points."""
-    g = case.geometry
+    g = preset_geometry(case)
     anchors: dict[str, tuple[int, Vec, int, Vec]] = {
         "A0": (1, (0.0, 0.0), 2, (0.0, 0.0)),
         "A": (2, (g.a2, 0.0), 3, (0.0, 0.0)),
@@ -155,10 +155,11 @@ def make_slide(case: Case, static: pymunk.Body,
     The groove runs well past the reachable stroke (|s14| ≤ a2 + a3) so its
     end stops never engage.
     """
-    assert not isinstance(case.geometry, FourBarGeometry)
+    g = preset_geometry(case)
+    assert not isinstance(g, FourBarGeometry)
     (ux, uy), (nx, ny) = slide_axes(case)
-    e = case.geometry.offset
-    reach = 2.0 * (case.geometry.a2 + case.geometry.a3 + abs(e))
+    e = g.offset
+    reach = 2.0 * (g.a2 + g.a3 + abs(e))
     start = (e * nx - reach * ux, e * ny - reach * uy)
     end = (e * nx + reach * ux, e * ny + reach * uy)
     groove = pymunk.GrooveJoint(static, slider, start, end, (0.0, 0.0))
