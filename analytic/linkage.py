@@ -165,9 +165,9 @@ class Linkage:
         object.__setattr__(self, "points", FrozenMap(
             {_identifier(n, f"points.{n}"): _point(p, f"points.{n}") for n, p in self.points.items()}))
         object.__setattr__(self, "links", tuple(self.links))
+        self._check_links()
         object.__setattr__(self, "joints", tuple(self._checked_joint(j, i)
                                                  for i, j in enumerate(self.joints)))
-        self._check_links()
         self._check_points_joined()
         self._check_connected()
         self._check_drivers()

@@ -70,7 +70,7 @@ class LinkageMassSpec(Strict):
 
 class LinearSpringSpec(Strict):
     name: str
-    ends: Annotated[list[tuple[str, PointRef]], Field(min_length=2, max_length=2)]
+    ends: Annotated[list[list[Any]], Field(min_length=2, max_length=2)]  # [[link, point], …]
     stiffness: float
     free_length: float
     damping: float = 0.0
@@ -132,8 +132,8 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
                                          t.damping))
         else:
             s = validated(LinearSpringSpec, table, f"springs[{i}]")
-            ends = tuple((link, where(ref, f"springs[{i}].ends[{k}]"))
-                         for k, (link, ref) in enumerate(s.ends))
+            ends = tuple(_spring_end(end, f"springs[{i}].ends[{k}]", where)
+                         for k, end in enumerate(s.ends))
             springs.append(LinearSpring(s.name, (ends[0], ends[1]), s.stiffness,
                                         s.free_length * scale, s.damping))
     f = spec.friction
@@ -154,6 +154,17 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
             f.mu, {k: v * scale for k, v in f.pin_radius.items()}, dict(f.joint_mu),
             dict(f.viscous)),
     )
+
+
+def _spring_end(end: list[Any], key: str, where: Any) -> tuple[str, Vec2]:
+    """``[link, point name]`` or ``[link, [x, y]]``."""
+    if len(end) != 2 or not isinstance(end[0], str):
+        raise CaseError("must be [link, point name] or [link, [x, y]]", key=key)
+    ref = end[1]
+    if not isinstance(ref, str) and not (isinstance(ref, list) and len(ref) == 2
+                                         and all(isinstance(v, int | float) for v in ref)):
+        raise CaseError("must be [link, point name] or [link, [x, y]]", key=key)
+    return end[0], where(ref, key)
 
 
 def _driver(d: DriverSpec, i: int, kinds: Mapping[str, str], scale: float) -> Driver:
