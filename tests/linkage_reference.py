@@ -28,8 +28,29 @@ Systems*, ch. 3, 11):
   Coulomb friction makes Q depend on |λ|: Newton on λ from the frictionless
   answer (∂|F|/∂F = F/|F|).
 * Free coordinates (DOF > drivers, static): Newton on the equilibrium equations
-  Φ(q) = 0, Q(q) − Φ_qᵀλ = 0 in (q, λ) from the drawn pose; stability from the
-  sign of the stiffness reduced to the null space of Φ_q.
+  Φ(q) = 0, Q(q) − Φ_qᵀλ = 0 in (q, λ) from the drawn pose (drivers at 0), then the
+  drivers stepped to their values; stability from the sign of the stiffness reduced
+  to the null space of Φ_q. Newton finds the nearest equilibrium, stable or not.
+
+How this module reads the places where LINKAGES.md leaves a choice:
+
+* ``phi_`` and revolute ``q_`` are radians wrapped to [−π, π); the unwrapped values
+  are in ``LinkageResult.q``. ``x_``/``y_`` are given for every point, ground points
+  included (a point's position on the first link that carries it).
+* A prismatic reaction ``F_`` is the whole force of links[0] on links[1] through the
+  joint except the driver's effort: the normal force plus the joint's Coulomb and
+  viscous friction along the axis. The driver's −Q acts on links[0] at the same point.
+* The revolute friction moment is μ·r·|F| with |F| the joint's own reaction; ``joint_mu``
+  overrides ``mu`` for revolute and prismatic joints alike; a missing ``mu`` is 0.
+  "Coulomb friction" (for the refusals) means some joint with μ·r > 0 or μ > 0.
+* Coulomb senses: drivers with a velocity use it; a resting driver moves at ±1 rad/s
+  or m/s in its ``sense``. A joint with Coulomb friction whose relative speed is zero
+  (below 1e-9 of the largest) makes the forces ``indeterminate``.
+* A load, mass or spring end named by a point that its link does not carry is that
+  point's drawn position, fixed to the link. Loads and masses on the ground do nothing.
+* Redundant constraints: the pose is still solved (with a full-rank subset of rows)
+  and reported, without forces. A final condition number above 1e8 is ``singular``;
+  Coulomb equations without a solution are ``no_solution`` ("friction self-locks").
 """
 
 from __future__ import annotations
@@ -62,6 +83,8 @@ ZERO_SPEED_RTOL = 1e-9
 FIRST_STEP, LARGEST_STEP, SMALLEST_STEP = 0.02, 0.05, 1e-11
 #: Tangents of consecutive accepted points differ by less than this angle (rad).
 LARGEST_TURN = 0.2
+#: A path longer than this many accepted steps (≈ 2500 rad of travel) is not followed.
+MAX_PATH_STEPS = 50_000
 
 IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*\Z")
 CASE_KEYS = {"name", "mechanism", "description", "seed", "tolerance", "length_unit", "gravity",
@@ -872,8 +895,9 @@ def trace_drivers(lk: Linkage, rows: Vector) -> Path:
         return Path("ok", q0, 1.0, 0)
     w = np.r_[q0 / lk.column_scale(), 0.0]
     _, jac, _ = _path_system(lk, rows, w, span)
-    t = _tangent(jac, np.r_[np.zeros(lk.n), 1.0])
-    if t[-1] <= 0.0:
+    t = np.linalg.svd(jac)[2][-1]  # the null vector of [F_q, F_s], by SVD: robust at s = 0
+    t = t if t[-1] >= 0.0 else -t
+    if t[-1] <= RANK_RTOL:
         return Path("singular", q0, 0.0, 0, "the drawn pose is a dead point of the drivers")
     orientation = _bordered_sign(lk, rows, w, t, span)
     h = FIRST_STEP
@@ -885,7 +909,7 @@ def trace_drivers(lk: Linkage, rows: Vector) -> Path:
         if ok:
             _, jac, _ = _path_system(lk, rows, w_new, span)
             t_new = _tangent(jac, t)
-            ok = bool(t @ t_new > math.cos(LARGEST_TURN)) and np.linalg.norm(w_new - w) < 2 * h
+            ok = bool(t @ t_new > math.cos(LARGEST_TURN) and np.linalg.norm(w_new - w) < 2 * h)
         if not ok:
             h *= 0.5
             if h < SMALLEST_STEP:
@@ -893,6 +917,9 @@ def trace_drivers(lk: Linkage, rows: Vector) -> Path:
                             "the path from the drawn pose cannot be followed")
             continue
         steps += 1
+        if steps > MAX_PATH_STEPS:
+            return Path("singular", w_new[:-1] * lk.column_scale(), w_new[-1] / span, steps,
+                        "the path from the drawn pose does not reach the drivers' values")
         if t_new[-1] <= 0.0:  # s turns back: the linkage locks here, unless s = 1 comes first
             fold = _locate_fold(lk, rows, w, t, h, span)
             s_lock = fold[-1] / span
@@ -1121,8 +1148,8 @@ def _static_residual(lk: Linkage, rows: Vector, q: Vector, lam: Vector, s: float
     """[Φ(q, s); Q(q) − Φ_qᵀλ] on the kept rows: constraints and equilibrium."""
     keep = rows.astype(bool)
     zero = np.zeros(lk.n)
-    return np.r_[constraints(lk, q, s)[keep] * row_scale(lk)[keep],
-                 applied_forces(lk, q, zero) - jacobian(lk, q)[keep].T @ lam]
+    return np.asarray(np.r_[constraints(lk, q, s)[keep] * row_scale(lk)[keep],
+                            applied_forces(lk, q, zero) - jacobian(lk, q)[keep].T @ lam])
 
 
 def _force_stiffness(lk: Linkage, rows: Vector, q: Vector, lam: Vector) -> Matrix:
@@ -1304,7 +1331,10 @@ def solve(case: dict[str, Any]) -> LinkageResult:
 def _solve_driven(lk: Linkage, mob: Mobility, diag: dict[str, Any]) -> LinkageResult:
     """DOF = drivers: continuation to the pose, then kinematics and multipliers."""
     rows = mob.keep
-    path = trace_drivers(lk, rows)
+    try:
+        path = trace_drivers(lk, rows)
+    except np.linalg.LinAlgError:  # an exactly singular Jacobian met on the way
+        path = Path("singular", drawn_pose(lk), 0.0, 0, "a singular pose on the path")
     diag["steps"] = path.steps
     if path.status != "ok":
         diag["s"] = float(path.s)
