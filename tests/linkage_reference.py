@@ -1382,6 +1382,8 @@ def _solve_free(lk: Linkage, mob: Mobility, diag: dict[str, Any]) -> LinkageResu
     k_r = reduced_stiffness(lk, q, lam, rows)
     eig = np.linalg.eigvalsh(k_r)
     diag["stable"] = bool(eig.size and eig[0] > RANK_RTOL * max(abs(eig[-1]), 1e-300))
+    # In an orthonormal basis of the free directions in scaled coordinates: only their
+    # signs are meaningful (the sizes depend on the basis).
     diag["reduced_stiffness_eigenvalues"] = [float(e) for e in eig]
     if mob.redundant_joints:
         return LinkageResult("indeterminate",
