@@ -60,6 +60,9 @@ def lock_message(linkage: Linkage, fraction: float) -> str:
 def verdict(case: Case, results: LinkageResults, index: int) -> tuple[Status, str] | None:
     """Why a pose has no unique forces, or None."""
     linkage = case.linkage
+    if results.stable is not None and not np.isfinite(results.stable[index]):
+        return "no_solution", ("no equilibrium pose of the free coordinates was found from the "
+                               "drawn pose")
     if not results.pose.assembled[index]:
         return "no_solution", lock_message(linkage, float(results.pose.locked_at[index]))
     if linkage.redundant:
@@ -95,6 +98,9 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
     pose_only = {q: v for q, v in values.items() if q.startswith(("x_", "y_", "phi_", "q_"))}
     if only is not None:
         values = {q: v for q, v in values.items() if q in only or q in pose_only}
+    if results.stable is not None:
+        diagnostics["stable"] = "yes" if results.stable[index] == 1.0 else (
+            "no" if results.stable[index] == 0.0 else "not found")
     found = verdict(case, results, index)
     units = quantity_units(linkage)
     if found is not None:

@@ -335,11 +335,17 @@ def condition(pose: LinkagePose, k: Array) -> Array:
     scaled[:, 2::3, :] /= linkage.scale
     norms = np.linalg.norm(scaled, axis=2, keepdims=True)
     scaled = scaled / np.where(norms > 0.0, norms, 1.0)
-    if scaled.shape[1] != scaled.shape[2] or scaled.shape[1] == 0:
-        return np.full(k.shape[0], np.inf if scaled.shape[1] else 1.0)
-    with np.errstate(all="ignore"):
-        s = np.linalg.svd(scaled, compute_uv=False)
-        return np.where(s[:, -1] > 0.0, s[:, 0] / s[:, -1], np.inf)
+    if 0 in scaled.shape[1:]:
+        return np.ones(k.shape[0])
+    # A pose that does not assemble has no matrix: its condition is infinite by definition.
+    assembled = np.all(np.isfinite(scaled), axis=(1, 2))
+    out = np.full(k.shape[0], np.inf)
+    if assembled.any():
+        # Rectangular (free coordinates: more equations than unknowns) or square: the
+        # ratio of the extreme singular values over the unknowns' space.
+        s = np.linalg.svd(scaled[assembled], compute_uv=False)
+        out[assembled] = np.where(s[:, -1] > 0.0, s[:, 0] / s[:, -1], np.inf)
+    return out
 
 
 @dataclass(frozen=True)
@@ -353,6 +359,8 @@ class LinkageResults:
     condition: Array
     converged: NDArray[np.bool_]
     reversing: NDArray[np.str_]
+    #: Free coordinates only: 1 where the equilibrium pose is stable, 0 where not.
+    stable: Array | None = None
 
     @property
     def singular(self) -> NDArray[np.bool_]:
@@ -417,7 +425,12 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     Poses that lock have NaN everything; singular poses, and friction poses whose Newton
     iteration did not converge or whose friction reverses, have NaN forces.
     """
-    pose = solve_pose(linkage, values, velocities, accelerations)
+    free = linkage.dof - len(linkage.drivers)
+    stable = None
+    if free > 0:
+        pose, stable = equilibrium_poses(linkage, values)
+    else:
+        pose = solve_pose(linkage, values, velocities, accelerations)
     k = coefficient_matrix(pose)
     b = known_vector(pose)
     cond = condition(pose, k)
@@ -435,5 +448,22 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     reversing = reversing.astype(str)
     withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "")
     x[withheld] = np.nan
+    if stable is not None:  # an equilibrium not found is no pose to report forces at
+        converged = converged & np.isfinite(stable)
     return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms), cond,
-                          converged, reversing)
+                          converged, reversing, stable)
+
+
+def equilibrium_poses(linkage: Linkage, values: Array | None) -> tuple[LinkagePose, Array]:
+    """The equilibrium pose of the free coordinates at each row of driver values (static
+    cases only), and its stability per pose: 1 stable, 0 unstable, NaN not found."""
+    from mechcheck.analytic.linkage_equilibrium import equilibrium
+
+    d = len(linkage.drivers)
+    rows = (np.array([[drv.value for drv in linkage.drivers]]) if values is None
+            else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, d))
+    found = [equilibrium(linkage, row) for row in rows]
+    q = np.array([e.q if e.converged else np.full(e.q.shape, np.nan) for e in found])
+    stable = np.array([float(e.stable) if e.converged else np.nan for e in found])
+    zeros = np.zeros_like(q)
+    return LinkagePose(linkage, rows, q, zeros, zeros, np.full(rows.shape[0], np.nan)), stable
