@@ -238,8 +238,10 @@ def load_cases(*paths: str | Path) -> list[Case]:
 
 
 def builtin_case_files() -> list[Path]:
-    """The case files shipped with the package (the seed examples and the suite)."""
-    return sorted((Path(__file__).parent / "cases").glob("*.toml"))
+    """The case files shipped with the package: the seed examples, the suite and the
+    built-in linkages (``cases/linkages/``)."""
+    cases = Path(__file__).parent / "cases"
+    return sorted(cases.glob("*.toml")) + sorted((cases / "linkages").glob("*.toml"))
 
 
 def builtin_sweep_files() -> list[Path]:

@@ -14,7 +14,8 @@ from mechcheck.casefile import load_file
 
 from . import linkage_reference as ref
 
-FILES = sorted((Path(__file__).parent / "linkages").glob("*.toml"))
+#: The built-in linkages (compare/cases/linkages/, shipped with the package).
+FILES = sorted((Path(__file__).resolve().parents[1] / "compare" / "cases" / "linkages").glob("*.toml"))
 CASES = [(path, table) for path in FILES
          for table in tomllib.loads(path.read_text(encoding="utf-8"))["case"]]
 #: Two methods for the same rigid-body equations: rounding only (the policy's 1e-9).

@@ -22,7 +22,7 @@ import pytest
 
 from . import linkage_reference as ref
 
-CASES = Path(__file__).parent / "linkages"
+CASES = Path(__file__).resolve().parents[1] / "compare" / "cases" / "linkages"
 
 #: Printed answers carry 2 decimals (N, degrees): half a unit of the last digit.
 PRINTED_2DP = 0.005
