@@ -19,6 +19,7 @@ import numpy as np
 
 from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.linkage import Linkage
 
 #: Freedom of each joint type (seed 001): revolute, prismatic, cylinder in a
 #: slot, gear contact, cylindrical, spherical, spherical with a key.
@@ -201,3 +202,64 @@ def slider_stroke(g: SliderCrankGeometry) -> float:
     if not slider_crank_rotates(g):
         raise CaseError("the crank does not turn fully (a2 + |e| >= a3)", key="geometry")
     return math.sqrt((g.a3 + g.a2) ** 2 - g.offset**2) - math.sqrt((g.a3 - g.a2) ** 2 - g.offset**2)
+
+
+# -- any linkage ----------------------------------------------------------------------------
+
+#: How far each driver is moved, both ways, when its reachable range is searched: a full
+#: turn for a revolute joint, five times the linkage's size for a prismatic one.
+RANGE_TURN = 2 * math.pi
+RANGE_SIZES = 5.0
+
+
+@dataclass(frozen=True)
+class DriverRange:
+    """Where one driver, moved alone from the drawn pose, locks in each direction (in its
+    joint's unit from the drawn pose: rad or m); None where it does not lock within the
+    searched travel (a revolute driver then turns fully)."""
+
+    joint: str
+    kind: str
+    low: float | None
+    high: float | None
+    travel: float
+
+
+def driver_ranges(linkage: Linkage) -> list[DriverRange]:
+    """Each driver's reachable range from the drawn pose, the others held at the drawn pose."""
+    from mechcheck.analytic.linkage_kinematics import positions
+
+    out = []
+    for k, driver in enumerate(linkage.drivers):
+        kind = linkage.joint(driver.joint).kind
+        travel = RANGE_TURN if kind == "revolute" else RANGE_SIZES * linkage.scale
+        values = np.zeros((2, len(linkage.drivers)))
+        values[:, k] = (-travel, travel)
+        _, locked = positions(linkage, values)
+        low, high = (None if np.isnan(s) else float(s) * v for s, v in zip(locked, values[:, k],
+                                                                            strict=True))
+        out.append(DriverRange(driver.joint, kind, low, high, travel))
+    return out
+
+
+def mechanical_advantage(case: Case) -> list[tuple[str, float, float]]:
+    """For a single-driver linkage: each load's force magnitude and the driver effort it
+    needs alone at the pose (superposition of single loads), as (label, |F|, Q)."""
+    from mechcheck.analytic.linkage_backends import single_loads
+    from mechcheck.analytic.linkage_forces import coefficient_matrix
+    from mechcheck.analytic.linkage_kinematics import solve_batched, solve_pose
+
+    linkage = case.linkage
+    if len(linkage.drivers) != 1 or linkage.dof != 1:
+        return []
+    pose = solve_pose(linkage)
+    if not pose.assembled[0]:
+        return []
+    k = coefficient_matrix(pose)
+    column = k.shape[2] - 1
+    out = []
+    for load, b in zip(linkage.loads, single_loads(linkage, pose)[:len(linkage.loads)],
+                       strict=True):
+        effort = float(solve_batched(k, -b)[0, column])
+        out.append((f"load on {load.link}", math.hypot(*load.force), effort))
+    return out
