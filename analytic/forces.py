@@ -67,6 +67,10 @@ class PoseResults:
         return self.reversing != ""
 
     @property
+    def assembled(self) -> NDArray[np.bool_]:
+        return np.isfinite(self.values["theta13"])
+
+    @property
     def singular(self) -> NDArray[np.bool_]:
         return ~(self.condition <= SINGULAR_CONDITION)
 

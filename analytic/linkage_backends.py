@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -16,6 +18,7 @@ from mechcheck.analytic.linkage import LinearSpring, Linkage
 from mechcheck.analytic.linkage_forces import (
     LinkageResults,
     coefficient_matrix,
+    force_quantities,
     known_vector,
     solve_linkage,
 )
@@ -109,71 +112,41 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
     return Solution(case.name, backend, values, diagnostics=diagnostics, units=units)
 
 
-def solve(case: Case) -> Solution:
-    """The ``analytic`` backend for a linkage: the member-equilibrium matrix method."""
-    start = time.perf_counter()
-    results = solve_linkage(case.linkage)
-    return solution_from(case, "analytic", results, method="member-equilibrium matrix method",
-                         elapsed=time.perf_counter() - start)
+def driver_values(case: Case, first: Array | None) -> Array | None:
+    """Driver values (N, d) with the first driver at ``first`` (its unit: rad or m, from the
+    drawn pose) and the others at the case's values; None: the case's own pose."""
+    if first is None:
+        return None
+    own = np.array([d.value for d in case.linkage.drivers])
+    values = np.tile(own, (np.size(first), 1))
+    values[:, 0] = np.asarray(first, dtype=float)
+    return values
 
 
-def not_applicable(case: Case, backend: str) -> Solution:
-    return Solution(case.name, backend, {}, status="not_applicable", message=COULOMB_REFUSAL,
-                    units=quantity_units(case.linkage))
+def analytic_results(case: Case, first: Array | None = None) -> LinkageResults:
+    """The member-equilibrium matrix method at each value of the first driver."""
+    return solve_linkage(case.linkage, driver_values(case, first))
 
 
-def superposition(case: Case) -> Solution:
-    """The ``superposition`` backend: each known load alone (every external load, weight
-    with inertia of each mass, spring and viscous term), the solutions added."""
+def superposition_results(case: Case, first: Array | None = None) -> LinkageResults:
+    """Each known load alone (every external load, weight with inertia of each mass, spring
+    and viscous term), the solutions added; refuses Coulomb friction."""
     if case.has_coulomb_friction:
-        return not_applicable(case, "superposition")
-    start = time.perf_counter()
+        raise ValueError(COULOMB_REFUSAL)
     linkage = case.linkage
-    results = solve_linkage(linkage)
+    results = analytic_results(case, first)
     pose = results.pose
     k = coefficient_matrix(pose)
     x = sum((solve_batched(k, -b) for b in single_loads(linkage, pose)),
             start=np.zeros((1, k.shape[2])))
+    x[results.withheld] = np.nan
     values = dict(results.values)
     values.update(_forces_from(pose, x))
-    summed = LinkageResults(pose, values, results.condition, results.converged, results.reversing)
-    return solution_from(case, "superposition", summed, method="superposition of single loads",
-                         elapsed=time.perf_counter() - start)
+    return replace(results, values=values)
 
 
-def single_loads(linkage: Linkage, pose: LinkagePose) -> list[Array]:
-    """The known vector of each load alone: b is linear in the loads, so they add up to b."""
-    out = []
-    parts: list[Linkage] = []
-    bare = Linkage(linkage.points, linkage.links, linkage.joints, linkage.drivers)
-    for load in linkage.loads:
-        parts.append(_with(bare, loads=(load,)))
-    for mass in linkage.masses:
-        parts.append(_with(bare, masses=(mass,), gravity=linkage.gravity))
-    for spring in linkage.springs:
-        parts.append(_with(bare, springs=(spring,)))
-    if linkage.friction is not None:
-        parts.append(_with(bare, friction=linkage.friction))
-    for part in parts:
-        out.append(known_vector(LinkagePose(part, pose.drivers, pose.q, pose.qdot, pose.qddot,
-                                            pose.locked_at)))
-    return out
-
-
-def _with(bare: Linkage, **changes: object) -> Linkage:
-    from dataclasses import replace
-
-    return replace(bare, **changes)  # type: ignore[arg-type]
-
-
-def _forces_from(pose: LinkagePose, x: Array) -> dict[str, Array]:
-    from mechcheck.analytic.linkage_forces import force_quantities
-
-    return force_quantities(pose, x, [])
-
-
-def virtual_work(case: Case) -> Solution:
-    """The ``virtual_work`` backend: each driver's effort from the power equation.
+def virtual_work_results(case: Case, first: Array | None = None) -> LinkageResults:
+    """Each driver's effort from the power equation.
 
     Moving driver k alone at unit rate (the others held), ideal joints do no work, so
     Q_k = −(power of every known force: loads, weights, inertia, springs, viscous terms).
@@ -181,22 +154,64 @@ def virtual_work(case: Case) -> Solution:
     F·v_O + M·ω with v_O = ṫ − ω·perp(t) the velocity of the link's point at the origin.
     """
     if case.has_coulomb_friction:
-        return not_applicable(case, "virtual_work")
-    start = time.perf_counter()
+        raise ValueError(COULOMB_REFUSAL)
     linkage = case.linkage
-    results = solve_linkage(linkage)
+    results = analytic_results(case, first)
     pose = results.pose
     b = known_vector(pose)
     values = {q: v for q, v in results.values.items() if q.startswith(("x_", "y_", "phi_", "q_"))}
     for k, driver in enumerate(linkage.drivers):
-        rates = np.zeros((1, len(linkage.drivers)))
-        rates[0, k] = 1.0
+        rates = np.zeros((pose.q.shape[0], len(linkage.drivers)))
+        rates[:, k] = 1.0
         virtual = solve_pose(linkage, pose.drivers, rates, np.zeros_like(rates))
-        values[f"Q_{driver.joint}"] = -_power(linkage, pose, virtual, b)
-    summed = LinkageResults(pose, values, results.condition, results.converged, results.reversing)
-    return solution_from(case, "virtual_work", summed, method="power equation",
-                         elapsed=time.perf_counter() - start,
-                         only={f"Q_{d.joint}" for d in linkage.drivers})
+        effort = -_power(linkage, pose, virtual, b)
+        effort[results.withheld] = np.nan
+        values[f"Q_{driver.joint}"] = effort
+    return replace(results, values=values)
+
+
+def _backend(results_of: Callable[[Case], LinkageResults], name: str, method: str,
+             case: Case, only: set[str] | None = None) -> Solution:
+    start = time.perf_counter()
+    try:
+        results = results_of(case)
+    except ValueError:  # the method refuses Coulomb friction
+        return Solution(case.name, name, {}, status="not_applicable", message=COULOMB_REFUSAL,
+                        units=quantity_units(case.linkage))
+    return solution_from(case, name, results, method=method, elapsed=time.perf_counter() - start,
+                         only=only)
+
+
+def solve(case: Case) -> Solution:
+    """The ``analytic`` backend for a linkage: the member-equilibrium matrix method."""
+    return _backend(analytic_results, "analytic", "member-equilibrium matrix method", case)
+
+
+def superposition(case: Case) -> Solution:
+    """The ``superposition`` backend for a linkage (:func:`superposition_results`)."""
+    return _backend(superposition_results, "superposition", "superposition of single loads",
+                    case)
+
+
+def virtual_work(case: Case) -> Solution:
+    """The ``virtual_work`` backend for a linkage: the drivers' efforts and the pose."""
+    return _backend(virtual_work_results, "virtual_work", "power equation", case,
+                    only={f"Q_{d.joint}" for d in case.linkage.drivers})
+
+
+def single_loads(linkage: Linkage, pose: LinkagePose) -> list[Array]:
+    """The known vector of each load alone: b is linear in the loads, so they add up to b."""
+    bare = Linkage(linkage.points, linkage.links, linkage.joints, linkage.drivers)
+    parts = [replace(bare, loads=(load,)) for load in linkage.loads]
+    parts += [replace(bare, masses=(mass,), gravity=linkage.gravity) for mass in linkage.masses]
+    parts += [replace(bare, springs=(spring,)) for spring in linkage.springs]
+    if linkage.friction is not None:
+        parts.append(replace(bare, friction=linkage.friction))
+    return [known_vector(replace(pose, linkage=part)) for part in parts]
+
+
+def _forces_from(pose: LinkagePose, x: Array) -> dict[str, Array]:
+    return force_quantities(pose, x, [])
 
 
 def _power(linkage: Linkage, pose: LinkagePose, virtual: LinkagePose, b: Array) -> Array:

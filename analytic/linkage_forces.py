@@ -370,6 +370,15 @@ class LinkageResults:
     def indeterminate(self) -> NDArray[np.bool_]:
         return self.reversing != ""
 
+    @property
+    def assembled(self) -> NDArray[np.bool_]:
+        return self.pose.assembled
+
+    @property
+    def withheld(self) -> NDArray[np.bool_]:
+        """Poses without forces: unassembled, singular, friction reversing or not converged."""
+        return ~self.assembled | self.singular | self.indeterminate | ~self.converged
+
 
 def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
     """x_/y_ of every point, phi_ of every moving link, q_ of every joint."""

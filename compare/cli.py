@@ -135,6 +135,10 @@ def sweep_command(
              "None: the built-in sweeps of the seed four-bar and slider-crank.")] = None,
     theta12: Annotated[str, typer.Option(
         help="Input angles START:STOP:STEP in degrees, STOP excluded.")] = "0:360:1",
+    driver: Annotated[str | None, typer.Option(
+        help="For linkages: the first driver's values START:STOP:STEP from the drawn pose, "
+             "in degrees (revolute) or mm (prismatic), STOP excluded; the other drivers keep "
+             "their values. Default: the --theta12 grid.")] = None,
     backend: Annotated[list[str] | None, typer.Option(
         "--backend", "-b", help="Backend to sweep besides analytic (repeatable). "
         "Default: every available one.")] = None,
@@ -162,8 +166,9 @@ def sweep_command(
     try:
         specs = load_specs(paths)
         grid = parse_range(theta12)
+        driver_grid = None if driver is None else parse_range(driver, "--driver")
         names = list(backend) if backend else registry.available()
-        tasks = plan([c for c, _ in specs], names, grid)
+        tasks = plan([c for c, _ in specs], names, grid, driver_grid)
     except (CaseError, ValueError, registry.BackendUnavailable) as error:
         raise fail_input(str(error)) from None
     check_outputs(out, junit)
@@ -173,7 +178,9 @@ def sweep_command(
     if fresh:
         for folder in ("results", "status"):
             shutil.rmtree(out / folder, ignore_errors=True)
-    status = run_sweep_command(specs, tasks, len(grid), out, workers=workers, dask=dask,
+    poses = max(len(driver_grid) if c.mechanism == "linkage" and driver_grid is not None
+                else len(grid) for c, _ in specs)
+    status = run_sweep_command(specs, tasks, poses, out, workers=workers, dask=dask,
                                fail_on=verdicts, junit=junit, quiet=quiet)
     raise typer.Exit(status)
 

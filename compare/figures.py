@@ -48,10 +48,23 @@ def _mark_singular(ax: Axes, status: pd.DataFrame) -> None:
                 transform=ax.get_xaxis_transform(), ms=8)
 
 
+def _names(case: Case) -> tuple[str, str, list[tuple[str, str]], str]:
+    """(drive quantity, its unit, reactions as (label, quantity stem), x-axis label)."""
+    if case.mechanism != "linkage":
+        return (f"T1{case.drive_link}", "N·m",
+                [(f"|F{j}|", f"F{j}") for j in ("12", "23", "34", "14")], "θ12 [deg]")
+    linkage = case.linkage
+    first = linkage.drivers[0].joint
+    revolute = linkage.joint(first).kind == "revolute"
+    return (f"Q_{first}", "N·m" if revolute else "N",
+            [(f"|F_{j.name}|", f"F_{j.name}") for j in linkage.joints],
+            f"driver {first} from the drawn pose [{'deg' if revolute else 'mm'}]")
+
+
 def sweep_figure(case: Case, results: pd.DataFrame, status: pd.DataFrame,
                  comparison: pd.DataFrame) -> bytes:
     """PNG bytes of the four-panel figure of one case's sweep."""
-    drive = f"T1{case.drive_link}"
+    drive, drive_unit, reactions, x_label = _names(case)
     backends = [str(b) for b in pd.unique(results["backend"])]
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), sharex=True)
     (ax_t, ax_f), (ax_e, ax_mu) = axes
@@ -59,13 +72,13 @@ def sweep_figure(case: Case, results: pd.DataFrame, status: pd.DataFrame,
         s = _series(results, b, drive)
         style = {"lw": 1.6} if b == REFERENCE else {"ls": "none", "marker": ".", "ms": 3}
         ax_t.plot(s["theta12"], s["value"], label=b, **style)
-    ax_t.set_ylabel(f"{drive} [N·m]")
-    ax_t.set_title("Drive torque")
+    ax_t.set_ylabel(f"{drive} [{drive_unit}]")
+    ax_t.set_title("Drive effort")
     ax_t.legend(fontsize=7, ncol=2)
-    for j in ("12", "23", "34", "14"):
-        x = _series(results, REFERENCE, f"F{j}_x").set_index("theta12")["value"]
-        y = _series(results, REFERENCE, f"F{j}_y").set_index("theta12")["value"]
-        ax_f.plot(x.index, np.hypot(x, y.reindex(x.index)), label=f"|F{j}|")
+    for label, stem in reactions:
+        x = _series(results, REFERENCE, f"{stem}_x").set_index("theta12")["value"]
+        y = _series(results, REFERENCE, f"{stem}_y").set_index("theta12")["value"]
+        ax_f.plot(x.index, np.hypot(x, y.reindex(x.index)), label=label)
     ax_f.set_yscale("log")
     ax_f.set_ylabel("reaction [N] (analytic)")
     ax_f.set_title("Reaction magnitudes")
@@ -84,20 +97,35 @@ def sweep_figure(case: Case, results: pd.DataFrame, status: pd.DataFrame,
                    else "Error against the tolerance (nothing to compare)")
     if len(comparison):
         ax_e.legend(fontsize=7, ncol=2)
-    theta = np.sort(results.loc[results["backend"] == REFERENCE, "theta12"].unique())
-    theta = theta[:: max(1, len(theta) // MAX_POINTS)]
-    ax_mu.plot(theta, np.degrees(transmission_angle(case, np.radians(theta))), color="k")
-    ax_mu.axhline(40.0, color="grey", lw=0.8, ls=":")
-    ax_mu.set_ylabel("transmission angle μ [deg]")
-    ax_mu.set_title("Transmission angle (dotted: 40° guideline)")
+    _condition_or_transmission(ax_mu, case, results, status)
     for ax in axes.flat:
         _mark_singular(ax, status)
         ax.grid(alpha=0.3)
     for ax in axes[1]:
-        ax.set_xlabel("θ12 [deg]")
-    fig.suptitle(f"{case.name}: sweep over θ12 (dashed red: singular pose)")
+        ax.set_xlabel(x_label)
+    fig.suptitle(f"{case.name}: sweep over {x_label.split(' [')[0]} (dashed red: singular pose)")
     fig.tight_layout()
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=90)
     plt.close(fig)
     return buffer.getvalue()
+
+
+def _condition_or_transmission(ax: Axes, case: Case, results: pd.DataFrame,
+                               status: pd.DataFrame) -> None:
+    """The four-bar's and slider-crank's transmission angle; a linkage's condition number
+    (how close each pose is to a toggle), which every mechanism has."""
+    if case.mechanism == "linkage":
+        ref = _thin(status[status["backend"] == REFERENCE].sort_values("theta12"))
+        ax.plot(ref["theta12"], ref["condition_number"], color="k")
+        ax.axhline(NEAR_SINGULAR_CONDITION, color="grey", lw=0.8, ls=":")
+        ax.set_yscale("log")
+        ax.set_ylabel("condition number (analytic)")
+        ax.set_title("Distance from toggles (dotted: near-singular line)")
+        return
+    theta = np.sort(results.loc[results["backend"] == REFERENCE, "theta12"].unique())
+    theta = theta[:: max(1, len(theta) // MAX_POINTS)]
+    ax.plot(theta, np.degrees(transmission_angle(case, np.radians(theta))), color="k")
+    ax.axhline(40.0, color="grey", lw=0.8, ls=":")
+    ax.set_ylabel("transmission angle μ [deg]")
+    ax.set_title("Transmission angle (dotted: 40° guideline)")

@@ -52,6 +52,12 @@ VECTOR_BACKENDS = {
     "superposition": "mechcheck.analytic.superposition:solve_poses",
     "virtual_work": "mechcheck.analytic.virtual_work:solve_poses",
 }
+#: The same for a linkage: (case, first driver's values in rad or m) → LinkageResults.
+LINKAGE_VECTOR_BACKENDS = {
+    "analytic": "mechcheck.analytic.linkage_backends:analytic_results",
+    "superposition": "mechcheck.analytic.linkage_backends:superposition_results",
+    "virtual_work": "mechcheck.analytic.linkage_backends:virtual_work_results",
+}
 #: Simulator sweeps, name → "module:function" taking (case, theta12_rad, backend) → [Solution].
 SIMULATOR_SWEEPS = {
     "mujoco": "mechcheck.sim_models.mujoco:sweep", "mujoco_solve": "mechcheck.sim_models.mujoco:sweep",
@@ -104,14 +110,14 @@ def task_digest(case: Case, backend: str, theta12_deg: np.ndarray) -> str:
     return h.hexdigest()[:16]
 
 
-def parse_range(text: str) -> np.ndarray:
+def parse_range(text: str, option: str = "--theta12") -> np.ndarray:
     """``START:STOP:STEP`` in degrees: START, START + STEP, … every value below STOP.
 
     STOP itself is excluded (``0:360:1`` is 360 poses, and a whole turn does not
     visit 0° twice), also where rounding puts it a hair inside; ``0:10:3`` is
     0, 3, 6, 9. A grid of more than :data:`MAX_SWEEP_POSES` poses is refused.
     """
-    option = f"--theta12 {text!r}"
+    option = f"{option} {text!r}"
     try:
         start, stop, step = (float(p) for p in text.split(":"))
     except ValueError:
@@ -139,8 +145,14 @@ def _resolve(target: str) -> Callable[..., Any]:
         raise BackendUnavailable(f"backend sweep {target!r} is not available: {error}") from None
 
 
-def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray) -> list[SweepTask]:
-    """The tasks of a sweep; the reference backend is always included."""
+def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray,
+         driver_grid: np.ndarray | None = None) -> list[SweepTask]:
+    """The tasks of a sweep; the reference backend is always included.
+
+    A four-bar or slider-crank sweeps θ12 over ``theta12_deg``; a linkage sweeps its first
+    driver over ``driver_grid`` (degrees of a revolute joint, mm of a prismatic one, from
+    the drawn pose; default: the θ12 grid), its other drivers at their own values.
+    """
     names = list(dict.fromkeys([REFERENCE, *backends]))
     for name in names:
         if name not in REGISTRY:
@@ -149,41 +161,52 @@ def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray
             raise BackendUnavailable(f"backend {name!r} has no sweep")
     tasks = []
     for case in cases:
+        grid = theta12_deg if case.mechanism != "linkage" or driver_grid is None else driver_grid
         for name in names:
             size = VECTOR_CHUNK if name in VECTOR_BACKENDS else SIMULATOR_CHUNK
-            for chunk, start in enumerate(range(0, len(theta12_deg), size)):
-                part = np.array(theta12_deg[start:start + size], dtype=float)
+            for chunk, start in enumerate(range(0, len(grid), size)):
+                part = np.array(grid[start:start + size], dtype=float)
                 tasks.append(SweepTask(case, name, part, chunk, task_digest(case, name, part)))
     return tasks
 
 
-QUANTITIES = list(QUANTITY_UNITS)
-UNITS = sorted({u for u, _ in QUANTITY_UNITS.values()})
+UNITS = ["N", "N*m", "deg", "m"]
 
 
-def _long_frame(case: str, backend: str, theta_deg: np.ndarray,
+def units_of(case: Case) -> dict[str, str]:
+    """The table unit of every quantity the case's backends report."""
+    if case.mechanism == "linkage":
+        from mechcheck.analytic.linkage_backends import quantity_units
+
+        return quantity_units(case.linkage)
+    return {q: unit for q, (unit, _) in QUANTITY_UNITS.items()}
+
+
+def _long_frame(case: Case, backend: str, theta_deg: np.ndarray,
                 values: dict[str, np.ndarray]) -> pd.DataFrame:
     """Long rows from per-quantity arrays (table units), dropping absent (NaN) values.
 
     Text columns are categorical: a 10⁶-pose sweep has 10⁷ rows.
     """
+    units = units_of(case)
+    quantities = list(values)
     thetas, vals, q_codes, u_codes = [], [], [], []
-    for quantity, array in values.items():
-        unit = QUANTITY_UNITS[quantity][0]
+    for code, (quantity, array) in enumerate(values.items()):
+        unit = units[quantity]
         ok = np.isfinite(array)
         thetas.append(theta_deg[ok])
-        vals.append(table_values(quantity, array[ok]))
-        q_codes.append(np.full(int(ok.sum()), QUANTITIES.index(quantity), dtype=np.int8))
+        vals.append(table_values(quantity, array[ok], unit))
+        q_codes.append(np.full(int(ok.sum()), code, dtype=np.int16))
         u_codes.append(np.full(int(ok.sum()), UNITS.index(unit), dtype=np.int8))
     if not thetas:
         return pd.DataFrame(columns=RESULT_COLUMNS)
     theta = np.concatenate(thetas)
     n = theta.shape[0]
     return pd.DataFrame({
-        "case": _categorical(np.zeros(n, dtype=np.int8), [case]),
+        "case": _categorical(np.zeros(n, dtype=np.int8), [case.name]),
         "backend": _categorical(np.zeros(n, dtype=np.int8), [backend]),
         "theta12": theta,
-        "quantity": _categorical(np.concatenate(q_codes), QUANTITIES),
+        "quantity": _categorical(np.concatenate(q_codes), quantities),
         "value": np.concatenate(vals),
         "unit": _categorical(np.concatenate(u_codes), UNITS),
     })
@@ -193,27 +216,40 @@ def _categorical(codes: np.ndarray, categories: list[str]) -> pd.Categorical[Any
     return pd.Categorical.from_codes(codes, dtype=pd.CategoricalDtype(categories))
 
 
+def driver_grid_si(case: Case, grid: np.ndarray) -> np.ndarray:
+    """A linkage's sweep grid (deg of a revolute first driver, mm of a prismatic one) in the
+    engine's units (rad, m)."""
+    kind = case.linkage.joint(case.linkage.drivers[0].joint).kind
+    return np.radians(grid) if kind == "revolute" else grid / 1000.0
+
+
 def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     theta_deg = np.asarray(task.theta12_deg)
-    solver = _resolve(VECTOR_BACKENDS[task.backend])
+    linkage = task.case.mechanism == "linkage"
+    solver = _resolve((LINKAGE_VECTOR_BACKENDS if linkage else VECTOR_BACKENDS)[task.backend])
+    grid = driver_grid_si(task.case, theta_deg) if linkage else np.radians(theta_deg)
     try:
-        results = solver(task.case, np.radians(theta_deg))
+        results = solver(task.case, grid)
     except ValueError:  # the method refuses this case (Coulomb friction)
         status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
                                "theta12": theta_deg, "status": "not_applicable",
                                "condition_number": np.nan})
         return pd.DataFrame(columns=RESULT_COLUMNS), status
-    pose_ok = np.isfinite(results.values["theta13"])
     status_values = np.select(
-        [~pose_ok, results.singular, results.indeterminate, ~results.converged],
+        [~results.assembled, results.singular, results.indeterminate, ~results.converged],
         ["no_solution", "singular", "indeterminate", "no_solution"], default="ok")
     status = pd.DataFrame({"case": task.case.name, "backend": task.backend, "theta12": theta_deg,
                            "status": status_values, "condition_number": results.condition})
-    return _long_frame(task.case.name, task.backend, theta_deg, results.values), status
+    return _long_frame(task.case, task.backend, theta_deg, results.values), status
 
 
 def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     theta_deg = np.asarray(task.theta12_deg)
+    if task.case.mechanism == "linkage":  # the simulators' builders do not take linkages yet
+        status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
+                               "theta12": theta_deg, "status": "not_applicable",
+                               "condition_number": np.nan})
+        return pd.DataFrame(columns=RESULT_COLUMNS), status
     sweep_fn = _resolve(SIMULATOR_SWEEPS[task.backend])
     solutions: list[Solution] = sweep_fn(task.case, np.radians(theta_deg), task.backend)
     values = {q: np.full(len(theta_deg), np.nan) for q in QUANTITY_UNITS}
@@ -227,7 +263,7 @@ def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
         "condition_number": [float(s.diagnostics.get("condition_number", np.nan))
                              for s in solutions],
     })
-    return _long_frame(task.case.name, task.backend, theta_deg, present), status
+    return _long_frame(task.case, task.backend, theta_deg, present), status
 
 
 def run_task(task: SweepTask) -> tuple[bytes, bytes]:

@@ -14,11 +14,9 @@ import pandas as pd
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import (
     FORCE_FLOOR_N,
-    QUANTITY_UNITS,
     Solution,
     kind_of_unit,
     order_key,
-    quantity_kind,
     table_value,
     unit_factor,
 )
@@ -134,16 +132,18 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     Columns: the comparison columns of CONVENTIONS.md plus ``theta12``.
     """
     keys = ["theta12", "quantity"]
-    ref = reference[[*keys, "value"]].rename(columns={"value": "reference"})
-    ref = ref.assign(quantity=ref["quantity"].astype(str))
-    merged = other.assign(quantity=other["quantity"].astype(str)).merge(ref, on=keys)
+    ref = reference[[*keys, "value", "unit"]].rename(columns={"value": "reference"})
+    ref = ref.assign(quantity=ref["quantity"].astype(str), unit=ref["unit"].astype(str))
+    merged = other.drop(columns="unit").assign(quantity=other["quantity"].astype(str)).merge(
+        ref, on=keys)
     if merged.empty:
         return pd.DataFrame(columns=["case", "theta12", *COMPARISON_COLUMNS[1:]])
     quantity = merged["quantity"]
-    factor = quantity.map(lambda q: QUANTITY_UNITS[q][1]).to_numpy()
-    kind = quantity.map(quantity_kind)
+    unit = merged["unit"]
+    factor = unit.map(unit_factor).to_numpy()
+    kind = unit.map(kind_of_unit)
     # Scale of each force/torque kind at each pose: the largest reference magnitude.
-    ref_kind = ref.assign(kind=ref["quantity"].map(quantity_kind), mag=ref["reference"].abs())
+    ref_kind = ref.assign(kind=ref["unit"].map(kind_of_unit), mag=ref["reference"].abs())
     scale_table = ref_kind.groupby(["theta12", "kind"], observed=True)["mag"].max()
     scale = pd.Series(list(zip(merged["theta12"], kind, strict=True))).map(scale_table).to_numpy()
     scale = np.maximum(np.nan_to_num(scale, nan=SCALE_FLOOR), SCALE_FLOOR)
@@ -151,7 +151,7 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     force_at = merged["theta12"].map(scale_table.xs("force", level="kind")).to_numpy()
     force_at = np.nan_to_num(force_at, nan=SCALE_FLOOR) * case.geometry.scale
     scale = np.where(kind == "torque", np.maximum(scale, force_at), scale)
-    is_angle = quantity.isin(["theta13", "theta14"]).to_numpy()
+    is_angle = (unit == "deg").to_numpy()
     scale = np.where(kind == "pose", np.where(is_angle, factor, case.geometry.scale), scale)
     diff = merged["value"].to_numpy() - merged["reference"].to_numpy()
     diff = np.where(is_angle, (diff + 180.0) % 360.0 - 180.0, diff)
@@ -159,9 +159,9 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     rel_err = abs_err / scale
     cond = merged["theta12"].map(reference_status.set_index("theta12")["condition_number"])
     pose_kind = np.where(cond.to_numpy() > NEAR_SINGULAR_CONDITION, "near_singular", case.kind)
-    rules = {(q, k): tolerance_for(case, str(merged["backend"].iloc[0]), q, k)
-             for q, k in set(zip(quantity, pose_kind, strict=True))}
-    pairs = list(zip(quantity, pose_kind, strict=True))
+    rules = {(q, k, u): tolerance_for(case, str(merged["backend"].iloc[0]), q, k, kind_of_unit(u))
+             for q, k, u in set(zip(quantity, pose_kind, unit, strict=True))}
+    pairs = list(zip(quantity, pose_kind, unit, strict=True))
     rtol = np.array([rules[p].rtol for p in pairs])
     atol = np.array([rules[p].atol for p in pairs])
     passed = (rel_err <= rtol) | (abs_err / factor <= atol)
