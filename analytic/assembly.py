@@ -1,6 +1,6 @@
 """Can a Case be assembled at its θ12?  If not, say which θ12 can.
 
-A geometry that assembles at no θ12 is unusable input (:func:`check_geometry`).
+A geometry that assembles at no θ12 is unusable input (the geometry refuses itself).
 A θ12 outside the range that assembles is a property of the pose, like a toggle:
 every backend gives it the verdict ``no_solution``, naming the range that does
 assemble; a θ12 inside the range where the pose is still undefined is a change
@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
-from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, PresetGeometry, preset_geometry
+from mechcheck.analytic.case import Case, FourBarGeometry, preset_geometry
 from mechcheck.analytic.solution import Status
 
 #: Decimal places of the degrees in printed ranges (rounded inward, so that every
@@ -32,29 +32,11 @@ def _deg_range(lo: float, hi: float) -> str:
     return f"[{a:.{RANGE_DECIMALS}f}°, {b:.{RANGE_DECIMALS}f}°]"
 
 
-def _never_assembles(g: PresetGeometry) -> str | None:
-    """Why no θ12 assembles this geometry, or None if some does."""
-    if isinstance(g, FourBarGeometry):
-        if fourbar_kinematics.assembly_interval(g) is None:
-            return "a link is longer than the other three together"
-        return None
-    if slidercrank_kinematics.assembly_interval(g) is None:
-        return "the offset exceeds crank plus rod"
-    return None
-
-
-def check_geometry(g: PresetGeometry) -> None:
-    """Raise :class:`CaseError` (key ``geometry``) if no θ12 assembles ``g``."""
-    why = _never_assembles(g)
-    if why is not None:
-        raise CaseError(f"cannot be assembled at any θ12: {why}", key="geometry")
-
-
 def assembly_range_text(case: Case) -> str:
     """Human description of the θ12 values (global, degrees) that assemble."""
     g = preset_geometry(case)
     gd = case.ground_angle
-    why = _never_assembles(g)
+    why = g.never_assembles()
     if why is not None:
         return f"no θ12 assembles this geometry ({why})"
     if isinstance(g, FourBarGeometry):

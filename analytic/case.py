@@ -21,118 +21,30 @@ Examples
 
 from __future__ import annotations
 
-import math
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Literal, TypeVar, Union
+from typing import Literal
 
-if TYPE_CHECKING:
-    from mechcheck.analytic.linkage import Linkage
+from mechcheck.analytic.linkage import Linkage
+from mechcheck.analytic.values import (
+    CaseError,
+    FrozenMap,
+    Vec2,
+    bounded_angle,
+    finite,
+    link_length,
+    nonnegative,
+    pair,
+    positive,
+)
 
 Mechanism = Literal["four_bar", "slider_crank", "linkage"]
-Vec2 = tuple[float, float]
-V = TypeVar("V")
 
 FOUR_BAR_PINS = ("A0", "A", "B", "B0")
 SLIDER_CRANK_PINS = ("A0", "A", "B")
 MOVING_LINKS = (2, 3, 4)
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")
-_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
-
-
-class CaseError(ValueError):
-    """An unusable case: names the file, the case and the key at fault.
-
-    ``str(error)`` is the one-line message the command line prints.
-    """
-
-    def __init__(self, message: str, *, key: str = "", case: str = "", file: str = "") -> None:
-        self.message = message
-        self.key = key
-        self.case = case
-        self.file = file
-        super().__init__(self.__str__())
-
-    def located(self, *, file: str | None = None, case: str | None = None,
-                key_prefix: str = "") -> CaseError:
-        """The same error with its place filled in (outer callers know more)."""
-        key = f"{key_prefix}.{self.key}" if key_prefix and self.key else (self.key or key_prefix)
-        return CaseError(self.message, key=key, case=case if case is not None else self.case,
-                         file=file if file is not None else self.file)
-
-    def __str__(self) -> str:
-        where = []
-        if self.file:
-            where.append(self.file)
-        if self.case:
-            where.append(f"case '{self.case}'")
-        if self.key:
-            where.append(f"key '{self.key}'")
-        text = (": ".join(where) + ": " if where else "") + self.message
-        # One line whatever the file held: control characters (a newline in a name) are escaped.
-        return _CONTROL.sub(lambda m: repr(m[0])[1:-1], text)
-
-
-#: The largest magnitude of any value, in SI units (m, N, N·m, kg, kg·m², rad/s …): far
-#: beyond any machine, and far enough below float64's 1e308 that the products the
-#: equations form (m·ω²·length, force·length², length⁴) can neither overflow nor lose
-#: the 1e-9 agreement the backends are held to. A length of 1e155 overflowed; 1e200 N gave NaN.
-MAX_MAGNITUDE = 1e12
-#: The shortest link, m: below a micrometre a link is no drawing of a machine, and lengths
-#: near 1e-300 vanish when squared (the loop equations then divide by zero).
-MIN_LINK_LENGTH = 1e-6
-#: The largest angle, degrees (≈ 278 turns): beyond it sin and cos of a float64 angle lose
-#: the digits the 1e-9 agreement needs.
-MAX_ANGLE_DEG = 1e5
-
-
-def finite(value: float, key: str, limit: float = MAX_MAGNITUDE) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise CaseError(f"must be a number, got {value!r}", key=key)
-    if not math.isfinite(value):
-        raise CaseError(f"must be finite, got {value!r}", key=key)
-    if abs(value) > limit:
-        raise CaseError(f"must be at most {limit:g} in magnitude (SI units), got {value:g}: "
-                        "no machine is that large, and the arithmetic would overflow", key=key)
-    return float(value)
-
-
-def bounded_angle(value: float, key: str) -> float:
-    """An angle in radians, refused (in the file's degrees) beyond ±MAX_ANGLE_DEG."""
-    value = finite(value, key, limit=math.inf)
-    if abs(value) > math.radians(MAX_ANGLE_DEG):
-        raise CaseError(f"must be within ±{MAX_ANGLE_DEG:g}°, got {math.degrees(value):g}°",
-                        key=key)
-    return value
-
-
-def _positive(value: float, key: str) -> float:
-    value = finite(value, key)
-    if value <= 0.0:
-        raise CaseError(f"must be > 0, got {value:g}", key=key)
-    return value
-
-
-def _link_length(value: float, key: str) -> float:
-    value = _positive(value, key)
-    if value < MIN_LINK_LENGTH:
-        raise CaseError(f"must be at least {MIN_LINK_LENGTH:g} m (a micrometre), got {value:g} m",
-                        key=key)
-    return value
-
-
-def _nonnegative(value: float, key: str) -> float:
-    value = finite(value, key)
-    if value < 0.0:
-        raise CaseError(f"must be >= 0, got {value:g}", key=key)
-    return value
-
-
-def _vec2(value: Vec2, key: str) -> Vec2:
-    if len(value) != 2:
-        raise CaseError(f"must be a pair [x, y], got {value!r}", key=key)
-    return (finite(value[0], f"{key}[0]"), finite(value[1], f"{key}[1]"))
 
 
 def _link(link: int, key: str) -> int:
@@ -153,7 +65,17 @@ class FourBarGeometry:
 
     def __post_init__(self) -> None:
         for key in ("a1", "a2", "a3", "a4"):
-            object.__setattr__(self, key, _link_length(getattr(self, key), f"geometry.{key}"))
+            object.__setattr__(self, key, link_length(getattr(self, key), f"geometry.{key}"))
+        why = self.never_assembles()
+        if why:
+            raise CaseError(f"cannot be assembled at any θ12: {why}", key="geometry")
+
+    def never_assembles(self) -> str | None:
+        """Why no θ12 assembles this four-bar, or None if some does."""
+        lengths = (self.a1, self.a2, self.a3, self.a4)
+        if max(lengths) > sum(lengths) - max(lengths):
+            return "a link is longer than the other three together"
+        return None
 
     @property
     def scale(self) -> float:
@@ -170,16 +92,25 @@ class SliderCrankGeometry:
     offset: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "a2", _link_length(self.a2, "geometry.a2"))
-        object.__setattr__(self, "a3", _link_length(self.a3, "geometry.a3"))
+        object.__setattr__(self, "a2", link_length(self.a2, "geometry.a2"))
+        object.__setattr__(self, "a3", link_length(self.a3, "geometry.a3"))
         object.__setattr__(self, "offset", finite(self.offset, "geometry.offset"))
+        why = self.never_assembles()
+        if why:
+            raise CaseError(f"cannot be assembled at any θ12: {why}", key="geometry")
+
+    def never_assembles(self) -> str | None:
+        """Why no θ12 assembles this slider-crank, or None if some does."""
+        if abs(self.offset) > self.a2 + self.a3:
+            return "the offset exceeds crank plus rod"
+        return None
 
     @property
     def scale(self) -> float:
         return max(self.a2, self.a3, abs(self.offset))
 
 
-Geometry = Union[FourBarGeometry, SliderCrankGeometry, "Linkage"]
+Geometry = FourBarGeometry | SliderCrankGeometry | Linkage
 
 
 PresetGeometry = FourBarGeometry | SliderCrankGeometry
@@ -192,12 +123,6 @@ def preset_geometry(case: Case) -> PresetGeometry:
         return g
     raise TypeError(f"case {case.name!r} is a linkage: it has no four-bar or slider-crank "
                     "geometry")
-
-
-def _linkage_type() -> type:
-    from mechcheck.analytic.linkage import Linkage
-
-    return Linkage
 
 
 @dataclass(frozen=True)
@@ -215,8 +140,8 @@ class Load:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "link", _link(self.link, "link"))
-        object.__setattr__(self, "at", _vec2(self.at, "at"))
-        object.__setattr__(self, "force", _vec2(self.force, "force"))
+        object.__setattr__(self, "at", pair(self.at, "at"))
+        object.__setattr__(self, "force", pair(self.force, "force"))
         object.__setattr__(self, "torque", finite(self.torque, "torque"))
 
 
@@ -231,9 +156,9 @@ class Mass:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "link", _link(self.link, "link"))
-        object.__setattr__(self, "mass", _positive(self.mass, "mass"))
-        object.__setattr__(self, "com", _vec2(self.com, "com"))
-        object.__setattr__(self, "inertia", _nonnegative(self.inertia, "inertia"))
+        object.__setattr__(self, "mass", positive(self.mass, "mass"))
+        object.__setattr__(self, "com", pair(self.com, "com"))
+        object.__setattr__(self, "inertia", nonnegative(self.inertia, "inertia"))
 
 
 @dataclass(frozen=True)
@@ -268,12 +193,12 @@ class Friction:
     direction: int = 0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "mu", _nonnegative(self.mu, "friction.mu"))
+        object.__setattr__(self, "mu", nonnegative(self.mu, "friction.mu"))
         if self.slide_mu is not None:
             object.__setattr__(self, "slide_mu",
-                               _nonnegative(self.slide_mu, "friction.slide_mu"))
+                               nonnegative(self.slide_mu, "friction.slide_mu"))
         for name in ("pin_radius", "viscous"):
-            values = {joint: _nonnegative(v, f"friction.{name}.{joint}")
+            values = {joint: nonnegative(v, f"friction.{name}.{joint}")
                       for joint, v in dict(getattr(self, name)).items()}
             object.__setattr__(self, name, FrozenMap(values))
         if self.direction not in (-1, 0, 1):
@@ -285,31 +210,6 @@ class Friction:
 
     def slide_coefficient(self) -> float:
         return self.mu if self.slide_mu is None else self.slide_mu
-
-
-class FrozenMap(Mapping[str, V]):
-    """A read-only, hashable, picklable mapping, so that the values holding it stay immutable."""
-
-    def __init__(self, items: Mapping[str, V]) -> None:
-        self._items = dict(items)
-
-    def __getitem__(self, key: str) -> V:
-        return self._items[key]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._items)
-
-    def __len__(self) -> int:
-        return len(self._items)
-
-    def __hash__(self) -> int:
-        return hash(tuple(sorted(self._items.items())))
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, Mapping) and dict(self._items) == dict(other)
-
-    def __repr__(self) -> str:
-        return repr(self._items)
 
 
 @dataclass(frozen=True)
@@ -355,14 +255,12 @@ class Case:
             raise error.located(case=self.name, file=self.source) from None
 
     def _validate(self) -> None:
-        from mechcheck.analytic.linkage import Linkage  # late: linkage needs CaseError
-
         if not isinstance(self.name, str) or not NAME_PATTERN.fullmatch(self.name):
             raise CaseError(f"must use only letters, digits, '-' and '_', got {self.name!r}",
                             key="name")
         if isinstance(self.geometry, Linkage):
             # A linkage carries its own drivers, loads, masses and friction (LINKAGES.md).
-            object.__setattr__(self, "gravity", _vec2(self.geometry.gravity, "gravity"))
+            object.__setattr__(self, "gravity", pair(self.geometry.gravity, "gravity"))
             return
         if not isinstance(self.geometry, (FourBarGeometry, SliderCrankGeometry)):
             raise CaseError("must be a FourBarGeometry, SliderCrankGeometry or Linkage",
@@ -375,7 +273,7 @@ class Case:
                             f"{self.mechanism}, got {self.branch!r}", key="branch")
         object.__setattr__(self, "theta12", bounded_angle(self.theta12, "theta12"))
         object.__setattr__(self, "ground_angle", bounded_angle(self.ground_angle, "ground_angle"))
-        object.__setattr__(self, "gravity", _vec2(self.gravity, "gravity"))
+        object.__setattr__(self, "gravity", pair(self.gravity, "gravity"))
         if self.drive_link not in (2, 4):
             raise CaseError(f"must be 2 or 4, got {self.drive_link!r}", key="drive_link")
         if self.drive_link == 4 and self.mechanism == "slider_crank":
@@ -389,9 +287,6 @@ class Case:
                 raise CaseError(f"link {m.link} has more than one mass entry", key=f"masses[{i}].link")
             seen.add(m.link)
         self._validate_friction()
-        from mechcheck.analytic.assembly import check_geometry  # late: assembly needs Case defined
-
-        check_geometry(self.geometry)
 
     def _validate_friction(self) -> None:
         f = self.friction
@@ -426,12 +321,12 @@ class Case:
 
     @property
     def linkage(self) -> Linkage:
-        """The mechanism as a linkage: a linkage case's own, or a preset drawn at this pose."""
-        from mechcheck.analytic.presets import linkage_of
-
-        if isinstance(self.geometry, (FourBarGeometry, SliderCrankGeometry)):
-            return linkage_of(self)
-        return self.geometry
+        """A linkage case's linkage (for the four-bar or slider-crank as a linkage, see
+        :func:`mechcheck.analytic.presets.linkage_of`)."""
+        if isinstance(self.geometry, Linkage):
+            return self.geometry
+        raise TypeError(f"case {self.name!r} is a {self.mechanism}: its linkage is "
+                        "mechcheck.analytic.presets.linkage_of(case)")
 
     @property
     def input_sense(self) -> int:

@@ -43,6 +43,7 @@ def drive_quantity(case: Case) -> str:
 
 
 @dataclass(frozen=True)
+
 class PoseResults:
     """Vectorised results: each array has one entry per θ12.
 
@@ -118,28 +119,32 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
     Poses beyond :data:`~mechcheck.analytic.equilibrium.SINGULAR_CONDITION`, and
     friction poses whose Newton iteration did not converge, get NaN forces.
     """
-    angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
-    pose = pose_of(case, angles)
-    cond = condition(case, pose)
-    b = known_vector(case, pose)
-    x = eliminate(case, pose, b)
-    iterations = np.zeros(angles.shape[0], dtype=int)
-    converged = np.ones(angles.shape[0], dtype=bool)
-    reversing = np.full(angles.shape[0], "", dtype=object)
-    if case.has_coulomb_friction:
-        k = coefficient_matrix(case, pose)
-        x, iterations, converged = solve_with_friction(case, pose, k, b, x)
-        for joint, where in reversing_joints(coulomb_terms(case, angles)):
-            reversing[where] = np.where(reversing[where] == "", joint,
-                                        reversing[where] + ", " + joint)
-    reversing = reversing.astype(str)
-    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "")
-    x[withheld] = np.nan
-    values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
-    return PoseResults(angles, values, cond, iterations, converged, reversing)
+    # A pose that does not assemble is NaN by design (its verdict is no_solution):
+    # the arithmetic on it must not warn.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
+        pose = pose_of(case, angles)
+        cond = condition(case, pose)
+        b = known_vector(case, pose)
+        x = eliminate(case, pose, b)
+        iterations = np.zeros(angles.shape[0], dtype=int)
+        converged = np.ones(angles.shape[0], dtype=bool)
+        reversing = np.full(angles.shape[0], "", dtype=object)
+        if case.has_coulomb_friction:
+            k = coefficient_matrix(case, pose)
+            x, iterations, converged = solve_with_friction(case, pose, k, b, x)
+            for joint, where in reversing_joints(coulomb_terms(case, angles)):
+                reversing[where] = np.where(reversing[where] == "", joint,
+                                            reversing[where] + ", " + joint)
+        reversing = reversing.astype(str)
+        withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "")
+        x[withheld] = np.nan
+        values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
+        return PoseResults(angles, values, cond, iterations, converged, reversing)
 
 
 @dataclass(frozen=True)
+
 class PoseVerdict:
     """Why no force analysis exists at a pose: a property of the pose, so every
     backend, analytic or simulated, reports the same verdict there."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from mechcheck.analytic.case import FourBarGeometry
-from mechcheck.analytic.kinematics import Array, LinkState, Pose, perp, unit
+from mechcheck.analytic.pose import Array, LinkState, Pose, perp, unit
 
 
 def rocker_angle(g: FourBarGeometry, phi12: Array, branch: str) -> Array:

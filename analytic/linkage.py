@@ -33,9 +33,9 @@ from typing import Literal
 
 import numpy as np
 
-from mechcheck.analytic.case import CaseError, FrozenMap, Vec2, finite
+from mechcheck.analytic.linkage_kinematics import joint_jacobian_at_drawn_pose
+from mechcheck.analytic.values import GROUND, CaseError, FrozenMap, Vec2, finite
 
-GROUND = "ground"
 IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 JointKind = Literal["revolute", "prismatic"]
 
@@ -339,8 +339,6 @@ class Linkage:
     @cached_property
     def joint_rank(self) -> int:
         """Rank of the joints' constraint Jacobian at the drawn pose."""
-        from mechcheck.analytic.linkage_kinematics import joint_jacobian_at_drawn_pose
-
         jac = joint_jacobian_at_drawn_pose(self)
         if jac.size == 0:
             return 0

@@ -19,10 +19,10 @@ from mechcheck.analytic.linkage_forces import (
     LinkageResults,
     coefficient_matrix,
     force_quantities,
-    known_vector,
     solve_linkage,
 )
 from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, perp, solve_batched, solve_pose
+from mechcheck.analytic.linkage_loads import known_vector
 from mechcheck.analytic.solution import Solution, Status
 
 COULOMB_REFUSAL = ("the method applies only to linkages without Coulomb friction: friction "

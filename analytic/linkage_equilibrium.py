@@ -23,7 +23,9 @@ from mechcheck.analytic.linkage_kinematics import (
     LinkagePose,
     positions,
     residual_and_jacobian,
+    solve_batched,
 )
+from mechcheck.analytic.linkage_loads import known_vector
 
 #: Gauss–Newton budget and convergence (relative to the linkage's size and force level).
 ITERATIONS = 60
@@ -61,8 +63,6 @@ def _static_pose(linkage: Linkage, q: Array, values: Array) -> LinkagePose:
 
 def _residual(linkage: Linkage, q: Array, values: Array) -> Array:
     """[Φ(q); (I − J⁺J)·Q(q) / force scale] for one pose (q: (3n,))."""
-    from mechcheck.analytic.linkage_forces import known_vector
-
     qq = q[None, :]
     phi, jac = residual_and_jacobian(linkage, qq, values[None, :])
     force = generalized_forces(_static_pose(linkage, qq, values[None, :]),
@@ -134,8 +134,6 @@ def _stable(linkage: Linkage, q: Array, values: Array) -> bool:
     manifold, through which the constraint forces contribute stiffness, is included. At
     an equilibrium the Hessian does not depend on how the manifold is parametrized.
     """
-    from mechcheck.analytic.linkage_kinematics import solve_batched
-
     _, jac = residual_and_jacobian(linkage, q[None, :], values[None, :])
     _, s, vt = np.linalg.svd(jac[0])
     rank = int((s > 1e-9 * s[0]).sum()) if s.size else 0
@@ -164,3 +162,16 @@ def _stable(linkage: Linkage, q: Array, values: Array) -> bool:
 
 def layout_size(linkage: Linkage) -> int:
     return Layout(linkage).size
+
+
+def equilibrium_poses(linkage: Linkage, values: Array | None) -> tuple[LinkagePose, Array]:
+    """The equilibrium pose of the free coordinates at each row of driver values (static
+    cases only), and its stability per pose: 1 stable, 0 unstable, NaN not found."""
+    d = len(linkage.drivers)
+    rows = (np.array([[drv.value for drv in linkage.drivers]]) if values is None
+            else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, d))
+    found = [equilibrium(linkage, row) for row in rows]
+    q = np.array([e.q if e.converged else np.full(e.q.shape, np.nan) for e in found])
+    stable = np.array([float(e.stable) if e.converged else np.nan for e in found])
+    zeros = np.zeros_like(q)
+    return LinkagePose(linkage, rows, q, zeros, zeros, np.full(rows.shape[0], np.nan)), stable

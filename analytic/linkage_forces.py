@@ -24,14 +24,20 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic.linkage import GROUND, Joint, LinearSpring, Linkage, TorsionSpring
+from mechcheck.analytic.linkage import Joint, Linkage
+from mechcheck.analytic.linkage_equilibrium import equilibrium_poses
 from mechcheck.analytic.linkage_kinematics import (
     Array,
     LinkagePose,
-    perp,
-    rotate,
     solve_batched,
     solve_pose,
+)
+from mechcheck.analytic.linkage_loads import (
+    ForceLayout,
+    cross,
+    joint_frame,
+    known_vector,
+    spring_force,
 )
 
 #: Above this condition number of the scaled equilibrium matrix the pose is singular and
@@ -45,36 +51,6 @@ FRICTION_ITERATIONS = 50
 REVERSAL_RTOL = 1e-12
 
 
-def _cross(r: Array, f: Array) -> Array:
-    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
-
-
-@dataclass(frozen=True)
-class ForceLayout:
-    """Columns of the unknowns and rows of the links."""
-
-    linkage: Linkage
-
-    def row(self, link: str) -> int:
-        """First of the link's three rows; −1 for the ground (no equations)."""
-        return -1 if link == GROUND else 3 * self.linkage.moving_links.index(link)
-
-    def joint_columns(self, joint: Joint) -> tuple[int, int]:
-        k = [j.name for j in self.linkage.joints].index(joint.name)
-        return 2 * k, 2 * k + 1
-
-    def driver_column(self, index: int) -> int:
-        return 2 * len(self.linkage.joints) + index
-
-    @property
-    def rows(self) -> int:
-        return 3 * len(self.linkage.moving_links)
-
-    @property
-    def columns(self) -> int:
-        return 2 * len(self.linkage.joints) + len(self.linkage.drivers)
-
-
 def _force_on(m: Array, layout: ForceLayout, link: str, col: int, direction: Array,
               point: Array, sign: float) -> None:
     """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
@@ -83,31 +59,13 @@ def _force_on(m: Array, layout: ForceLayout, link: str, col: int, direction: Arr
         return
     m[:, r, col] += sign * direction[:, 0]
     m[:, r + 1, col] += sign * direction[:, 1]
-    m[:, r + 2, col] += sign * _cross(point, direction)
+    m[:, r + 2, col] += sign * cross(point, direction)
 
 
 def _couple_on(m: Array, layout: ForceLayout, link: str, col: int, sign: float) -> None:
     r = layout.row(link)
     if r >= 0:
         m[:, r + 2, col] += sign
-
-
-@dataclass(frozen=True)
-class JointFrame:
-    """A joint's point (current) and, for a prismatic joint, its axis u and normal n."""
-
-    point: Array
-    u: Array | None
-    n: Array | None
-
-
-def joint_frame(pose: LinkagePose, joint: Joint) -> JointFrame:
-    point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
-    if joint.kind == "revolute":
-        return JointFrame(point, None, None)
-    assert joint.axis is not None
-    u = rotate(pose.angle(joint.links[0])[0], np.array(joint.axis))
-    return JointFrame(point, u, perp(u))
 
 
 def coefficient_matrix(pose: LinkagePose) -> Array:
@@ -143,93 +101,6 @@ def coefficient_matrix(pose: LinkagePose) -> Array:
                 assert frame.u is not None
                 _force_on(k, layout, link, col, frame.u, frame.point, sign)
     return k
-
-
-def _add_force(b: Array, layout: ForceLayout, link: str, force: Array, point: Array) -> None:
-    r = layout.row(link)
-    if r < 0:
-        return
-    b[:, r] += force[:, 0]
-    b[:, r + 1] += force[:, 1]
-    b[:, r + 2] += _cross(point, force)
-
-
-def _add_couple(b: Array, layout: ForceLayout, link: str, torque: Array) -> None:
-    r = layout.row(link)
-    if r >= 0:
-        b[:, r + 2] += torque
-
-
-def known_vector(pose: LinkagePose) -> Array:
-    """b (N, 3n): every force that does not depend on the unknowns, on each link."""
-    linkage = pose.linkage
-    layout = ForceLayout(linkage)
-    n = pose.q.shape[0]
-    b = np.zeros((n, layout.rows))
-    for load in linkage.loads:
-        at = pose.point(load.link, load.at)[0]
-        _add_force(b, layout, load.link, np.broadcast_to(np.array(load.force), (n, 2)), at)
-        _add_couple(b, layout, load.link, np.full(n, load.torque))
-    g = np.array(linkage.gravity)
-    for m in linkage.masses:
-        com, _, acc = pose.point(m.link, m.com)
-        _add_force(b, layout, m.link, m.mass * (g[None, :] - acc), com)
-        _add_couple(b, layout, m.link, -m.inertia * pose.angle(m.link)[2])
-    for spring in linkage.springs:
-        _add_spring(b, layout, pose, spring)
-    _add_viscous(b, layout, pose)
-    return b
-
-
-def spring_force(pose: LinkagePose, spring: LinearSpring | TorsionSpring) -> Array:
-    """S (N,): tension k(L − L0) + c·L̇ of a linear spring, k(q − q0) + c·q̇ of a torsional one."""
-    if isinstance(spring, TorsionSpring):
-        q, qdot, _ = pose.joint_coordinate(pose.linkage.joint(spring.joint))
-        return spring.stiffness * (q - spring.free_rotation) + spring.damping * qdot
-    (la, pa), (lb, pb) = spring.ends
-    a, va, _ = pose.point(la, pa)
-    bb, vb, _ = pose.point(lb, pb)
-    d = bb - a
-    length = np.hypot(d[:, 0], d[:, 1])
-    rate = np.einsum("ni,ni->n", d, vb - va) / length
-    return spring.stiffness * (length - spring.free_length) + spring.damping * rate
-
-
-def _add_spring(b: Array, layout: ForceLayout, pose: LinkagePose,
-                spring: LinearSpring | TorsionSpring) -> None:
-    s = spring_force(pose, spring)
-    if isinstance(spring, TorsionSpring):
-        i, j = pose.linkage.joint(spring.joint).links
-        _add_couple(b, layout, j, -s)
-        _add_couple(b, layout, i, s)
-        return
-    (la, pa), (lb, pb) = spring.ends
-    a = pose.point(la, pa)[0]
-    bb = pose.point(lb, pb)[0]
-    d = bb - a
-    e = d / np.hypot(d[:, 0], d[:, 1])[:, None]
-    _add_force(b, layout, la, s[:, None] * e, a)    # tension pulls a toward b
-    _add_force(b, layout, lb, -s[:, None] * e, bb)
-
-
-def _add_viscous(b: Array, layout: ForceLayout, pose: LinkagePose) -> None:
-    """−c·q̇ on links[1] (and the reverse on links[0]) at every joint with a viscous term."""
-    f = pose.linkage.friction
-    if f is None:
-        return
-    for name, c in f.viscous.items():
-        joint = pose.linkage.joint(name)
-        _, rate, _ = pose.joint_coordinate(joint)
-        i, j = joint.links
-        if joint.kind == "revolute":
-            _add_couple(b, layout, j, -c * rate)
-            _add_couple(b, layout, i, c * rate)
-        else:
-            frame = joint_frame(pose, joint)
-            assert frame.u is not None
-            force = -c * rate[:, None] * frame.u
-            _add_force(b, layout, j, force, frame.point)
-            _add_force(b, layout, i, -force, frame.point)
 
 
 @dataclass(frozen=True)
@@ -297,7 +168,7 @@ def friction_residual(pose: LinkagePose, terms: list[CoulombTerm], x: Array) -> 
             r = layout.row(link)
             if r < 0:
                 continue
-            lever = _cross(frame.point, frame.u)
+            lever = cross(frame.point, frame.u)
             for row_offset, coef in ((0, frame.u[:, 0]), (1, frame.u[:, 1]), (2, lever)):
                 phi[:, r + row_offset] += sign * coef * along
                 dphi[:, r + row_offset, c0] += sign * coef * d_along
@@ -461,18 +332,3 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
         converged = converged & np.isfinite(stable)
     return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms), cond,
                           converged, reversing, stable)
-
-
-def equilibrium_poses(linkage: Linkage, values: Array | None) -> tuple[LinkagePose, Array]:
-    """The equilibrium pose of the free coordinates at each row of driver values (static
-    cases only), and its stability per pose: 1 stable, 0 unstable, NaN not found."""
-    from mechcheck.analytic.linkage_equilibrium import equilibrium
-
-    d = len(linkage.drivers)
-    rows = (np.array([[drv.value for drv in linkage.drivers]]) if values is None
-            else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, d))
-    found = [equilibrium(linkage, row) for row in rows]
-    q = np.array([e.q if e.converged else np.full(e.q.shape, np.nan) for e in found])
-    stable = np.array([float(e.stable) if e.converged else np.nan for e in found])
-    zeros = np.zeros_like(q)
-    return LinkagePose(linkage, rows, q, zeros, zeros, np.full(rows.shape[0], np.nan)), stable

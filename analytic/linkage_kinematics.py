@@ -21,11 +21,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mechcheck.analytic.linkage import GROUND, Joint, Linkage
+from mechcheck.analytic.values import GROUND
+
+if TYPE_CHECKING:
+    from mechcheck.analytic.linkage import Joint, Linkage
 
 Array = NDArray[np.float64]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from mechcheck.analytic.case import SliderCrankGeometry
-from mechcheck.analytic.kinematics import Array, LinkState, Pose, unit
+from mechcheck.analytic.pose import Array, LinkState, Pose, unit
 
 
 def rod_angle(g: SliderCrankGeometry, phi12: Array, branch: str) -> Array:

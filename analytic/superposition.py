@@ -25,18 +25,21 @@ REFUSAL = ("superposition applies only to frictionless (linear) systems; this ca
 
 def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults:
     """Sum of the single-load solutions at each θ12 (rad)."""
-    if case.has_coulomb_friction:
-        raise ValueError(REFUSAL)
-    angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
-    pose = pose_of(case, angles)
-    x = np.zeros((angles.shape[0], 9))
-    for _, b in known_vectors(case, pose):
-        x += eliminate(case, pose, b)
-    results = PoseResults(angles, {}, condition(case, pose),
-                          np.zeros(angles.shape[0], dtype=int), np.ones(angles.shape[0], bool))
-    x[results.singular] = np.nan
-    values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
-    return PoseResults(angles, values, results.condition, results.iterations, results.converged)
+    # A pose that does not assemble is NaN by design (its verdict is no_solution):
+    # the arithmetic on it must not warn.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if case.has_coulomb_friction:
+            raise ValueError(REFUSAL)
+        angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
+        pose = pose_of(case, angles)
+        x = np.zeros((angles.shape[0], 9))
+        for _, b in known_vectors(case, pose):
+            x += eliminate(case, pose, b)
+        results = PoseResults(angles, {}, condition(case, pose),
+                              np.zeros(angles.shape[0], dtype=int), np.ones(angles.shape[0], bool))
+        x[results.singular] = np.nan
+        values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
+        return PoseResults(angles, values, results.condition, results.iterations, results.converged)
 
 
 def solve(case: Case) -> Solution:

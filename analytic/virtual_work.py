@@ -76,23 +76,26 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
     angle), and the torque only while the driven link moves (its speed ratio
     to the fastest link). ``condition`` holds the reciprocal of the smaller.
     """
-    if case.has_coulomb_friction:
-        raise ValueError(REFUSAL)
-    angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
-    torque, omega_d = drive_torque(case, angles)
-    pose = pose_of(case, angles, omega=0.0, alpha=0.0)
-    virtual = pose_of(case, angles, omega=1.0, alpha=0.0)
-    speeds = [np.abs(virtual.links[k].omega) for k in (2, 3, 4)]
-    if virtual.s14_dot is not None:
-        speeds.append(np.abs(virtual.s14_dot) / case.geometry.scale)
-    ratio = np.abs(omega_d) / np.max(speeds, axis=0)
-    with np.errstate(divide="ignore"):
-        condition = 1.0 / np.minimum(ratio, transmission_sine(case, pose))
-    condition = np.where(np.isfinite(condition) & np.isfinite(torque), condition, np.inf)
-    torque = np.where(condition <= SINGULAR_CONDITION, torque, np.nan)
-    values = pose_values(case, pose) | {drive_quantity(case): torque}
-    n = angles.shape[0]
-    return PoseResults(angles, values, condition, np.zeros(n, dtype=int), np.ones(n, dtype=bool))
+    # A pose that does not assemble is NaN by design (its verdict is no_solution):
+    # the arithmetic on it must not warn.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if case.has_coulomb_friction:
+            raise ValueError(REFUSAL)
+        angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
+        torque, omega_d = drive_torque(case, angles)
+        pose = pose_of(case, angles, omega=0.0, alpha=0.0)
+        virtual = pose_of(case, angles, omega=1.0, alpha=0.0)
+        speeds = [np.abs(virtual.links[k].omega) for k in (2, 3, 4)]
+        if virtual.s14_dot is not None:
+            speeds.append(np.abs(virtual.s14_dot) / case.geometry.scale)
+        ratio = np.abs(omega_d) / np.max(speeds, axis=0)
+        with np.errstate(divide="ignore"):
+            condition = 1.0 / np.minimum(ratio, transmission_sine(case, pose))
+        condition = np.where(np.isfinite(condition) & np.isfinite(torque), condition, np.inf)
+        torque = np.where(condition <= SINGULAR_CONDITION, torque, np.nan)
+        values = pose_values(case, pose) | {drive_quantity(case): torque}
+        n = angles.shape[0]
+        return PoseResults(angles, values, condition, np.zeros(n, dtype=int), np.ones(n, dtype=bool))
 
 
 def solve(case: Case) -> Solution:

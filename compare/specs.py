@@ -11,7 +11,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from pydantic_core import ErrorDetails
 
-from mechcheck.analytic.case import CaseError, bounded_angle, finite
+from mechcheck.analytic.values import CaseError, bounded_angle, finite
 
 Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
 

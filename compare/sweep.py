@@ -29,8 +29,9 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from mechcheck.analytic.case import MAX_ANGLE_DEG, Case
+from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution, table_values
+from mechcheck.analytic.values import MAX_ANGLE_DEG
 from mechcheck.backends import REFERENCE, REGISTRY, BackendUnavailable
 from mechcheck.output import file_stem, write_all
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from hypothesis import assume, strategies as st
 
@@ -46,11 +47,20 @@ def masses(draw: st.DrawFn) -> tuple[Mass, ...]:
                       inertia=draw(st.floats(0.0, 0.05))) for k in sorted(links))
 
 
+def assembling(factory: Any, *lengths: float) -> Any:
+    """A geometry that assembles at some θ12; others (which refuse themselves) are rejected."""
+    try:
+        return factory(*lengths)
+    except CaseError:
+        assume(False)
+        raise  # unreachable: assume(False) raises
+
+
 @st.composite
 def geometries(draw: st.DrawFn, mechanism: str) -> FourBarGeometry | SliderCrankGeometry:
     if mechanism == "four_bar":
-        return FourBarGeometry(draw(length), draw(length), draw(length), draw(length))
-    return SliderCrankGeometry(draw(length), draw(length), draw(st.floats(-0.3, 0.3)))
+        return assembling(FourBarGeometry, draw(length), draw(length), draw(length), draw(length))
+    return assembling(SliderCrankGeometry, draw(length), draw(length), draw(st.floats(-0.3, 0.3)))
 
 
 @st.composite

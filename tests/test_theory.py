@@ -17,6 +17,8 @@ from mechcheck.analytic.transmission import transmission_angle
 from mechcheck.cli import app
 from mechcheck.theory_cli import GRASHOF_CATALOGUE, MOBILITY_CATALOGUE, parse_joints
 
+from .strategies import assembling
+
 #: A brute-force search on a 0.001° grid locates an extreme to within the grid
 #: spacing; near an extreme the function is flat, so the value is exact to
 #: (grid)²-order: 1e-3° on the angle, 1e-6 rad on the value.
@@ -118,7 +120,7 @@ def turning_four_bars(draw: st.DrawFn) -> FourBarGeometry:
     a1, a3, a4 = draw(lengths()), draw(lengths()), draw(lengths())
     upper = min(a3 + a4 - a1, a1 - abs(a3 - a4))
     assume(upper > 0.02)
-    return FourBarGeometry(a1, draw(st.floats(0.01, upper)), a3, a4)
+    return assembling(FourBarGeometry, a1, draw(st.floats(0.01, upper)), a3, a4)
 
 
 @settings(max_examples=80, deadline=None)
@@ -155,7 +157,7 @@ def _assembles(g: FourBarGeometry, ground: float, branch: str) -> bool:
 def test_slider_crank_rotates_exactly_when_every_pose_assembles(a2: float, a3: float,
                                                                 e: float) -> None:
     """a2 + |e| < a3 ⇔ every θ12 assembles, and the stroke is max s14 − min s14 then."""
-    g = SliderCrankGeometry(a2, a3, e)
+    g = assembling(SliderCrankGeometry, a2, a3, e)
     assume(abs(a2 + abs(e) - a3) > 1e-6)
     case_args = {"name": "s", "geometry": g}
     theta = np.radians(np.arange(0.0, 360.0, 0.01))

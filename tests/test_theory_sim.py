@@ -37,6 +37,8 @@ from mechcheck.sim_models.mujoco import turning as mujoco_turning
 from mechcheck.sim_models.pymunk import turning as pymunk_turning
 from mechcheck.sim_models.turning import Amplification, TurnResult
 
+from .strategies import assembling
+
 SIMULATORS: dict[str, ModuleType] = {"mujoco": mujoco_turning, "pymunk": pymunk_turning}
 
 #: The issue's requirement for the dead positions: the measured rocker
@@ -389,9 +391,7 @@ def crank_rockers(draw: st.DrawFn) -> Case:
     """A Grashof crank-rocker (crank shortest) on either branch, ground at any angle,
     whose transmission angle stays above MIN_TRANSMISSION."""
     long = st.floats(0.1, 0.4)
-    g = FourBarGeometry(draw(long), draw(st.floats(0.02, 0.09)), draw(long), draw(long))
-    lengths = (g.a1, g.a2, g.a3, g.a4)
-    assume(2 * max(lengths) < sum(lengths))  # a loop that closes at all
+    g = assembling(FourBarGeometry, draw(long), draw(st.floats(0.02, 0.09)), draw(long), draw(long))
     assume(theory.grashof(ground=g.a1, crank=g.a2, coupler=g.a3, rocker=g.a4).kind
            == "crank-rocker")
     ground = draw(st.floats(-math.pi, math.pi))
@@ -406,7 +406,7 @@ def non_grashof_cranks(draw: st.DrawFn) -> Case:
     """A four-bar whose crank rocks through φ12 = 0 between ±limit, limit in (20°, 160°),
     starting at φ12 = 0 clear of the folded toggle (|A B0| − |a3 − a4| > 5 % of the longest link)."""
     length = st.floats(0.05, 0.5)
-    g = FourBarGeometry(draw(length), draw(length), draw(length), draw(length))
+    g = assembling(FourBarGeometry, draw(length), draw(length), draw(length), draw(length))
     interval = fourbar_kinematics.assembly_interval(g)
     assume(interval is not None and interval[0] == 0.0)
     assert interval is not None

@@ -1,0 +1,150 @@
+"""The known forces on a linkage's links at a pose: loads, weights, D'Alembert inertia,
+springs and viscous friction, reduced to each link's (Fx, Fy, M about the origin) — the
+right-hand side b of the member-equilibrium equations (:mod:`.linkage_forces`) and the
+forces whose equilibrium the free coordinates seek (:mod:`.linkage_equilibrium`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, TorsionSpring
+from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, perp, rotate
+from mechcheck.analytic.values import GROUND
+
+
+def cross(r: Array, f: Array) -> Array:
+    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+
+
+@dataclass(frozen=True)
+class ForceLayout:
+    """Columns of the unknowns and rows of the links."""
+
+    linkage: Linkage
+
+    def row(self, link: str) -> int:
+        """First of the link's three rows; −1 for the ground (no equations)."""
+        return -1 if link == GROUND else 3 * self.linkage.moving_links.index(link)
+
+    def joint_columns(self, joint: Joint) -> tuple[int, int]:
+        k = [j.name for j in self.linkage.joints].index(joint.name)
+        return 2 * k, 2 * k + 1
+
+    def driver_column(self, index: int) -> int:
+        return 2 * len(self.linkage.joints) + index
+
+    @property
+    def rows(self) -> int:
+        return 3 * len(self.linkage.moving_links)
+
+    @property
+    def columns(self) -> int:
+        return 2 * len(self.linkage.joints) + len(self.linkage.drivers)
+
+
+@dataclass(frozen=True)
+class JointFrame:
+    """A joint's point (current) and, for a prismatic joint, its axis u and normal n."""
+
+    point: Array
+    u: Array | None
+    n: Array | None
+
+
+def joint_frame(pose: LinkagePose, joint: Joint) -> JointFrame:
+    point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
+    if joint.kind == "revolute":
+        return JointFrame(point, None, None)
+    assert joint.axis is not None
+    u = rotate(pose.angle(joint.links[0])[0], np.array(joint.axis))
+    return JointFrame(point, u, perp(u))
+
+
+def add_force(b: Array, layout: ForceLayout, link: str, force: Array, point: Array) -> None:
+    r = layout.row(link)
+    if r < 0:
+        return
+    b[:, r] += force[:, 0]
+    b[:, r + 1] += force[:, 1]
+    b[:, r + 2] += cross(point, force)
+
+
+def add_couple(b: Array, layout: ForceLayout, link: str, torque: Array) -> None:
+    r = layout.row(link)
+    if r >= 0:
+        b[:, r + 2] += torque
+
+
+def known_vector(pose: LinkagePose) -> Array:
+    """b (N, 3n): every force that does not depend on the unknowns, on each link."""
+    linkage = pose.linkage
+    layout = ForceLayout(linkage)
+    n = pose.q.shape[0]
+    b = np.zeros((n, layout.rows))
+    for load in linkage.loads:
+        at = pose.point(load.link, load.at)[0]
+        add_force(b, layout, load.link, np.broadcast_to(np.array(load.force), (n, 2)), at)
+        add_couple(b, layout, load.link, np.full(n, load.torque))
+    g = np.array(linkage.gravity)
+    for m in linkage.masses:
+        com, _, acc = pose.point(m.link, m.com)
+        add_force(b, layout, m.link, m.mass * (g[None, :] - acc), com)
+        add_couple(b, layout, m.link, -m.inertia * pose.angle(m.link)[2])
+    for spring in linkage.springs:
+        _add_spring(b, layout, pose, spring)
+    _add_viscous(b, layout, pose)
+    return b
+
+
+def spring_force(pose: LinkagePose, spring: LinearSpring | TorsionSpring) -> Array:
+    """S (N,): tension k(L − L0) + c·L̇ of a linear spring, k(q − q0) + c·q̇ of a torsional one."""
+    if isinstance(spring, TorsionSpring):
+        q, qdot, _ = pose.joint_coordinate(pose.linkage.joint(spring.joint))
+        return spring.stiffness * (q - spring.free_rotation) + spring.damping * qdot
+    (la, pa), (lb, pb) = spring.ends
+    a, va, _ = pose.point(la, pa)
+    bb, vb, _ = pose.point(lb, pb)
+    d = bb - a
+    length = np.hypot(d[:, 0], d[:, 1])
+    rate = np.einsum("ni,ni->n", d, vb - va) / length
+    return spring.stiffness * (length - spring.free_length) + spring.damping * rate
+
+
+def _add_spring(b: Array, layout: ForceLayout, pose: LinkagePose,
+                spring: LinearSpring | TorsionSpring) -> None:
+    s = spring_force(pose, spring)
+    if isinstance(spring, TorsionSpring):
+        i, j = pose.linkage.joint(spring.joint).links
+        add_couple(b, layout, j, -s)
+        add_couple(b, layout, i, s)
+        return
+    (la, pa), (lb, pb) = spring.ends
+    a = pose.point(la, pa)[0]
+    bb = pose.point(lb, pb)[0]
+    d = bb - a
+    e = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    add_force(b, layout, la, s[:, None] * e, a)    # tension pulls a toward b
+    add_force(b, layout, lb, -s[:, None] * e, bb)
+
+
+def _add_viscous(b: Array, layout: ForceLayout, pose: LinkagePose) -> None:
+    """−c·q̇ on links[1] (and the reverse on links[0]) at every joint with a viscous term."""
+    f = pose.linkage.friction
+    if f is None:
+        return
+    for name, c in f.viscous.items():
+        joint = pose.linkage.joint(name)
+        _, rate, _ = pose.joint_coordinate(joint)
+        i, j = joint.links
+        if joint.kind == "revolute":
+            add_couple(b, layout, j, -c * rate)
+            add_couple(b, layout, i, c * rate)
+        else:
+            frame = joint_frame(pose, joint)
+            assert frame.u is not None
+            force = -c * rate[:, None] * frame.u
+            add_force(b, layout, j, force, frame.point)
+            add_force(b, layout, i, -force, frame.point)

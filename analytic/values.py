@@ -1,0 +1,140 @@
+"""The small values every case is built from, and the one error they raise.
+
+Every number of a case file passes through :func:`finite` or :func:`bounded_angle`, and
+every problem is one :class:`CaseError` naming the key. Both the four-bar and
+slider-crank :class:`~mechcheck.analytic.case.Case` and the general
+:class:`~mechcheck.analytic.linkage.Linkage` build on this module, which imports neither.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterator, Mapping
+from typing import TypeVar
+
+Vec2 = tuple[float, float]
+V = TypeVar("V")
+
+#: The name of the fixed link of every linkage.
+GROUND = "ground"
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+
+class CaseError(ValueError):
+    """An unusable case: names the file, the case and the key at fault.
+
+    ``str(error)`` is the one-line message the command line prints.
+    """
+
+    def __init__(self, message: str, *, key: str = "", case: str = "", file: str = "") -> None:
+        self.message = message
+        self.key = key
+        self.case = case
+        self.file = file
+        super().__init__(self.__str__())
+
+    def located(self, *, file: str | None = None, case: str | None = None,
+                key_prefix: str = "") -> CaseError:
+        """The same error with its place filled in (outer callers know more)."""
+        key = f"{key_prefix}.{self.key}" if key_prefix and self.key else (self.key or key_prefix)
+        return CaseError(self.message, key=key, case=case if case is not None else self.case,
+                         file=file if file is not None else self.file)
+
+    def __str__(self) -> str:
+        where = []
+        if self.file:
+            where.append(self.file)
+        if self.case:
+            where.append(f"case '{self.case}'")
+        if self.key:
+            where.append(f"key '{self.key}'")
+        text = (": ".join(where) + ": " if where else "") + self.message
+        # One line whatever the file held: control characters (a newline in a name) are escaped.
+        return _CONTROL.sub(lambda m: repr(m[0])[1:-1], text)
+
+
+#: The largest magnitude of any value, in SI units (m, N, N·m, kg, kg·m², rad/s …): far
+#: beyond any machine, and far enough below float64's 1e308 that the products the
+#: equations form (m·ω²·length, force·length², length⁴) can neither overflow nor lose
+#: the 1e-9 agreement the backends are held to. A length of 1e155 overflowed; 1e200 N gave NaN.
+MAX_MAGNITUDE = 1e12
+#: The shortest link, m: below a micrometre a link is no drawing of a machine, and lengths
+#: near 1e-300 vanish when squared (the loop equations then divide by zero).
+MIN_LINK_LENGTH = 1e-6
+#: The largest angle, degrees (≈ 278 turns): beyond it sin and cos of a float64 angle lose
+#: the digits the 1e-9 agreement needs.
+MAX_ANGLE_DEG = 1e5
+
+
+def finite(value: float, key: str, limit: float = MAX_MAGNITUDE) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise CaseError(f"must be a number, got {value!r}", key=key)
+    if not math.isfinite(value):
+        raise CaseError(f"must be finite, got {value!r}", key=key)
+    if abs(value) > limit:
+        raise CaseError(f"must be at most {limit:g} in magnitude (SI units), got {value:g}: "
+                        "no machine is that large, and the arithmetic would overflow", key=key)
+    return float(value)
+
+
+def bounded_angle(value: float, key: str) -> float:
+    """An angle in radians, refused (in the file's degrees) beyond ±MAX_ANGLE_DEG."""
+    value = finite(value, key, limit=math.inf)
+    if abs(value) > math.radians(MAX_ANGLE_DEG):
+        raise CaseError(f"must be within ±{MAX_ANGLE_DEG:g}°, got {math.degrees(value):g}°",
+                        key=key)
+    return value
+
+
+def positive(value: float, key: str) -> float:
+    value = finite(value, key)
+    if value <= 0.0:
+        raise CaseError(f"must be > 0, got {value:g}", key=key)
+    return value
+
+
+def link_length(value: float, key: str) -> float:
+    value = positive(value, key)
+    if value < MIN_LINK_LENGTH:
+        raise CaseError(f"must be at least {MIN_LINK_LENGTH:g} m (a micrometre), got {value:g} m",
+                        key=key)
+    return value
+
+
+def nonnegative(value: float, key: str) -> float:
+    value = finite(value, key)
+    if value < 0.0:
+        raise CaseError(f"must be >= 0, got {value:g}", key=key)
+    return value
+
+
+def pair(value: Vec2, key: str) -> Vec2:
+    if len(value) != 2:
+        raise CaseError(f"must be a pair [x, y], got {value!r}", key=key)
+    return (finite(value[0], f"{key}[0]"), finite(value[1], f"{key}[1]"))
+
+
+class FrozenMap(Mapping[str, V]):
+    """A read-only, hashable, picklable mapping, so that the values holding it stay immutable."""
+
+    def __init__(self, items: Mapping[str, V]) -> None:
+        self._items = dict(items)
+
+    def __getitem__(self, key: str) -> V:
+        return self._items[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __hash__(self) -> int:
+        return hash(tuple(sorted(self._items.items())))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Mapping) and dict(self._items) == dict(other)
+
+    def __repr__(self) -> str:
+        return repr(self._items)
