@@ -11,10 +11,11 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-import numpy as np
-from numpy.typing import ArrayLike
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import ArrayLike
 
 Status = Literal["ok", "singular", "indeterminate", "not_settled", "not_applicable", "no_solution",
                  "error"]
@@ -72,6 +73,8 @@ def table_values(quantity: str, values: ArrayLike, unit: str | None = None) -> n
     """Values as the tables show them: in table units (degrees for angles), angles wrapped
     to [−180°, 180°) (CONVENTIONS.md), so that every backend spells one angle one way.
     ``unit`` is needed for a linkage's quantities (see :meth:`Solution.unit`)."""
+    import numpy as np  # here: `mechcheck --help` and the pytest plugin never need it
+
     unit = unit or QUANTITY_UNITS[quantity][0]
     out = np.asarray(values, dtype=float) * unit_factor(unit)
     return (out + 180.0) % 360.0 - 180.0 if unit == "deg" else out

@@ -26,11 +26,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from mechcheck.analytic.case import Case, CaseError
 from mechcheck.analytic.solution import Solution
+from mechcheck.analytic.values import CaseError
 from mechcheck.verdicts import DEFAULT_FAIL_ON
 
 if TYPE_CHECKING:
+    from mechcheck.analytic.case import Case
     from mechcheck.run import RunResult
 
 __all__ = ["Case", "CaseError", "RunResult", "Solution", "available_backends", "check", "load_cases", "solve"]
@@ -77,7 +78,12 @@ def available_backends() -> list[str]:
 
 
 def __getattr__(name: str) -> object:
-    # RunResult lives with pandas; importing it only when asked keeps `import mechcheck` light.
+    # Case (numpy) and RunResult (pandas) are imported only when asked for, so that
+    # `import mechcheck`, `mechcheck --help` and the pytest plugin stay light.
+    if name == "Case":
+        from mechcheck.analytic.case import Case
+
+        return Case
     if name == "RunResult":
         from mechcheck.run import RunResult
 

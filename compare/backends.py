@@ -10,11 +10,13 @@ from __future__ import annotations
 import importlib
 import importlib.util
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
-from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import Solution
+if TYPE_CHECKING:
+    from mechcheck.analytic.case import Case
+    from mechcheck.analytic.solution import Solution
 
-Backend = Callable[[Case], Solution]
+Backend = Callable[["Case"], "Solution"]
 
 #: name → "module:function"; ``analytic`` is the reference every other is compared with.
 REGISTRY: dict[str, str] = {

@@ -20,7 +20,7 @@ from typing import Annotated
 import typer
 
 from mechcheck import backends as registry
-from mechcheck.analytic.case import CaseError
+from mechcheck.analytic.values import CaseError
 from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
 
 # pandas, matplotlib, pydantic and the simulators are imported inside the commands

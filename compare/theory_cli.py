@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from mechcheck.analytic.case import CaseError
+from mechcheck.analytic.values import CaseError
 
 if TYPE_CHECKING:
     from mechcheck.analytic.case import Case

@@ -38,11 +38,11 @@ def test_every_source_package_is_packaged() -> None:
 
 @pytest.mark.parametrize("args", [["--help"], ["backends"]])
 def test_fast_commands_import_nothing_heavy(args: list[str]) -> None:
-    """`mechcheck --help` and `mechcheck backends` import neither pandas, matplotlib, mujoco nor
-    pymunk (benchmarks/bench_startup.py times them)."""
+    """`mechcheck --help` and `mechcheck backends` import neither numpy, pandas, matplotlib,
+    mujoco nor pymunk (benchmarks/bench_startup.py times them)."""
     probe = ("import sys\nfrom mechcheck.cli import app\n"
              f"app({args!r}, standalone_mode=False)\n"
-             "print('heavy:' + ','.join(m for m in ('pandas', 'matplotlib', 'mujoco', 'pymunk') "
+             "print('heavy:' + ','.join(m for m in ('numpy', 'pandas', 'matplotlib', 'mujoco', 'pymunk') "
              "if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
     assert done.stdout.splitlines()[-1] == "heavy:", done.stdout
