@@ -19,7 +19,6 @@ import numpy as np
 from mechcheck.analytic.linkage import Linkage, TorsionSpring
 from mechcheck.analytic.linkage_kinematics import (
     Array,
-    Layout,
     LinkagePose,
     positions,
     residual_and_jacobian,
@@ -158,10 +157,6 @@ def _stable(linkage: Linkage, q: Array, values: Array) -> bool:
                 - energy_at(eye[j] - eye[i]) + energy_at(-eye[i] - eye[j])) / (4 * h * h) \
                 if i != j else (energy_at(eye[i]) - 2 * base + energy_at(-eye[i])) / (h * h)
     return bool(np.all(np.linalg.eigvalsh(hessian) > 0.0))
-
-
-def layout_size(linkage: Linkage) -> int:
-    return Layout(linkage).size
 
 
 def equilibrium_poses(linkage: Linkage, values: Array | None) -> tuple[LinkagePose, Array]:
