@@ -6,6 +6,8 @@ read from MuJoCo's own constraint state.
 - :func:`solve_at_pose` — backend ``mujoco_solve``: exact constraint forces at
   the analytic pose from MuJoCo's constraint Jacobian.
 - :func:`sweep` — either backend over an array of θ12.
+
+A ``mechanism = "linkage"`` case goes to :mod:`.linkage` (any planar linkage, issue 12).
 """
 
 from __future__ import annotations
@@ -13,9 +15,9 @@ from __future__ import annotations
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.forces import pose_verdicts, withheld_solution
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models import unmodelled_linkage
 from mechcheck.sim_models.mujoco import solve as exact
 from mechcheck.sim_models.mujoco.dynamics import driven
+from mechcheck.sim_models.mujoco.linkage import settle_linkage, solve_linkage_at_pose
 from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
 from mechcheck.sim_models.mujoco.settle import settle_static
 from mechcheck.sim_models.mujoco.sweep import sweep
@@ -30,9 +32,8 @@ def settle(case: Case) -> Solution:
     the analytic backend's singular line, a friction reversal) is not
     simulated: a soft model would settle to whatever its bending allows.
     """
-    refused = unmodelled_linkage(case, "mujoco")
-    if refused is not None:
-        return refused
+    if case.mechanism == "linkage":
+        return noting_warnings(lambda: settle_linkage(case))
     verdict = pose_verdicts(case)[0]
     if verdict is not None:
         return withheld_solution(case, "mujoco", verdict)
@@ -44,9 +45,8 @@ def settle(case: Case) -> Solution:
 def solve_at_pose(case: Case) -> Solution:
     """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose
     (not at a pose whose forces do not exist or are not unique, as :func:`settle`)."""
-    refused = unmodelled_linkage(case, "mujoco_solve")
-    if refused is not None:
-        return refused
+    if case.mechanism == "linkage":
+        return noting_warnings(lambda: solve_linkage_at_pose(case))
     verdict = pose_verdicts(case)[0]
     if verdict is not None:
         return withheld_solution(case, "mujoco_solve", verdict)

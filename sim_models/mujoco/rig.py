@@ -78,6 +78,35 @@ def cross_z(r: Array, f: Array) -> Array:
     return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
 
 
+def parent_force(m: mujoco.MjModel, d: mujoco.MjData, body: int,
+                 point: Array) -> tuple[Array, float]:
+    """(force, moment about ``point``) of the parent body on ``body`` from cfrc_int (after
+    mj_rnePostConstraint), whose moment MuJoCo refers to the centre of mass of the body's
+    kinematic tree."""
+    f = d.cfrc_int[body, 3:5]
+    c = d.subtree_com[m.body_rootid[body], :2]
+    return f.copy(), float(d.cfrc_int[body, 2] + cross_z(c - point, f))
+
+
+def xfrc_of_loads(d: mujoco.MjData, loads: LoadTable, incidence: Array, body_forces: Array,
+                  extra_torque: Array) -> None:
+    """Write ``xfrc_applied``: each body's loads (``body_forces``, summed through
+    ``incidence``) with their moments about its centre of mass from the current site
+    positions, the loads' own couples and ``extra_torque``.
+
+    MuJoCo applies xfrc_applied at the body's centre of mass, so a force at p carries
+    the moment (p − x_com) × F. Loads given as qfrc_applied would be invisible to
+    cfrc_int (SIMULATORS.md).
+    """
+    xfrc = d.xfrc_applied
+    xfrc[:, 0:3] = body_forces
+    xfrc[:, 3:5] = 0.0  # planar: no moments about x or y
+    xfrc[:, 5] = extra_torque
+    if loads.sites.size:
+        arm = d.site_xpos[loads.sites] - d.xipos[loads.bodies]
+        xfrc[:, 5] += incidence @ (cross_z(arm, loads.forces) + loads.torques)
+
+
 class Rig:
     """One Case's compiled model and data, with loads, pose and force read-out."""
 
@@ -90,6 +119,7 @@ class Rig:
         self.four_bar = case.mechanism == "four_bar"
         self.output_joint = "B0" if self.four_bar else "slide"
         self.scale = case.geometry.scale
+        self.units: dict[str, str] | None = None  # the four-bar's names carry their units
         # Body × load incidence: sums each load onto its body in one product.
         self.incidence = np.zeros((self.model.nbody, self.loads.sites.size))
         self.incidence[self.loads.bodies, np.arange(self.loads.sites.size)] = 1.0
@@ -155,21 +185,11 @@ class Rig:
 
     # -- loads ------------------------------------------------------------------
     def apply_loads(self) -> None:
-        """xfrc_applied from the current pose: each force at its body-fixed point.
-
-        MuJoCo applies xfrc_applied at the body's centre of mass, so a force at
-        p carries the moment (p − x_com) × F. Loads given as qfrc_applied would
-        be invisible to cfrc_int (SIMULATORS.md).
-        """
+        """xfrc_applied from the current pose: each force at its body-fixed point
+        (:func:`xfrc_of_loads`), and the slide friction's force at pin B."""
         d = self.data
         xfrc = d.xfrc_applied
-        xfrc[:, 0:3] = self.body_forces
-        xfrc[:, 3:5] = 0.0  # planar: no moments about x or y
-        xfrc[:, 5] = self.extra_torque
-        t = self.loads
-        if t.sites.size:
-            arm = d.site_xpos[t.sites] - d.xipos[t.bodies]
-            xfrc[:, 5] += self.incidence @ (cross_z(arm, t.forces) + t.torques)
+        xfrc_of_loads(d, self.loads, self.incidence, self.body_forces, self.extra_torque)
         # Extra forces (slide friction) act at pin B, the slider's origin.
         b4 = self.layout.body[4]
         if self.extra_force[b4].any():
@@ -231,11 +251,7 @@ class Rig:
 
     def parent_force(self, link: int, point: Array) -> tuple[Array, float]:
         """(force, moment about ``point``) of the parent body on ``link`` from cfrc_int."""
-        m, d = self.model, self.data
-        b = self.layout.body[link]
-        f = d.cfrc_int[b, 3:5]
-        c = d.subtree_com[m.body_rootid[b], :2]
-        return f.copy(), float(d.cfrc_int[b, 2] + cross_z(c - point, f))
+        return parent_force(self.model, self.data, self.layout.body[link], point)
 
     def read(self) -> dict[str, float]:
         """Every quantity from the current data (call after a forward pass)."""
@@ -294,10 +310,15 @@ class Rig:
         return float(diff.max())
 
 
-def disagreement(a: dict[str, float], b: dict[str, float], length: float) -> float:
-    """Largest difference of forces (and torques/length) relative to the largest of them."""
+def disagreement(a: dict[str, float], b: dict[str, float], length: float,
+                 units: dict[str, str] | None = None) -> float:
+    """Largest difference of forces (and torques/length) relative to the largest of them;
+    ``units`` names the unit of each quantity of a linkage (its names do not say it)."""
+    table = units or {}
+
     def vector(v: dict[str, float]) -> np.ndarray:
-        return np.array([x / length if quantity_kind(q) == "torque" else x
-                         for q, x in v.items() if quantity_kind(q) != "pose"])
+        kinds = {q: quantity_kind(q, table.get(q)) for q in v}
+        return np.array([x / length if kinds[q] == "torque" else x
+                         for q, x in v.items() if kinds[q] != "pose"])
     va, vb = vector(a), vector(b)
     return float(np.abs(va - vb).max()) / max(float(np.abs(vb).max()), FORCE_FLOOR_N)

@@ -31,6 +31,7 @@ import time
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
+from typing import Protocol
 
 import mujoco
 import numpy as np
@@ -119,6 +120,26 @@ REFINE_RTOL = 1e-7
 MAX_PASSES = 16
 
 
+class SettlingRig(Protocol):
+    """What settling needs of a model: :class:`~.rig.Rig` (four-bar, slider-crank) and
+    :class:`~.linkage_rig.LinkageRig` (any linkage)."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    case: Case
+    scale: float
+    units: dict[str, str] | None
+
+    def apply_loads(self) -> None: ...
+    def constraint_forces(self) -> np.ndarray: ...
+    def joint_velocity(self) -> float: ...
+    def read(self) -> dict[str, float]: ...
+    def loop_violation(self) -> float: ...
+    def carry(self) -> None: ...
+    def set_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None: ...
+    def pose_drift(self, theta12: float | None = None, qpos: np.ndarray | None = None) -> float: ...
+
+
 @dataclass(frozen=True)
 class Settled:
     """What a settling run ended with."""
@@ -133,7 +154,7 @@ class Settled:
     rule: str = ""  # the stop rule that ended the last pass (DecayWatch.rule)
 
 
-def run_until_settled(rig: Rig, max_steps: int | None = None) -> Settled:
+def run_until_settled(rig: SettlingRig, max_steps: int | None = None) -> Settled:
     """Step ``rig`` from its current state until settled or out of budget
     (``max_steps``, default :data:`MAX_STEPS`)."""
     max_steps = MAX_STEPS if max_steps is None else max_steps
@@ -215,11 +236,11 @@ def floor_spread(readings: Iterable[Iterable[float]]) -> float:
     return float((stack.max(axis=0) - stack.min(axis=0)).max())
 
 
-def reseed(rig: Rig, qpos: np.ndarray) -> None:
+def reseed(rig: SettlingRig, qpos: np.ndarray) -> None:
     """Back to rest in the analytic pose ``qpos``, keeping what is carried: the
     constraints restart unbent and take up only the forces not yet carried
     (else the bending of the last pass would spring back through them)."""
-    rig.set_state(qpos, np.zeros(3))
+    rig.set_state(qpos, np.zeros_like(qpos))
 
 
 def seed_at(rig: Rig, theta12: float) -> np.ndarray:
@@ -233,7 +254,7 @@ def seed_at(rig: Rig, theta12: float) -> np.ndarray:
     return q
 
 
-def settle_refined(rig: Rig, qpos: np.ndarray) -> Settled:
+def settle_refined(rig: SettlingRig, qpos: np.ndarray) -> Settled:
     """Settle, carry the constraint forces, re-seed the pose, settle again, until
     the passes have converged (:func:`refinement_left` ≤ :data:`REFINE_RTOL`) or
     one does not settle."""
@@ -247,7 +268,7 @@ def settle_refined(rig: Rig, qpos: np.ndarray) -> Settled:
             return replace(result, steps=total, settled=False, passes=passes,
                            refinement=differences[-1] if differences else float("nan"))
         if previous is not None:
-            differences.append(disagreement(result.values, previous.values, rig.scale))
+            differences.append(disagreement(result.values, previous.values, rig.scale, rig.units))
             if refinement_left(differences) <= REFINE_RTOL:
                 return replace(result, steps=total, passes=passes, refinement=differences[-1])
         previous = result
@@ -275,7 +296,7 @@ def refinement_left(differences: list[float]) -> float:
     return d * max(1.0, c / (1.0 - c))
 
 
-def settled_solution(rig: Rig, qpos: np.ndarray, result: Settled, elapsed: float) -> Solution:
+def settled_solution(rig: SettlingRig, qpos: np.ndarray, result: Settled, elapsed: float) -> Solution:
     """A Solution from a settling run: forces only if it settled."""
     case = rig.case
     diagnostics: dict[str, float | str] = {
@@ -287,14 +308,17 @@ def settled_solution(rig: Rig, qpos: np.ndarray, result: Settled, elapsed: float
         "pose_drift": rig.pose_drift(qpos=qpos),
     }
     if not result.settled:
-        pose = {q: v for q, v in result.values.items() if quantity_kind(q) == "pose"}
+        units = rig.units or {}
+        pose = {q: v for q, v in result.values.items()
+                if quantity_kind(q, units.get(q)) == "pose"}
         why = (f"passes {result.passes - 1} and {result.passes} still differ by "
                f"{result.refinement:.1e} of the forces" if result.passes >= MAX_PASSES
                else f"residual velocity {result.residual_velocity:.2e} m/s")
         return Solution(case.name, "mujoco", pose, status="not_settled",
                         message=f"no equilibrium within {result.steps} steps ({why})",
-                        diagnostics=diagnostics)
-    return Solution(case.name, "mujoco", result.values, diagnostics=diagnostics)
+                        diagnostics=diagnostics, units=units)
+    return Solution(case.name, "mujoco", result.values, diagnostics=diagnostics,
+                    units=rig.units or {})
 
 
 def settle_static(case: Case, rig: Rig | None = None) -> Solution:

@@ -45,15 +45,27 @@ def constraint_solve(rig: Rig, qacc: np.ndarray) -> dict[str, float]:
     mujoco.mj_forward(m, d)
     full_qacc = np.zeros(m.nv)
     full_qacc[rig.joint_addresses()] = qacc
+    impose_rigid_forces(m, d, full_qacc)
+    return rig.read()
+
+
+def impose_rigid_forces(m: mujoco.MjModel, d: mujoco.MjData, qacc: np.ndarray) -> float:
+    """After a forward pass: the constraint forces f that make the motion ``qacc``
+    rigid-body exact, Jᵀ f = M·qacc − qfrc_smooth (least squares; armature excluded,
+    the exact model's is not the Case's), written into efc_force, qfrc_constraint and
+    qacc for :func:`mujoco.mj_rnePostConstraint`. Returns the equations' residual,
+    N or N·m (0 when the forces balance; a pose that is no equilibrium of its free
+    coordinates leaves one)."""
     inertial = np.zeros(m.nv)
-    mujoco.mj_mulM(m, d, inertial, full_qacc)
-    inertial -= m.dof_armature * full_qacc  # the exact model's armature is not the Case's
+    mujoco.mj_mulM(m, d, inertial, qacc)
+    inertial -= m.dof_armature * qacc
     jac = d.efc_J[:d.nefc * m.nv].reshape(d.nefc, m.nv)
-    f, *_ = np.linalg.lstsq(jac.T, inertial - d.qfrc_smooth, rcond=None)
+    rhs = inertial - d.qfrc_smooth
+    f = np.linalg.lstsq(jac.T, rhs, rcond=None)[0] if d.nefc else np.zeros(0)
     d.efc_force[:d.nefc] = f
     d.qfrc_constraint[:] = jac.T @ f
-    d.qacc[:] = full_qacc
-    return rig.read()
+    d.qacc[:] = qacc
+    return float(np.abs(jac.T @ f - rhs).max(initial=0.0))
 
 
 def friction_senses(rig: Rig, case: Case) -> dict[str, float]:

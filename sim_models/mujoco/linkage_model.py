@@ -1,0 +1,374 @@
+"""Pure builder: any :class:`~mechcheck.analytic.linkage.Linkage` → ``MjSpec`` (issue 12).
+
+The joint graph (links are nodes, joints edges) is cut to a spanning tree rooted at the
+ground (:func:`spanning_tree`). Each link is a body; each tree joint is a hinge or a slide
+of its child body; every joint left out of the tree closes a loop and must be revolute: it
+becomes a ``connect`` equality between two sites at its point (sites, because a
+body-anchored connect takes its second anchor from ``qpos0``). A loop with no revolute
+joint cannot be closed that way and is refused (:class:`Unbuildable`).
+
+Frames: every body is built with the orientation of the world and its origin at the point
+of its tree joint in the drawn pose, so ``qpos = 0`` is the drawn pose. A tree joint's
+axis is +z (hinge) or +u (slide) when its parent is the joint's ``links[0]``, and reversed
+when the tree runs the other way, so that each joint's ``qpos`` is its LINKAGES.md
+coordinate q whichever way the tree runs, and a generalised force on it is its effort
+(a driver's Q, a torsional spring's −S).
+
+- drivers: a joint equality on the driven tree joint (held at ``eq_data[id, 0]``);
+- linear springs: spatial tendons between two sites, with MuJoCo's stiffness and spring
+  length (and damping): the spring force is MuJoCo's passive force;
+- torsional springs: the hinge's stiffness with ``springref`` = the free rotation;
+- loads and weights: ``xfrc_applied`` at sites, computed each step (:mod:`.linkage_rig`);
+  MuJoCo's gravity is off, so statics may use fictitious masses (as :mod:`.model`).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, LinkMass, TorsionSpring
+from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.mujoco.model import (
+    INERTIA_FLOOR_FRACTION,
+    SETTLE_MASS,
+    SOLVER_TOLERANCE,
+    STATIC,
+    Settings,
+)
+
+
+class Unbuildable(ValueError):
+    """The linkage has no MuJoCo model in this builder; the message says why."""
+
+
+@dataclass(frozen=True)
+class TreeJoint:
+    """A joint of the spanning tree: ``child`` hangs from ``parent`` through it;
+    ``sign`` is +1 when the parent is the joint's ``links[0]``, else −1."""
+
+    joint: Joint
+    parent: str
+    child: str
+    sign: float
+
+
+@dataclass(frozen=True)
+class LinkageTree:
+    """The spanning tree (parents before children) and the loop-closing joints."""
+
+    tree: tuple[TreeJoint, ...]
+    closures: tuple[Joint, ...]
+
+    def parent_joint(self, link: str) -> TreeJoint:
+        return next(t for t in self.tree if t.child == link)
+
+    def tree_joint(self, name: str) -> TreeJoint | None:
+        return next((t for t in self.tree if t.joint.name == name), None)
+
+
+def _priority(linkage: Linkage, joint: Joint) -> int:
+    """Order in which joints enter the tree: prismatic joints first (a loop can only be
+    closed at a revolute joint), then driven joints (a joint equality needs a MuJoCo
+    joint), then joints with a torsional spring (joint stiffness), then the rest."""
+    if joint.kind == "prismatic":
+        return 0
+    if any(d.joint == joint.name for d in linkage.drivers):
+        return 1
+    if _torsion(linkage, joint)[0] or _viscous(linkage, joint):
+        return 2
+    return 3
+
+
+def spanning_tree(linkage: Linkage) -> LinkageTree:
+    """Kruskal's spanning tree in :func:`_priority` order, then oriented from the ground.
+
+    Raises :class:`Unbuildable` for a loop without a revolute joint, and for a driver or a
+    torsional spring on a joint that must close a loop.
+    """
+    order = sorted(linkage.joints, key=lambda j: _priority(linkage, j))
+    root = {link.name: link.name for link in linkage.links}
+
+    def find(n: str) -> str:
+        while root[n] != n:
+            root[n] = root[root[n]]
+            n = root[n]
+        return n
+
+    chosen: list[Joint] = []
+    closures: list[Joint] = []
+    for joint in order:
+        a, b = (find(n) for n in joint.links)
+        if a != b:
+            root[a] = b
+            chosen.append(joint)
+            continue
+        if joint.kind == "prismatic":
+            loop = _path(chosen, *joint.links) + [joint.name]
+            raise Unbuildable(f"the loop through joints {', '.join(loop)} has no revolute "
+                              "joint: the MuJoCo model closes every loop with a connect at a "
+                              "revolute joint")
+        if _priority(linkage, joint) < 3:
+            what = "driver" if _priority(linkage, joint) == 1 else "torsional spring or damper"
+            raise Unbuildable(f"the {what} at joint {joint.name} is on a joint that closes a "
+                              "loop of prismatic and driven joints: the MuJoCo model holds it "
+                              "only on a tree joint")
+        closures.append(joint)
+    return LinkageTree(_oriented(chosen), tuple(j for j in linkage.joints if j in closures))
+
+
+def _path(joints: list[Joint], start: str, goal: str) -> list[str]:
+    """Names of the joints on the path from ``start`` to ``goal`` through ``joints``."""
+    came: dict[str, tuple[str, str] | None] = {start: None}
+    queue = deque([start])
+    while queue:
+        link = queue.popleft()
+        for j in joints:
+            if link in j.links:
+                other = j.links[1] if j.links[0] == link else j.links[0]
+                if other not in came:
+                    came[other] = (link, j.name)
+                    queue.append(other)
+    names: list[str] = []
+    step = came.get(goal)
+    while step is not None:
+        names.append(step[1])
+        step = came[step[0]]
+    return names[::-1]
+
+
+def _oriented(joints: list[Joint]) -> tuple[TreeJoint, ...]:
+    """The tree joints breadth-first from the ground, each with its parent and child."""
+    out: list[TreeJoint] = []
+    reached = {GROUND}
+    queue = deque([GROUND])
+    while queue:
+        link = queue.popleft()
+        for j in joints:
+            if link in j.links:
+                other = j.links[1] if j.links[0] == link else j.links[0]
+                if other not in reached:
+                    reached.add(other)
+                    out.append(TreeJoint(j, link, other, 1.0 if j.links[0] == link else -1.0))
+                    queue.append(other)
+    return tuple(out)
+
+
+# -- inertia ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Inertial:
+    """A body's mass (kg), centre of mass (global, drawn pose, m) and planar inertia about
+    it (kg·m²)."""
+
+    mass: float
+    com: tuple[float, float]
+    inertia: float
+
+
+def link_extent(linkage: Linkage, link: str) -> float:
+    """The largest distance between two points of a link, or the linkage's size for a
+    one-point link (a slider, a block): a length for fictitious inertias."""
+    xy = np.array([linkage.points[p] for p in next(k for k in linkage.links
+                                                   if k.name == link).points])
+    span = float(np.max(np.linalg.norm(xy[:, None] - xy[None], axis=2)))
+    return span if span > 0.0 else linkage.scale
+
+
+def real_inertial(linkage: Linkage, link: str) -> Inertial | None:
+    """The link's masses combined (parallel-axis theorem), or None for a massless link."""
+    masses: list[LinkMass] = [m for m in linkage.masses if m.link == link]
+    if not masses:
+        return None
+    total = sum(m.mass for m in masses)
+    com = np.sum([m.mass * np.array(m.com) for m in masses], axis=0) / total
+    inertia = sum(m.inertia + m.mass * float(np.sum((np.array(m.com) - com) ** 2))
+                  for m in masses)
+    return Inertial(total, (float(com[0]), float(com[1])), inertia)
+
+
+def centroid(linkage: Linkage, link: str) -> tuple[float, float]:
+    xy = np.array([linkage.points[p] for p in next(k for k in linkage.links
+                                                   if k.name == link).points])
+    return float(xy[:, 0].mean()), float(xy[:, 1].mean())
+
+
+def model_inertial(linkage: Linkage, link: str, settings: Settings) -> Inertial:
+    """What the model gives a link: :data:`~.model.SETTLE_MASS` for statics; else its
+    real mass, a fictitious one if massless (removed after compiling for the exact solve,
+    :func:`use_real_inertia`), and a floor inertia for a point mass (MuJoCo refuses zero)."""
+    length = link_extent(linkage, link)
+    if settings.masses == "settle":
+        m = settings.fictitious_scale * SETTLE_MASS
+        return Inertial(m, centroid(linkage, link), m * length**2 / 12.0)
+    real = real_inertial(linkage, link)
+    if real is None:
+        reference = max((m.mass for m in linkage.masses), default=1.0)
+        m = settings.fictitious_scale * settings.fictitious_fraction * reference
+        return Inertial(m, centroid(linkage, link), m * length**2 / 12.0)
+    floor = INERTIA_FLOOR_FRACTION * real.mass * length**2
+    return real if real.inertia >= floor else Inertial(real.mass, real.com,
+                                                       real.inertia + floor)
+
+
+# -- the spec ---------------------------------------------------------------------------
+
+def body_name(link: str) -> str:
+    return f"link_{link}"
+
+
+def origin_of(tree: LinkageTree, linkage: Linkage, link: str) -> tuple[float, float]:
+    """A body's origin: its tree joint's point in the drawn pose (the world's: 0, 0)."""
+    if link == GROUND:
+        return (0.0, 0.0)
+    return linkage.points[tree.parent_joint(link).joint.at]
+
+
+def local(tree: LinkageTree, linkage: Linkage, link: str, p: tuple[float, float]) -> list[float]:
+    """A drawn point in ``link``'s body frame (bodies are aligned with the world)."""
+    o = origin_of(tree, linkage, link)
+    return [p[0] - o[0], p[1] - o[1], 0.0]
+
+
+def build_spec(name: str, linkage: Linkage, settings: Settings = STATIC) -> mujoco.MjSpec:
+    """The MuJoCo model of ``linkage`` as an MjSpec (pure: a new spec every call).
+
+    Raises :class:`Unbuildable` (see :func:`spanning_tree`).
+    """
+    tree = spanning_tree(linkage)
+    spec = mujoco.MjSpec()
+    spec.modelname = name
+    spec.compiler.degree = False
+    _options(spec, settings)
+    bodies = {GROUND: spec.worldbody}
+    for t in tree.tree:
+        bodies[t.child] = _add_body(bodies[t.parent], tree, linkage, t, settings)
+    _add_point_sites(bodies, tree, linkage)
+    _add_load_sites(bodies, tree, linkage)
+    for joint in tree.closures:
+        _add_closure(spec, bodies, tree, linkage, joint, settings)
+    for spring in linkage.springs:
+        _add_spring(spec, bodies, tree, linkage, spring)
+    for driver in linkage.drivers:
+        spec.add_equality(name=f"drive_{driver.joint}", type=mujoco.mjtEq.mjEQ_JOINT,
+                          name1=driver.joint, data=[driver.value] + [0.0] * 11,
+                          solref=list(settings.solref), solimp=list(settings.solimp))
+    return spec
+
+
+def _options(spec: mujoco.MjSpec, settings: Settings) -> None:
+    """The four-bar model's options (:func:`.model.build_spec` says why each is set)."""
+    opt = spec.option
+    opt.timestep = settings.timestep
+    opt.gravity = [0.0, 0.0, 0.0]
+    opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    opt.jacobian = int(mujoco.mjtJacobian.mjJAC_DENSE)
+    opt.integrator = int(mujoco.mjtIntegrator.mjINT_EULER)
+    opt.tolerance = SOLVER_TOLERANCE
+
+
+def _add_body(parent: mujoco.MjsBody, tree: LinkageTree, linkage: Linkage, t: TreeJoint,
+              settings: Settings) -> mujoco.MjsBody:
+    """The child link of tree joint ``t`` with its hinge or slide."""
+    inertial = model_inertial(linkage, t.child, settings)
+    origin = origin_of(tree, linkage, t.child)
+    parent_origin = origin_of(tree, linkage, t.parent)
+    izz = inertial.inertia
+    body = parent.add_body(
+        name=body_name(t.child), pos=[origin[0] - parent_origin[0], origin[1] - parent_origin[1], 0.0],
+        mass=inertial.mass, ipos=local(tree, linkage, t.child, inertial.com),
+        # Only Izz matters for hinges about z; Ixx = Iyy = Izz passes MuJoCo's triangle check.
+        inertia=[izz, izz, izz], explicitinertial=True)
+    joint = t.joint
+    if joint.kind == "revolute":
+        axis = [0.0, 0.0, t.sign]
+        kind = mujoco.mjtJoint.mjJNT_HINGE
+    else:
+        assert joint.axis is not None
+        axis = [t.sign * joint.axis[0], t.sign * joint.axis[1], 0.0]
+        kind = mujoco.mjtJoint.mjJNT_SLIDE
+    stiffness, springref = _torsion(linkage, joint)
+    body.add_joint(name=joint.name, type=kind, axis=axis, armature=settings.armature,
+                   stiffness=[stiffness, 0.0, 0.0], springref=springref,
+                   damping=[_viscous(linkage, joint), 0.0, 0.0])
+    return body
+
+
+def _torsion(linkage: Linkage, joint: Joint) -> tuple[float, float]:
+    """(stiffness, free rotation) of the torsional springs at a joint (they add up)."""
+    springs = [s for s in linkage.springs if isinstance(s, TorsionSpring) and s.joint == joint.name]
+    k = sum(s.stiffness for s in springs)
+    if k == 0.0:
+        return 0.0, 0.0
+    return k, sum(s.stiffness * s.free_rotation for s in springs) / k
+
+
+def _viscous(linkage: Linkage, joint: Joint) -> float:
+    """Joint damping: the torsional springs' and the friction table's viscous terms."""
+    damping = sum(s.damping for s in linkage.springs
+                  if isinstance(s, TorsionSpring) and s.joint == joint.name)
+    if linkage.friction is not None:
+        damping += linkage.friction.viscous.get(joint.name, 0.0)
+    return damping
+
+
+def _carrier(linkage: Linkage, point: str) -> str:
+    """The link a point is reported on (the first that carries it, as the analytic side)."""
+    return next(link.name for link in linkage.links if point in link.points)
+
+
+def _add_point_sites(bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+                     linkage: Linkage) -> None:
+    """A site at every named point, on the link it is reported on: x_, y_ are read there."""
+    for name, p in linkage.points.items():
+        link = _carrier(linkage, name)
+        bodies[link].add_site(name=f"point_{name}", pos=local(tree, linkage, link, p))
+
+
+def _add_load_sites(bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+                    linkage: Linkage) -> None:
+    """A site at every load point and centre of mass (where weights act)."""
+    for i, load in enumerate(linkage.loads):
+        bodies[load.link].add_site(name=f"load{i}", pos=local(tree, linkage, load.link, load.at))
+    for i, m in enumerate(linkage.masses):
+        bodies[m.link].add_site(name=f"weight{i}", pos=local(tree, linkage, m.link, m.com))
+
+
+def closure_sites(joint: Joint) -> tuple[str, str]:
+    """The connect's two sites: the first on ``links[1]``, whose body receives the
+    connect force with a + sign, so the equality force is F_<joint> (by links[0] on
+    links[1])."""
+    return f"{joint.name}_on_{joint.links[1]}", f"{joint.name}_on_{joint.links[0]}"
+
+
+def _add_closure(spec: mujoco.MjSpec, bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+                 linkage: Linkage, joint: Joint, settings: Settings) -> None:
+    p = linkage.points[joint.at]
+    first, second = closure_sites(joint)
+    for site, link in ((first, joint.links[1]), (second, joint.links[0])):
+        bodies[link].add_site(name=site, pos=local(tree, linkage, link, p))
+    spec.add_equality(name=f"loop_{joint.name}", type=mujoco.mjtEq.mjEQ_CONNECT,
+                      objtype=mujoco.mjtObj.mjOBJ_SITE, name1=first, name2=second,
+                      solref=list(settings.solref), solimp=list(settings.solimp))
+
+
+def _add_spring(spec: mujoco.MjSpec, bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+                linkage: Linkage, spring: LinearSpring | TorsionSpring) -> None:
+    """A linear spring as a spatial tendon between two sites (torsional: joint stiffness)."""
+    if isinstance(spring, TorsionSpring):
+        return
+    tendon = spec.add_tendon(name=f"spring_{spring.name}", stiffness=[spring.stiffness, 0.0, 0.0],
+                             springlength=[spring.free_length, spring.free_length],
+                             damping=[spring.damping, 0.0, 0.0])
+    for k, (link, p) in enumerate(spring.ends):
+        site = f"{spring.name}_end{k}"
+        bodies[link].add_site(name=site, pos=local(tree, linkage, link, p))
+        tendon.wrap_site(site)
+
+
+def model_xml(name: str, linkage: Linkage, settings: Settings = STATIC) -> str:
+    """The model as MJCF text (committed as golden files for review)."""
+    return str(build_spec(name, linkage, settings).to_xml())

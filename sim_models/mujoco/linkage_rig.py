@@ -1,0 +1,289 @@
+"""A linkage's compiled model and data: put it in a pose, apply the loads, read the forces
+back in the quantities of LINKAGES.md — the linkage counterpart of :class:`.rig.Rig`,
+with the interface :mod:`.settle` drives.
+
+Forces are read from MuJoCo's own state only:
+
+- ``Q_<joint>``: the force of the driver's joint equality. Its Jacobian row is +1 on the
+  joint's coordinate q (:mod:`.linkage_model` orients every tree joint so), so the force
+  is the effort conjugate to q: a couple on ``links[1]`` or a force along the axis;
+- a loop-closing revolute joint's ``F_<joint>``: the force of its ``connect``, whose first
+  site is on ``links[1]``;
+- a tree joint's reaction: ``cfrc_int`` of its child body after ``mj_rnePostConstraint``
+  (the spatial force of the parent on the child's subtree, moment about the subtree's
+  centre of mass), turned into the force by ``links[0]`` on ``links[1]`` and, for a
+  prismatic joint, its moment about ``at``, less the driver's effort along the axis.
+  MuJoCo 4's RNE sees the loads (``xfrc_applied``), the connect forces and the spatial
+  tendons' pull on their sites (measured: the springs' reactions agree with the analytic
+  ones to 1e-15; a correction for a tendon's pull, needed if it acted only in joint
+  space, made them 3e-3 to 0.8 wrong);
+- ``S_<spring>``: k(L − L0) + c·L̇ of MuJoCo's tendon length and speed with the model's
+  own stiffness, spring length and damping; a torsional spring's from the hinge's qpos.
+
+Carried constraint forces (:mod:`.settle`): as :class:`.rig.Rig`, the forces of a settled
+state can be moved into explicit loads — each connect's force as an equal and opposite
+pair at its two sites, each driver's effort as ``qfrc_applied`` on its joint.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import Joint, LinearSpring, TorsionSpring
+from mechcheck.analytic.linkage_backends import quantity_units
+from mechcheck.analytic.linkage_kinematics import LinkagePose
+from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.mujoco.linkage_model import (
+    LinkageTree,
+    body_name,
+    build_spec,
+    closure_sites,
+    origin_of,
+    spanning_tree,
+)
+from mechcheck.sim_models.mujoco.model import STATIC, Settings
+from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, parent_force, xfrc_of_loads
+
+Array = NDArray[np.float64]
+
+
+class LinkageRig:
+    """One linkage Case's compiled model and data, with loads, pose and force read-out."""
+
+    def __init__(self, case: Case, settings: Settings = STATIC) -> None:
+        self.case = case
+        self.settings = settings
+        self.linkage = linkage = case.linkage
+        self.tree: LinkageTree = spanning_tree(linkage)
+        self.model = build_spec(case.name, linkage, settings).compile()
+        self.data = mujoco.MjData(self.model)
+        self.scale = linkage.scale
+        self.units: dict[str, str] | None = quantity_units(linkage)
+        m = self.model
+        self.body = {GROUND: 0} | {link: self._id(mujoco.mjtObj.mjOBJ_BODY, body_name(link))
+                                   for link in linkage.moving_links}
+        self.dof = {t.joint.name: int(m.jnt_dofadr[self._id(mujoco.mjtObj.mjOBJ_JOINT,
+                                                             t.joint.name)])
+                    for t in self.tree.tree}
+        self.hinge = np.array([m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE
+                               for j in range(m.njnt)])
+        # Each moving link's rotation is the signed sum of the hinges on its path from the
+        # ground (slides do not turn): phi = rotation @ qpos.
+        self.rotation = np.zeros((len(linkage.moving_links), m.nq))
+        for k, link in enumerate(linkage.moving_links):
+            while link != GROUND:
+                t = self.tree.parent_joint(link)
+                if t.joint.kind == "revolute":
+                    self.rotation[k, self.dof[t.joint.name]] = t.sign
+                link = t.parent
+        self.loads = self._load_table()
+        self.incidence = np.zeros((m.nbody, self.loads.sites.size))
+        self.incidence[self.loads.bodies, np.arange(self.loads.sites.size)] = 1.0
+        self.body_forces = self.incidence @ self.loads.forces
+        self.springs = [s for s in linkage.springs if isinstance(s, LinearSpring)]
+        self.loop_eq = {j.name: self._id(mujoco.mjtObj.mjOBJ_EQUALITY, f"loop_{j.name}")
+                        for j in self.tree.closures}
+        self.drive_eq = {d.joint: self._id(mujoco.mjtObj.mjOBJ_EQUALITY, f"drive_{d.joint}")
+                         for d in linkage.drivers}
+        self.loop_sites = {j.name: tuple(self._id(mujoco.mjtObj.mjOBJ_SITE, s)
+                                         for s in closure_sites(j)) for j in self.tree.closures}
+        self.point_sites = {p: self._id(mujoco.mjtObj.mjOBJ_SITE, f"point_{p}")
+                            for p in linkage.points}
+        mujoco.mj_forward(m, self.data)
+        self.nefc = int(self.data.nefc)  # constant: equalities only, no contacts or limits
+        self.loop_rows = {j: self.equality_rows(e) for j, e in self.loop_eq.items()}
+        self.drive_rows = {j: self.equality_rows(e) for j, e in self.drive_eq.items()}
+        self.efc_scale = np.ones(self.nefc)
+        for joint, rows in self.drive_rows.items():
+            if linkage.joint(joint).kind == "revolute":
+                self.efc_scale[rows] = 1.0 / self.scale  # torques as forces, for the stop rule
+        self.carried = np.zeros(self.nefc)
+        # Joint speeds and pose errors as point speeds and lengths: hinges times the size.
+        self.weight = np.where(self.hinge[m.dof_jntid], self.scale, 1.0)
+
+    def _id(self, kind: mujoco.mjtObj, name: str) -> int:
+        found = int(mujoco.mj_name2id(self.model, kind, name))
+        assert found >= 0, name
+        return found
+
+    def _load_table(self) -> LoadTable:
+        """The loads plus the weights m·g of the real masses (never fictitious ones); loads
+        on the ground do nothing and are left out."""
+        lk = self.linkage
+        sites, bodies, forces, torques = [], [], [], []
+        for i, load in enumerate(lk.loads):
+            if load.link != GROUND:
+                sites.append(self._id(mujoco.mjtObj.mjOBJ_SITE, f"load{i}"))
+                bodies.append(self.body[load.link])
+                forces.append((load.force[0], load.force[1], 0.0))
+                torques.append(load.torque)
+        if lk.gravity != (0.0, 0.0):
+            for i, mass in enumerate(lk.masses):
+                if mass.link != GROUND:
+                    sites.append(self._id(mujoco.mjtObj.mjOBJ_SITE, f"weight{i}"))
+                    bodies.append(self.body[mass.link])
+                    forces.append((mass.mass * lk.gravity[0], mass.mass * lk.gravity[1], 0.0))
+                    torques.append(0.0)
+        return LoadTable(np.array(sites, dtype=int), np.array(bodies, dtype=int),
+                         np.array(forces, dtype=float).reshape(-1, 3),
+                         np.array(torques, dtype=float))
+
+    def equality_rows(self, eq_id: int) -> NDArray[np.int_]:
+        d = self.data
+        return np.flatnonzero((d.efc_type[:d.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+                              & (d.efc_id[:d.nefc] == eq_id))
+
+    # -- pose -------------------------------------------------------------------------
+    def joint_states(self, pose: LinkagePose) -> tuple[Array, Array, Array]:
+        """qpos, qvel, qacc (N, nq) of the tree joints from an analytic pose: used only to
+        seed or prescribe the motion, never to read forces."""
+        n = pose.q.shape[0]
+        out = [np.zeros((n, self.model.nq)) for _ in range(3)]
+        for t in self.tree.tree:
+            for array, value in zip(out, pose.joint_coordinate(t.joint), strict=True):
+                array[:, self.dof[t.joint.name]] = value
+        return out[0], out[1], out[2]
+
+    def set_state(self, qpos: Array, qvel: Array) -> None:
+        self.data.qpos[:] = qpos
+        self.data.qvel[:] = qvel
+
+    def set_targets(self, values: Array) -> None:
+        """Hold each driven joint at its value (rad or m, from the drawn pose)."""
+        for driver, value in zip(self.linkage.drivers, values, strict=True):
+            self.model.eq_data[self.drive_eq[driver.joint], 0] = value
+
+    # -- loads ------------------------------------------------------------------------
+    def apply_loads(self) -> None:
+        """xfrc_applied from the current pose (see :func:`.rig.xfrc_of_loads`)."""
+        xfrc_of_loads(self.data, self.loads, self.incidence, self.body_forces,
+                      np.zeros(self.model.nbody))
+        if self.carried.any():
+            self.apply_carried()
+
+    def reset_carried(self) -> None:
+        self.carried = np.zeros(self.nefc)
+        self.data.qfrc_applied[:] = 0.0
+
+    def carry(self) -> None:
+        self.carried = self.carried + self.data.efc_force[:self.nefc]
+
+    def apply_carried(self) -> None:
+        """Each connect's carried force as a pair at its sites, each driver's as a
+        generalised force on its joint."""
+        d = self.data
+        for joint, rows in self.loop_rows.items():
+            f = self.carried[rows]
+            first, second = closure_sites(self.linkage.joint(joint))
+            links = self.linkage.joint(joint).links
+            for link, site, sign in ((links[1], self.loop_sites[joint][0], 1.0),
+                                     (links[0], self.loop_sites[joint][1], -1.0)):
+                b = self.body[link]
+                if b == 0:
+                    continue
+                d.xfrc_applied[b, 0:3] += sign * f
+                d.xfrc_applied[b, 5] += sign * cross_z(d.site_xpos[site] - d.xipos[b], f)
+        for joint, rows in self.drive_rows.items():
+            d.qfrc_applied[self.dof[joint]] = self.carried[rows[0]]
+
+    def total_constraint_forces(self) -> Array:
+        return self.carried + self.data.efc_force[:self.nefc]
+
+    def constraint_forces(self) -> Array:
+        """The equality forces, carried ones included, drivers' torques as forces."""
+        return self.total_constraint_forces() * self.efc_scale
+
+    # -- read-out ---------------------------------------------------------------------
+    def point_on(self, link: str, drawn: tuple[float, float]) -> Array:
+        """Current global (x, y) of a point fixed to ``link`` that was at ``drawn``."""
+        d, b = self.data, self.body[link]
+        o = origin_of(self.tree, self.linkage, link)
+        r = np.array([drawn[0] - o[0], drawn[1] - o[1], 0.0])
+        return (d.xpos[b] + d.xmat[b].reshape(3, 3) @ r)[:2]
+
+    def spring_tensions(self) -> Array:
+        """Each linear spring's tension from MuJoCo's tendon length and speed."""
+        m, d = self.model, self.data
+        return (m.tendon_stiffness * (d.ten_length - m.tendon_lengthspring[:, 0])
+                + m.tendon_damping * d.ten_velocity)
+
+    def read(self) -> dict[str, float]:
+        """Every quantity from the current data (call after a forward pass)."""
+        m, d = self.model, self.data
+        mujoco.mj_rnePostConstraint(m, d)
+        total = self.total_constraint_forces()
+        efforts = {j: float(total[rows[0]]) for j, rows in self.drive_rows.items()}
+        values = {f"Q_{j}": q for j, q in efforts.items()}
+        for joint in self.linkage.joints:
+            values.update(self._reaction(joint, total, efforts.get(joint.name, 0.0)))
+        values.update(self._springs())
+        values.update(self._pose())
+        return {k: float(v) for k, v in values.items()}
+
+    def _reaction(self, joint: Joint, total: Array, effort: float) -> dict[str, float]:
+        name = joint.name
+        if name in self.loop_rows:
+            f = total[self.loop_rows[name]]
+            return {f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
+        t = self.tree.tree_joint(name)
+        assert t is not None
+        point = self.point_on(joint.links[1], self.linkage.points[joint.at])
+        f, moment = parent_force(self.model, self.data, self.body[t.child], point)
+        f, moment = t.sign * f, t.sign * moment  # by links[0] on links[1]
+        out = {}
+        if joint.kind == "prismatic":
+            assert joint.axis is not None
+            b0 = self.body[joint.links[0]]
+            u = (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
+            f = f - effort * u  # the driver's effort is reported as Q, not in F
+            out[f"M_{name}"] = moment
+        out[f"F_{name}_x"], out[f"F_{name}_y"] = float(f[0]), float(f[1])
+        return out
+
+    def _springs(self) -> dict[str, float]:
+        d = self.data
+        out: dict[str, float] = {}
+        tensions = self.spring_tensions()
+        for k, s in enumerate(self.springs):
+            out[f"S_{s.name}"] = float(tensions[k])
+        for s in self.linkage.springs:
+            if isinstance(s, TorsionSpring):
+                dof = self.dof[s.joint]  # = its qpos address (hinges and slides only)
+                out[f"S_{s.name}"] = float(s.stiffness * (d.qpos[dof] - s.free_rotation)
+                                           + s.damping * d.qvel[dof])
+        return out
+
+    def _pose(self) -> dict[str, float]:
+        d = self.data
+        out: dict[str, float] = {}
+        for p, site in self.point_sites.items():
+            out[f"x_{p}"], out[f"y_{p}"] = float(d.site_xpos[site, 0]), float(d.site_xpos[site, 1])
+        phi = dict(zip(self.linkage.moving_links, self.rotation @ d.qpos, strict=True))
+        phi[GROUND] = 0.0
+        for link in self.linkage.moving_links:
+            out[f"phi_{link}"] = float(phi[link])
+        for joint in self.linkage.joints:
+            if joint.name in self.dof:
+                out[f"q_{joint.name}"] = float(d.qpos[self.dof[joint.name]])
+            else:
+                out[f"q_{joint.name}"] = float(phi[joint.links[1]] - phi[joint.links[0]])
+        return out
+
+    # -- how settled ------------------------------------------------------------------
+    def loop_violation(self) -> float:
+        """Largest gap of a loop-closing joint, metres."""
+        d = self.data
+        return max((float(np.linalg.norm(d.efc_pos[rows])) for rows in self.loop_rows.values()),
+                   default=0.0)
+
+    def joint_velocity(self) -> float:
+        """Largest joint speed as a point speed (hinges times the size), m/s."""
+        return float(np.abs(self.data.qvel * self.weight).max(initial=0.0))
+
+    def pose_drift(self, theta12: float | None = None, qpos: Array | None = None) -> float:
+        """Largest difference of the simulated joints from ``qpos``, as a length (m)."""
+        assert qpos is not None
+        return float(np.abs((self.data.qpos - qpos) * self.weight).max(initial=0.0))
