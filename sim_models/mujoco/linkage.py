@@ -23,7 +23,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
 from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, real_inertial
+from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, real_inertial, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import EXACT
 from mechcheck.sim_models.mujoco.settle import settle_refined, settled_solution
@@ -58,6 +58,16 @@ def driver_values(case: Case) -> np.ndarray:
     return np.array([d.value for d in case.linkage.drivers])
 
 
+def unbuildable(case: Case) -> str | None:
+    """Why the builder has no model of the linkage (checked before any pose verdict: no
+    pose of it is modelled), or None."""
+    try:
+        spanning_tree(case.linkage)
+    except Unbuildable as error:
+        return str(error)
+    return None
+
+
 def settle_refusal(case: Case) -> str | None:
     if case.kind != "static":
         return SETTLE_REFUSALS[case.kind]
@@ -73,17 +83,14 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
     ``rig`` and ``results`` (the analytic pose analysis) may be given by a sweep.
     """
     start = time.perf_counter()
-    why = settle_refusal(case)
+    why = unbuildable(case) or settle_refusal(case)
     if why is not None:
         return refused(case, "mujoco", why)
+    rig = rig or LinkageRig(case)
     results = results if results is not None else analytic_results(case)
     gated = withheld(case, "mujoco", results)
     if gated is not None:
         return gated
-    try:
-        rig = rig or LinkageRig(case)
-    except Unbuildable as error:
-        return refused(case, "mujoco", str(error))
     qpos = seed(rig, results, driver_values(case))
     result = settle_refined(rig, qpos)
     return settled_solution(rig, qpos, result, time.perf_counter() - start)
@@ -129,14 +136,14 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
     start = time.perf_counter()
     if case.has_coulomb_friction:
         return refused(case, "mujoco_solve", COULOMB_REFUSAL)
+    why = unbuildable(case)
+    if why is not None:
+        return refused(case, "mujoco_solve", why)
+    rig = rig or exact_linkage_rig(case)
     results = results if results is not None else analytic_results(case)
     gated = withheld(case, "mujoco_solve", results)
     if gated is not None:
         return gated
-    try:
-        rig = rig or exact_linkage_rig(case)
-    except Unbuildable as error:
-        return refused(case, "mujoco_solve", str(error))
     m, d = rig.model, rig.data
     qpos, qvel, qacc = (a[index] for a in rig.joint_states(results.pose))
     rig.set_state(qpos, qvel)

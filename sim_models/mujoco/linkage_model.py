@@ -107,7 +107,7 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
             chosen.append(joint)
             continue
         if joint.kind == "prismatic":
-            loop = _path(chosen, *joint.links) + [joint.name]
+            loop = [*_path(chosen, *joint.links), joint.name]
             raise Unbuildable(f"the loop through joints {', '.join(loop)} has no revolute "
                               "joint: the MuJoCo model closes every loop with a connect at a "
                               "revolute joint")

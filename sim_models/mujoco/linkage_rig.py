@@ -177,7 +177,6 @@ class LinkageRig:
         d = self.data
         for joint, rows in self.loop_rows.items():
             f = self.carried[rows]
-            first, second = closure_sites(self.linkage.joint(joint))
             links = self.linkage.joint(joint).links
             for link, site, sign in ((links[1], self.loop_sites[joint][0], 1.0),
                                      (links[0], self.loop_sites[joint][1], -1.0)):
@@ -247,13 +246,14 @@ class LinkageRig:
         d = self.data
         out: dict[str, float] = {}
         tensions = self.spring_tensions()
-        for k, s in enumerate(self.springs):
-            out[f"S_{s.name}"] = float(tensions[k])
-        for s in self.linkage.springs:
-            if isinstance(s, TorsionSpring):
-                dof = self.dof[s.joint]  # = its qpos address (hinges and slides only)
-                out[f"S_{s.name}"] = float(s.stiffness * (d.qpos[dof] - s.free_rotation)
-                                           + s.damping * d.qvel[dof])
+        for k, linear in enumerate(self.springs):
+            out[f"S_{linear.name}"] = float(tensions[k])
+        for torsion in self.linkage.springs:
+            if isinstance(torsion, TorsionSpring):
+                dof = self.dof[torsion.joint]  # = its qpos address (hinges and slides only)
+                out[f"S_{torsion.name}"] = float(
+                    torsion.stiffness * (d.qpos[dof] - torsion.free_rotation)
+                    + torsion.damping * d.qvel[dof])
         return out
 
     def _pose(self) -> dict[str, float]:

@@ -1,0 +1,214 @@
+"""The MuJoCo backends on any planar linkage (issue 12), against the analytic linkage backend.
+
+Expected values come from the member-equilibrium matrix method
+(:func:`mechcheck.analytic.linkage_backends.solve`), an independent method; every
+comparison goes through :func:`mechcheck.testing.assert_solution_close`, the one tolerance
+policy (settled statics 1e-6, the exact solve 1e-9).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+
+from mechcheck.analytic.case import Case, CaseError
+from mechcheck.analytic.linkage import Joint, Link, Linkage, PointLoad
+from mechcheck.analytic.linkage_backends import solve
+from mechcheck.casefile import linkage_case
+from mechcheck.linkage_file import LinkageCaseSpec
+from mechcheck.sim_models.mujoco import settle, solve_at_pose
+from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, model_xml, spanning_tree
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
+from mechcheck.testing import assert_solution_close
+
+from .builtin import builtin_cases
+from .strategies import MAX_CONDITION, linkage_tables
+
+GOLDEN = Path(__file__).parent / "golden" / "mujoco"
+
+
+def linkage_cases() -> dict[str, Case]:
+    return {n: c for n, c in builtin_cases().items() if c.mechanism == "linkage"}
+
+
+def names(predicate: Any) -> list[str]:
+    return sorted(n for n, c in linkage_cases().items() if predicate(c))
+
+
+def assembles(case: Case) -> bool:
+    return solve(case).status == "ok"
+
+
+def held_static(case: Case) -> bool:
+    return case.kind == "static" and case.linkage.dof == len(case.linkage.drivers) \
+        and assembles(case)
+
+
+def assert_close(case: Case, sim: Any) -> None:
+    """Within the policy's tolerance of the analytic backend, every quantity reported, and
+    MuJoCo raised no warning (the models are well posed)."""
+    assert_solution_close(case, sim, solve(case), complete=True)
+    assert "warnings" not in sim.diagnostics, sim.diagnostics["warnings"]
+
+
+@pytest.mark.parametrize("name", names(held_static))
+def test_settled_statics_agree_with_analytic(name: str) -> None:
+    """Every built-in static linkage held by its drivers settles to the analytic forces
+    (1e-6): reactions, drivers' efforts and the springs' forces, read from MuJoCo."""
+    case = linkage_cases()[name]
+    sim = settle(case)
+    assert sim.diagnostics["method"] == "settle"
+    assert_close(case, sim)
+
+
+@pytest.mark.parametrize("name", names(lambda c: not c.has_coulomb_friction and assembles(c)))
+def test_exact_solve_agrees_with_analytic(name: str) -> None:
+    """Every built-in linkage without Coulomb friction, static or moving, free coordinates
+    included: MuJoCo's constraint forces at the analytic motion are the analytic ones (1e-9)."""
+    case = linkage_cases()[name]
+    assert_close(case, solve_at_pose(case))
+
+
+def test_cylinder_boom_hand_check() -> None:
+    """The boom held at its drawn pose: the cylinder pushes Q = (2000·1500 + 1000·588.6) /
+    494.814 = 7252.42 N (the case file's hand calculation, moments about O)."""
+    case = linkage_cases()["boom-hold-drawn"]
+    arm = (700.0 * 550.0 - 250.0 * 300.0) / np.hypot(300.0, 550.0)  # mm
+    expected = (2000.0 * 1500.0 + 1000.0 * 60.0 * 9.81) / arm
+    for sim in (settle(case), solve_at_pose(case)):
+        assert sim.values["Q_cyl"] == pytest.approx(expected, rel=1e-6)
+
+
+def test_exam_q2_driver_force_is_the_hand_calculation() -> None:
+    """Exam Q2: F = m ẍ + (k1 + k2) x = 2·3 + 500·0.04 = 26 N, with S_k1 = 12 N and
+    S_k2 = −8 N from MuJoCo's tendons."""
+    sim = solve_at_pose(linkage_cases()["exam-q2-frictionless"])
+    assert sim.values["Q_slide"] == pytest.approx(26.0, rel=1e-12)
+    assert sim.values["S_k1"] == pytest.approx(12.0, rel=1e-12)
+    assert sim.values["S_k2"] == pytest.approx(-8.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("name", sorted(linkage_cases()))
+def test_golden_xml_is_reproduced(name: str) -> None:
+    """The committed MJCF of every built-in linkage is exactly what the builder gives today."""
+    case = linkage_cases()[name]
+    assert model_xml(name, case.linkage) == (GOLDEN / f"linkage-{name}.xml").read_text()
+
+
+def test_tree_holds_drivers_and_closes_loops_at_revolute_joints() -> None:
+    """The crank shaper: both prismatic joints and the driven joint are tree joints; the two
+    loops are closed at revolute joints; a joint's coordinate is its qpos either way the
+    tree runs (the slot's tree runs from the block to the arm, against its links)."""
+    tree = spanning_tree(linkage_cases()["crank-shaper"].linkage)
+    in_tree = {t.joint.name: t for t in tree.tree}
+    assert {"slot", "guide", "O2"} <= set(in_tree)
+    assert all(j.kind == "revolute" for j in tree.closures) and len(tree.closures) == 2
+    assert in_tree["slot"].sign == -1.0
+
+
+def prismatic_triangle() -> Linkage:
+    """Two sliders in a loop of three prismatic joints (no revolute joint in the loop)."""
+    return Linkage(
+        points={"G": (0.0, 0.0), "P": (0.0, 0.0), "R": (0.5, 0.5)},
+        links=(Link("ground", ("G",)), Link("a", ("P",)), Link("b", ("R",))),
+        joints=(Joint("ga", "prismatic", ("ground", "a"), "P", (1.0, 0.0)),
+                Joint("ab", "prismatic", ("a", "b"), "R", (0.0, 1.0)),
+                Joint("gb", "prismatic", ("ground", "b"), "R", (1.0, 1.0))),
+        loads=(PointLoad("b", (0.5, 0.5), (1.0, 0.0)),),
+    )
+
+
+def test_a_loop_without_a_revolute_joint_is_refused_with_the_reason() -> None:
+    """The builder cannot close a loop of prismatic joints with a connect: both backends
+    say so (not_applicable, naming the loop's joints), and no number is given."""
+    linkage = prismatic_triangle()
+    with pytest.raises(Unbuildable, match="ga, ab, gb"):
+        spanning_tree(linkage)
+    case = Case(name="prismatic-loop", geometry=linkage, theta12=0.0)
+    for backend in (settle, solve_at_pose):
+        sim = backend(case)
+        assert sim.status == "not_applicable"
+        assert "has no revolute joint" in sim.message and not sim.values
+
+
+@pytest.mark.parametrize("name", ["crank-shaper", "exam-q2-friction", "exam-q1-slider-bar"])
+def test_settling_refuses_what_it_does_not_model(name: str) -> None:
+    """Motion, friction and free coordinates are not settled yet: a verdict with the reason,
+    never a number."""
+    sim = settle(linkage_cases()[name])
+    assert sim.status == "not_applicable" and sim.message and not sim.values
+
+
+def test_exact_solve_refuses_coulomb_friction() -> None:
+    sim = solve_at_pose(linkage_cases()["e2-linkage-friction"])
+    assert sim.status == "not_applicable" and "Coulomb" in sim.message
+
+
+def test_a_linkage_that_locks_gets_the_analytic_verdict() -> None:
+    """The locking four-bar: both backends give the analytic backend's verdict and message."""
+    case = linkage_cases()["locking-fourbar"]
+    reference = solve(case)
+    for backend in (settle, solve_at_pose):
+        sim = backend(case)
+        assert (sim.status, sim.message) == (reference.status, reference.message)
+        assert not any(q.startswith(("F_", "Q_")) for q in sim.values)
+
+
+def test_reactions_of_tree_and_loop_joints_balance_every_link() -> None:
+    """An identity on MuJoCo's numbers alone: on seed E1 as a linkage, each
+    moving link's joint forces plus its loads sum to zero (ΣF = 0)."""
+    case = linkage_cases()["e1-linkage"]
+    assert not case.linkage.masses  # no weights to add
+    sim = solve_at_pose(case)
+    linkage = case.linkage
+    for link in linkage.moving_links:
+        total = np.zeros(2)
+        for joint in linkage.joints:
+            if link in joint.links:
+                sign = 1.0 if joint.links[1] == link else -1.0
+                total += sign * np.array([sim.values[f"F_{joint.name}_x"],
+                                          sim.values[f"F_{joint.name}_y"]])
+        for load in linkage.loads:
+            if load.link == link:
+                total += np.array(load.force)
+        assert np.abs(total).max() <= 1e-9 * max(abs(v) for v in sim.values.values())
+
+
+RANDOM = settings(max_examples=30, deadline=None,
+                  suppress_health_check=[HealthCheck.filter_too_much, HealthCheck.too_slow])
+
+
+def random_case(table: dict[str, Any]) -> Case:
+    """The table as a Case; tables the contract refuses, or poses near a toggle, are skipped."""
+    try:
+        case = linkage_case(LinkageCaseSpec.model_validate(table))
+    except CaseError:
+        assume(False)
+        raise
+    reference = solve(case)
+    assume(reference.status == "ok")
+    assume(float(reference.diagnostics["condition_number"]) < MAX_CONDITION)
+    return case
+
+
+@RANDOM
+@given(linkage_tables(friction=False))
+def test_exact_solve_on_random_linkages(table: dict[str, Any]) -> None:
+    """Random four-bars, slider-cranks and six-bars with loads, masses, gravity, springs and
+    motion: MuJoCo's exact solve agrees with the analytic backend (1e-9)."""
+    case = random_case(table)
+    assert_close(case, solve_at_pose(case))
+
+
+def test_rig_driver_targets_follow_the_case() -> None:
+    """A driver is held at its value: the five-bar's two joint equalities hold O1 at −20°
+    and O5 at +15° (eq_data), the values the case file gives."""
+    case = linkage_cases()["five-bar-two-drivers"]
+    rig = LinkageRig(case)
+    rig.set_targets(np.array([d.value for d in case.linkage.drivers]))
+    held = [float(rig.model.eq_data[rig.drive_eq[j], 0]) for j in ("O1", "O5")]
+    assert np.degrees(held) == pytest.approx([-20.0, 15.0])
