@@ -45,9 +45,10 @@ def refused(case: Case, backend: str, why: str) -> Solution:
                     units=quantity_units(case.linkage))
 
 
-def withheld(case: Case, backend: str, results: LinkageResults) -> Solution | None:
-    """The analytic backend's verdict on the pose (no forces there), or None."""
-    found = verdict(case, results, 0)
+def withheld_at(case: Case, backend: str, results: LinkageResults,
+                index: int = 0) -> Solution | None:
+    """The analytic backend's verdict on pose ``index`` (no forces there), or None."""
+    found = verdict(case, results, index)
     if found is None:
         return None
     return Solution(case.name, backend, {}, status=found[0], message=found[1],
@@ -88,18 +89,17 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
         return refused(case, "mujoco", why)
     rig = rig or LinkageRig(case)
     results = results if results is not None else analytic_results(case)
-    gated = withheld(case, "mujoco", results)
+    gated = withheld_at(case, "mujoco", results)
     if gated is not None:
         return gated
-    qpos = seed(rig, results, driver_values(case))
+    qpos = seed(rig, rig.joint_states(results.pose)[0][0], driver_values(case))
     result = settle_refined(rig, qpos)
     return settled_solution(rig, qpos, result, time.perf_counter() - start)
 
 
-def seed(rig: LinkageRig, results: LinkageResults, targets: np.ndarray, index: int = 0) -> np.ndarray:
-    """At rest in the analytic pose (row ``index``), drivers held at ``targets``,
-    nothing carried; returns the pose's joint coordinates."""
-    qpos = rig.joint_states(results.pose)[0][index]
+def seed(rig: LinkageRig, qpos: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """At rest in the analytic pose ``qpos``, drivers held at ``targets``, nothing
+    carried; returns ``qpos``."""
     mujoco.mj_resetData(rig.model, rig.data)
     rig.set_state(qpos, np.zeros_like(qpos))
     rig.set_targets(targets)
@@ -141,13 +141,22 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
         return refused(case, "mujoco_solve", why)
     rig = rig or exact_linkage_rig(case)
     results = results if results is not None else analytic_results(case)
-    gated = withheld(case, "mujoco_solve", results)
+    gated = withheld_at(case, "mujoco_solve", results, index)
     if gated is not None:
         return gated
+    states = rig.joint_states(results.pose)
+    return exact_solution(case, rig, tuple(a[index] for a in states),
+                          results.pose.drivers[index], start)
+
+
+def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
+                   targets: np.ndarray, start: float) -> Solution:
+    """The exact solve at the analytic joint ``state`` (qpos, qvel, qacc) with the drivers
+    at ``targets``; ``start`` times it."""
     m, d = rig.model, rig.data
-    qpos, qvel, qacc = (a[index] for a in rig.joint_states(results.pose))
+    qpos, qvel, qacc = state
     rig.set_state(qpos, qvel)
-    rig.set_targets(results.pose.drivers[index])
+    rig.set_targets(targets)
     mujoco.mj_kinematics(m, d)  # load points and centres of mass for the loads
     mujoco.mj_comPos(m, d)
     rig.apply_loads()
@@ -161,3 +170,58 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
     }
     return Solution(case.name, "mujoco_solve", values, diagnostics=diagnostics,
                     units=quantity_units(case.linkage))
+
+
+def predicted(history: list[tuple[float, np.ndarray]], value: float) -> np.ndarray:
+    """The constraint forces to start a pose with: extrapolated linearly in the first
+    driver's value from the last two settled poses, or the last one's alone."""
+    if len(history) == 1 or history[1][0] == history[0][0]:
+        return history[-1][1]
+    (v0, f0), (v1, f1) = history
+    return f1 + (f1 - f0) * (value - v1) / (v1 - v0)
+
+
+def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
+                  results: LinkageResults | None = None, *,
+                  continuation: bool = True) -> list[Solution]:
+    """Either backend at every value of the linkage's first driver (rad or m, from the
+    drawn pose; the other drivers at the case's values), in order.
+
+    One model serves every pose and the analytic pose analysis (``results``, computed here
+    unless given) is done once, vectorised; each pose is seeded from its analytic pose
+    (:func:`seed`). Settled statics continue from the last settled pose: its constraint
+    forces — MuJoCo's own — start the next pose as carried loads (:mod:`.rig`), so the
+    constraints hold only the change from pose to pose and settle sooner. The refinement
+    passes still end only when two passes agree (:func:`.settle.settle_refined`), so the
+    start changes the steps, not the equilibrium (``continuation=False``: every pose
+    from nothing carried, as when solved alone).
+    """
+    first = np.asarray(first, dtype=float)
+    why = unbuildable(case)
+    if backend == "mujoco":
+        why = why or settle_refusal(case)
+    if why is not None:
+        return [refused(case, backend, why)] * len(first)
+    if results is None:
+        results = analytic_results(case, np.asarray(first, dtype=float))
+    rig = LinkageRig(case) if backend == "mujoco" else exact_linkage_rig(case)
+    states = rig.joint_states(results.pose)
+    targets = results.pose.drivers
+    history: list[tuple[float, np.ndarray]] = []  # the last settled poses' forces
+    out = []
+    for i in range(len(first)):
+        start = time.perf_counter()
+        gated = withheld_at(case, backend, results, i)
+        if gated is not None:
+            out.append(gated)
+        elif backend == "mujoco":
+            qpos = seed(rig, states[0][i], targets[i])
+            if continuation and history:
+                rig.carried = predicted(history, float(first[i]))
+            result = settle_refined(rig, qpos)
+            out.append(settled_solution(rig, qpos, result, time.perf_counter() - start))
+            history = [*history[-1:], (float(first[i]), rig.total_constraint_forces())] \
+                if result.settled else []
+        else:
+            out.append(exact_solution(case, rig, tuple(a[i] for a in states), targets[i], start))
+    return out

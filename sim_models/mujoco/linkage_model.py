@@ -66,8 +66,6 @@ class LinkageTree:
     def parent_joint(self, link: str) -> TreeJoint:
         return next(t for t in self.tree if t.child == link)
 
-    def tree_joint(self, name: str) -> TreeJoint | None:
-        return next((t for t in self.tree if t.joint.name == name), None)
 
 
 def _priority(linkage: Linkage, joint: Joint) -> int:

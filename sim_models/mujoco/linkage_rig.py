@@ -27,6 +27,8 @@ pair at its two sites, each driver's effort as ``qfrc_applied`` on its joint.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
@@ -50,6 +52,17 @@ from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, parent_force, xf
 Array = NDArray[np.float64]
 
 
+@dataclass(frozen=True)
+class CarriedPairs:
+    """The sites where carried connect forces act (see :meth:`LinkageRig.apply_carried`)."""
+
+    sites: NDArray[np.int_]
+    bodies: NDArray[np.int_]
+    signs: Array
+    rows: NDArray[np.int_]
+    incidence: Array
+
+
 class LinkageRig:
     """One linkage Case's compiled model and data, with loads, pose and force read-out."""
 
@@ -58,6 +71,7 @@ class LinkageRig:
         self.settings = settings
         self.linkage = linkage = case.linkage
         self.tree: LinkageTree = spanning_tree(linkage)
+        self.tree_joints = {t.joint.name: t for t in self.tree.tree}
         self.model = build_spec(case.name, linkage, settings).compile()
         self.data = mujoco.MjData(self.model)
         self.scale = linkage.scale
@@ -101,6 +115,10 @@ class LinkageRig:
             if linkage.joint(joint).kind == "revolute":
                 self.efc_scale[rows] = 1.0 / self.scale  # torques as forces, for the stop rule
         self.carried = np.zeros(self.nefc)
+        self.pairs = self._carried_layout()
+        self.drive_dofs = np.array([self.dof[j] for j in self.drive_rows], dtype=int)
+        self.drive_first_rows = np.array([rows[0] for rows in self.drive_rows.values()],
+                                         dtype=int)
         # Joint speeds and pose errors as point speeds and lengths: hinges times the size.
         self.weight = np.where(self.hinge[m.dof_jntid], self.scale, 1.0)
 
@@ -130,6 +148,26 @@ class LinkageRig:
         return LoadTable(np.array(sites, dtype=int), np.array(bodies, dtype=int),
                          np.array(forces, dtype=float).reshape(-1, 3),
                          np.array(torques, dtype=float))
+
+    def _carried_layout(self) -> CarriedPairs:
+        """Where carried connect forces act, as a load table: one row per site of a
+        connect on a moving link, with its constraint rows (``rows``: x, y, z), its sign
+        (+ on ``links[1]``, the first site) and a body × site incidence."""
+        sites, bodies, signs, rows = [], [], [], []
+        for name, eq_rows in self.loop_rows.items():
+            links = self.linkage.joint(name).links
+            for link, site, sign in ((links[1], self.loop_sites[name][0], 1.0),
+                                     (links[0], self.loop_sites[name][1], -1.0)):
+                if link != GROUND:
+                    sites.append(site)
+                    bodies.append(self.body[link])
+                    signs.append(sign)
+                    rows.append(eq_rows)
+        incidence = np.zeros((self.model.nbody, len(sites)))
+        incidence[bodies, np.arange(len(sites))] = 1.0
+        return CarriedPairs(np.array(sites, dtype=int), np.array(bodies, dtype=int),
+                            np.array(signs), np.array(rows, dtype=int).reshape(-1, 3),
+                            incidence)
 
     def equality_rows(self, eq_id: int) -> NDArray[np.int_]:
         d = self.data
@@ -173,20 +211,15 @@ class LinkageRig:
 
     def apply_carried(self) -> None:
         """Each connect's carried force as a pair at its sites, each driver's as a
-        generalised force on its joint."""
+        generalised force on its joint (arrays from :meth:`_carried_layout`)."""
         d = self.data
-        for joint, rows in self.loop_rows.items():
-            f = self.carried[rows]
-            links = self.linkage.joint(joint).links
-            for link, site, sign in ((links[1], self.loop_sites[joint][0], 1.0),
-                                     (links[0], self.loop_sites[joint][1], -1.0)):
-                b = self.body[link]
-                if b == 0:
-                    continue
-                d.xfrc_applied[b, 0:3] += sign * f
-                d.xfrc_applied[b, 5] += sign * cross_z(d.site_xpos[site] - d.xipos[b], f)
-        for joint, rows in self.drive_rows.items():
-            d.qfrc_applied[self.dof[joint]] = self.carried[rows[0]]
+        pairs = self.pairs
+        if pairs.sites.size:
+            f = self.carried[pairs.rows] * pairs.signs[:, None]
+            arm = d.site_xpos[pairs.sites] - d.xipos[pairs.bodies]
+            d.xfrc_applied[:, 0:3] += pairs.incidence @ f
+            d.xfrc_applied[:, 5] += pairs.incidence @ cross_z(arm, f)
+        d.qfrc_applied[self.drive_dofs] = self.carried[self.drive_first_rows]
 
     def total_constraint_forces(self) -> Array:
         return self.carried + self.data.efc_force[:self.nefc]
@@ -227,20 +260,18 @@ class LinkageRig:
         if name in self.loop_rows:
             f = total[self.loop_rows[name]]
             return {f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
-        t = self.tree.tree_joint(name)
-        assert t is not None
+        t = self.tree_joints[name]
+        if joint.kind == "revolute":  # a force at the pin: its moment is not needed
+            f = t.sign * self.data.cfrc_int[self.body[t.child], 3:5]
+            return {f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
         point = self.point_on(joint.links[1], self.linkage.points[joint.at])
         f, moment = parent_force(self.model, self.data, self.body[t.child], point)
         f, moment = t.sign * f, t.sign * moment  # by links[0] on links[1]
-        out = {}
-        if joint.kind == "prismatic":
-            assert joint.axis is not None
-            b0 = self.body[joint.links[0]]
-            u = (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
-            f = f - effort * u  # the driver's effort is reported as Q, not in F
-            out[f"M_{name}"] = moment
-        out[f"F_{name}_x"], out[f"F_{name}_y"] = float(f[0]), float(f[1])
-        return out
+        assert joint.axis is not None
+        b0 = self.body[joint.links[0]]
+        u = (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
+        f = f - effort * u  # the driver's effort is reported as Q, not in F
+        return {f"M_{name}": moment, f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
 
     def _springs(self) -> dict[str, float]:
         d = self.data
