@@ -10,10 +10,21 @@ Targets: settled statics ≤ 2 ms/pose, mujoco_solve ≤ 0.2 ms/pose.
 
 A second table follows the near-toggle study (seed E1 at θ12 = 180° − δ): the
 settled backend's status, error, steps and passes as the change point nears.
-Run: /work/venv/bin/python benchmarks/bench_mujoco.py
+A third table times a linkage sweep (issue 12): the Watt II six-bar held statically
+(``watt-ii-demo`` with its driver at rest) at 360 crank angles over −170°…100° (where it
+assembles from the drawn pose), through both backends, with the analytic pose analysis
+done once beforehand (not timed). The settled sweep continues from pose to pose
+(:func:`mechcheck.sim_models.mujoco.linkage.sweep_linkage`); its simple reference is the
+same sweep with every pose settled from nothing carried. Target: ≤ 2 ms/pose settled.
+Medians over ``LINKAGE_REPEATS`` repeats, with min and max.
+
+Run: /work/venv/bin/python benchmarks/bench_mujoco.py [--linkage]
 """
 
+import dataclasses
 import math
+import statistics
+import sys
 import time
 
 import mujoco
@@ -25,6 +36,8 @@ from mechcheck.sim_models.mujoco import settle, sweep
 from mechcheck.tables import comparison_rows
 
 CASE = "seed-E1-as-stated"
+LINKAGE = "watt-ii-demo"
+LINKAGE_REPEATS = 5
 #: The near-toggle study's distances from the change point down to condition number ~5000, degrees.
 NEAR_TOGGLE_DELTAS = np.geomspace(30.0, 1e-4, 15)[2:9]
 
@@ -66,6 +79,8 @@ def main() -> None:
               f"{status.count('singular')} | {status.count('not_settled')} | "
               f"{worst_regular:.2e} | {failing} | {np.median(steps):.0f} | {max(steps)} |")
 
+    linkage_sweep_table({c.name: c for c in load_cases(*builtin_case_files())})
+
     print("\n| δ (deg) | condition number | status | rel. error | steps | passes | ms |")
     print("|---:|---:|---|---:|---:|---:|---:|")
     for delta in NEAR_TOGGLE_DELTAS:
@@ -79,5 +94,66 @@ def main() -> None:
               f"{error:.1e} | {sim.diagnostics['steps']} | {sim.diagnostics['passes']} | {ms:.1f} |")
 
 
+def static_watt(cases):
+    """The Watt II six-bar of the built-in cases with its driver at rest."""
+    case = cases[LINKAGE]
+    held = tuple(dataclasses.replace(d, velocity=0.0, acceleration=0.0)
+                 for d in case.linkage.drivers)
+    return dataclasses.replace(case, name="watt-ii-static",
+                               geometry=dataclasses.replace(case.linkage, drivers=held))
+
+
+def linkage_errors(case, results, solutions):
+    """Worst relative error (tolerance policy's measure) and poses outside tolerance."""
+    from mechcheck.analytic.linkage_backends import solution_from
+
+    worst, failing = 0.0, 0
+    for i, s in enumerate(solutions):
+        if s.status != "ok":
+            continue
+        reference = solution_from(case, "analytic", results, method="analytic", elapsed=0.0,
+                                  index=i)
+        rows = comparison_rows(case, reference, s)
+        worst = max(worst, max(float(r["rel_err"]) for r in rows))
+        failing += not all(r["passed"] for r in rows)
+    return worst, failing
+
+
+def spread(values, fmt=".3f"):
+    return f"{statistics.median(values):{fmt}} (min {min(values):{fmt}}, max {max(values):{fmt}})"
+
+
+def linkage_sweep_table(cases) -> None:
+    from mechcheck.analytic.linkage_backends import analytic_results
+    from mechcheck.sim_models.mujoco.linkage import sweep_linkage
+
+    case = static_watt(cases)
+    first = np.radians(np.linspace(-170.0, 100.0, 360))
+    results = analytic_results(case, first)
+    print(f"\n{LINKAGE} held statically, 360 poses over −170°…100°; {LINKAGE_REPEATS} repeats\n")
+    print("| backend | ms/pose | poses ok | worst rel. error | outside tolerance | "
+          "median steps | max steps |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    runs = {"mujoco (continued)": ("mujoco", True), "mujoco (each pose alone)": ("mujoco", False),
+            "mujoco_solve": ("mujoco_solve", True)}
+    medians = {}
+    for label, (backend, continuation) in runs.items():
+        times = []
+        for _ in range(LINKAGE_REPEATS):
+            start = time.perf_counter()
+            sols = sweep_linkage(case, first, backend, results, continuation=continuation)
+            times.append((time.perf_counter() - start) / first.size * 1e3)
+        medians[label] = statistics.median(times)
+        worst, failing = linkage_errors(case, results, sols)
+        steps = [s.diagnostics.get("steps", 0) for s in sols if s.status == "ok"]
+        ok = sum(s.status == "ok" for s in sols)
+        print(f"| {label} | {spread(times)} | {ok} | {worst:.2e} | {failing} | "
+              f"{np.median(steps):.0f} | {max(steps)} |")
+    print(f"\ncontinued / alone: {medians['mujoco (continued)'] / medians['mujoco (each pose alone)']:.2f}")
+
+
 if __name__ == "__main__":
-    main()
+    if "--linkage" in sys.argv:  # the linkage table alone
+        linkage_sweep_table({c.name: c for c in load_cases(*builtin_case_files())})
+    else:
+        main()

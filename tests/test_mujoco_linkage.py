@@ -17,10 +17,11 @@ from hypothesis import HealthCheck, assume, given, settings
 
 from mechcheck.analytic.case import Case, CaseError
 from mechcheck.analytic.linkage import Joint, Link, Linkage, PointLoad
-from mechcheck.analytic.linkage_backends import solve
+from mechcheck.analytic.linkage_backends import analytic_results, solution_from, solve
 from mechcheck.casefile import linkage_case
 from mechcheck.linkage_file import LinkageCaseSpec
 from mechcheck.sim_models.mujoco import settle, solve_at_pose
+from mechcheck.sim_models.mujoco.linkage import sweep_linkage
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, model_xml, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.testing import assert_solution_close
@@ -212,3 +213,17 @@ def test_rig_driver_targets_follow_the_case() -> None:
     rig.set_targets(np.array([d.value for d in case.linkage.drivers]))
     held = [float(rig.model.eq_data[rig.drive_eq[j], 0]) for j in ("O1", "O5")]
     assert np.degrees(held) == pytest.approx([-20.0, 15.0])
+
+
+@pytest.mark.parametrize("backend", ["mujoco", "mujoco_solve"])
+def test_a_sweep_agrees_with_the_analytic_sweep(backend: str) -> None:
+    """Seed E1 as a linkage swept over 12 crank angles with one model (settled statics
+    continuing from pose to pose): every pose within the policy's tolerance of the analytic
+    backend at that pose."""
+    case = linkage_cases()["e1-linkage"]
+    first = np.radians(np.linspace(-60.0, 60.0, 12))
+    results = analytic_results(case, first)
+    for i, sim in enumerate(sweep_linkage(case, first, backend, results)):
+        reference = solution_from(case, "analytic", results, method="analytic", elapsed=0.0,
+                                  index=i)
+        assert_solution_close(case, sim, reference, complete=True)
