@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 
 from mechcheck.analytic.case import Case, CaseError
 from mechcheck.analytic.linkage import Joint, Link, Linkage, PointLoad
@@ -196,7 +196,28 @@ def random_case(table: dict[str, Any]) -> Case:
     return case
 
 
+#: Found by the test below: a load 6e-8 m from a pivot, which MuJoCo's compiler put at
+#: the pivot ("same frame" sites) until the rig switched that off.
+NEAR_PIVOT = {
+    "name": "random-linkage", "mechanism": "linkage", "gravity": [0.0, 0.0],
+    "points": {"O2": [0.0, 0.0], "A": [0.25, 0.0], "O4": [1.0, 0.0],
+               "B": [0.625, -0.9270248108869579]},
+    "links": [{"name": "ground", "points": ["O2", "O4"]},
+              {"name": "crank", "points": ["O2", "A"]},
+              {"name": "coupler", "points": ["A", "B"]},
+              {"name": "rocker", "points": ["O4", "B"]}],
+    "joints": [{"name": n, "kind": "revolute", "links": links, "at": n}
+               for n, links in (("O2", ["ground", "crank"]), ("A", ["crank", "coupler"]),
+                                ("B", ["coupler", "rocker"]), ("O4", ["ground", "rocker"]))],
+    "drivers": [{"joint": "O2", "rotation": 0.0}],
+    "loads": [{"link": "crank", "at": [0.0, 5.960464477539063e-08],
+               "force": {"x": 1.0, "y": 0.0}, "torque": 0.0}],
+    "masses": [],
+}
+
+
 @RANDOM
+@example(NEAR_PIVOT)
 @given(linkage_tables(friction=False))
 def test_exact_solve_on_random_linkages(table: dict[str, Any]) -> None:
     """Random four-bars, slider-cranks and six-bars with loads, masses, gravity, springs and
