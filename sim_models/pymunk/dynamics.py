@@ -57,14 +57,15 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.pymunk.friction import (
-    apply_viscous_pin_moments,
-    sign,
-    slide_friction_force,
-    slide_speed,
-    update_pin_friction,
+    Diverged,
+    FrictionLoads,
+    State,
+    apply_friction,
+    friction_loads,
+    speeds,
 )
 from mechcheck.sim_models.pymunk.loads import apply_load_set
-from mechcheck.sim_models.pymunk.model import Model, build_model, slide_axes
+from mechcheck.sim_models.pymunk.model import Model, build_model
 from mechcheck.sim_models.pymunk.readout import (
     Values,
     crank_angle,
@@ -163,6 +164,13 @@ TRACKING_LIMIT = 1.0e-4
 STEP_AGREEMENT = 3.0e-4
 MAX_REFINEMENT = 4
 
+#: Passes per step of a run with friction: the step under the loads of its
+#: predicted state, then once more under the loads of the state that pass
+#: made (:mod:`~mechcheck.sim_models.pymunk.friction`). One correction leaves
+#: the loads' error at the friction's feedback gain times the prediction's
+#: O(dt²) error; the time-step check (STEP_AGREEMENT) measures what is left.
+FRICTION_PASSES = 2
+
 
 @dataclass
 class Drive:
@@ -229,8 +237,8 @@ def seed_state(model: Model, drive: Drive, t: float, angles: dict[int, float]) -
 def install_force_callbacks(model: Model, extras: dict[int, tuple[float, float, float]]) -> None:
     """Apply loads (at the integrated pose) and this step's friction forces inside pymunk.
 
-    ``extras[link] = (fx, fy, torque)`` holds friction forces computed before
-    the step from the previous step's state; the slider's force acts at B.
+    ``extras[link] = (fx, fy, torque)`` holds the friction forces of the step
+    (:func:`~mechcheck.sim_models.pymunk.friction.apply_friction`); the slider's force acts at B.
     """
     case = model.case
     for link, body in model.bodies.items():
@@ -249,25 +257,65 @@ def install_force_callbacks(model: Model, extras: dict[int, tuple[float, float, 
         body.velocity_func = velocity
 
 
-def friction_extras(model: Model) -> tuple[dict[int, tuple[float, float, float]], float]:
-    """Update the motor limits and compute this step's explicit friction forces.
+BodyState = tuple[pymunk.Body, float, tuple[float, float], tuple[float, float], float]
 
-    Returns the per-link extras and the slide force along u (part of F14).
+
+def snapshot(model: Model) -> list[BodyState]:
+    """Every moving body's and the clock's angle, position and velocities (to repeat a step)."""
+    return [(b, b.angle, tuple(b.position), tuple(b.velocity), b.angular_velocity)
+            for b in (*model.bodies.values(), model.driver)]
+
+
+def restore(saved: list[BodyState]) -> None:
+    """Put the bodies back where :func:`snapshot` found them (angle first: pymunk
+    rotates about the centre of gravity)."""
+    for body, angle, position, velocity, spin in saved:
+        body.angle = angle
+        body.position = position
+        body.velocity = velocity
+        body.angular_velocity = spin
+
+
+def combined_reactions(models: list[Model], slide: float) -> tuple[Values, float]:
+    """The reactions of one step, free of fictitious inertia (see :func:`drive`), and the
+    largest change that made (N or N·m).
+
+    ``models`` is the case as built and, when it has massless links, the same
+    with twice their fictitious inertia; every friction load is the same on
+    both, so F₀ = 2·F(1) − F(2) holds exactly as without friction.
     """
-    update_pin_friction(model)
-    extras: dict[int, tuple[float, float, float]] = {}
-    torques = {link: b.torque for link, b in model.bodies.items()}
-    apply_viscous_pin_moments(model)  # accumulates into body.torque; move it to extras
-    for link, b in model.bodies.items():
-        extras[link] = (0.0, 0.0, b.torque - torques[link])
-        b.torque = torques[link]
-    slide = 0.0
-    if model.groove is not None:
-        slide = slide_friction_force(model, sign(slide_speed(model)))
-        (ux, uy), _ = slide_axes(model.case)
-        _, _, tq = extras[4]
-        extras[4] = (slide * ux, slide * uy, tq)
-    return extras, slide
+    values = [reactions(m, slide) for m in models]
+    if len(values) == 1:
+        return values[0], 0.0
+    combined = {q: 2.0 * v - values[1][q] for q, v in values[0].items()}
+    return combined, max(abs(v - combined[q]) for q, v in values[0].items())
+
+
+def predicted(history: list[State]) -> State | None:
+    """The next step's state extrapolated linearly from the last two (error O(dt²))."""
+    if not history:
+        return None
+    if len(history) == 1:
+        return history[-1]
+    last, before = history[-1], history[-2]
+    return {q: 2.0 * v - before[q] for q, v in last.items()}
+
+
+def step_models(models: list[Model], extras: list[dict[int, tuple[float, float, float]]],
+                loads: FrictionLoads, rate: float) -> tuple[Values, float, State]:
+    """One step of every model under ``loads``; returns the reactions, the fictitious-inertia
+    correction (:func:`combined_reactions`) and the state they make."""
+    dt = models[0].settings.dt
+    for model, mine in zip(models, extras, strict=True):
+        if model.case.friction is not None:
+            apply_friction(model, loads, mine)
+        model.driver.angular_velocity = rate
+        model.space.step(dt)
+    values, correction = combined_reactions(models, loads.slide)
+    state = values | speeds(models[0])
+    if not all(math.isfinite(v) for v in state.values()):
+        raise Diverged("a reaction or speed became non-finite")
+    return values, correction, state
 
 
 @dataclass(frozen=True)
@@ -276,6 +324,7 @@ class Reading:
 
     theta12: float
     values: Values
+    correction: float = 0.0  # largest force (N) or torque (N·m) the fictitious-inertia twin removed
 
 
 @dataclass(frozen=True)
@@ -317,7 +366,8 @@ def singularity_ahead(case: Case, drive: Drive, t: np.ndarray, condition: np.nda
     point of the rocker drive is where dθ14/dθ12 changes sign there.
     """
     bad = ~np.isfinite(condition)
-    rising = np.nonzero(bad[n:] | (np.append(np.diff(condition[n:]), -1.0) < 0.0))[0]
+    finite = np.where(bad, np.finfo(float).max, condition)  # inf − inf would warn (a change point)
+    rising = np.nonzero(bad[n:] | (np.append(np.diff(finite[n:]), -1.0) < 0.0))[0]
     m = n + int(rising[0])
     where = f"θ12 ≈ {math.degrees(float(drive.theta12(t[m]))):.2f}°, {m} steps before θ12*"
     if case.drive_link == 4:
@@ -398,27 +448,47 @@ def force_change(new: Values, old: Values, length: float) -> float:
     return max(abs(new[q] - old[q]) / unit[q] for q in names) / scale
 
 
-def run_drive(model: Model, drive: Drive, lead: int, on_step: Callable[[], None] | None = None
-              ) -> list[Reading]:
-    """Step from ``lead`` steps before t* to one step past it; returns every step's reading."""
-    dt = model.settings.dt
+def run_drive(models: list[Model], drive: Drive, lead: int,
+              on_step: Callable[[], None] | None = None) -> list[Reading]:
+    """Step from ``lead`` steps before t* to one step past it; returns every step's reading.
+
+    ``models`` run in lockstep (the case and, with massless links, its twice
+    heavier twin, see :func:`combined_reactions`). With friction every step
+    is taken FRICTION_PASSES times from the same start: first with the loads
+    of the predicted state, then with those of the state the last pass made
+    (:mod:`~mechcheck.sim_models.pymunk.friction`). Raises :class:`Diverged`
+    when a number goes non-finite.
+    """
+    base = models[0]
+    dt = base.settings.dt
     t0 = drive.t_star - lead * dt
     steps = lead + 1
     angles = drive.link_angles(t0 + dt * np.arange(steps + 1), anchor=lead)
-    targets = angles[model.case.drive_link][1:]
-    seed_state(model, drive, t0, {link: float(a[0]) for link, a in angles.items()})
-    extras: dict[int, tuple[float, float, float]] = {}
-    install_force_callbacks(model, extras)
+    targets = angles[base.case.drive_link][1:]
+    extras: list[dict[int, tuple[float, float, float]]] = []
+    for model in models:
+        seed_state(model, drive, t0, {link: float(a[0]) for link, a in angles.items()})
+        extras.append({})
+        install_force_callbacks(model, extras[-1])
+    passes = FRICTION_PASSES if base.case.friction is not None else 1
+    history: list[State] = []
     readings: list[Reading] = []
     for step in range(1, steps + 1):
-        new_extras, slide = friction_extras(model)
-        extras.clear()
-        extras.update(new_extras)
-        model.driver.angular_velocity = (float(targets[step - 1]) - model.driver.angle) / dt
-        model.space.step(dt)
+        rate = (float(targets[step - 1]) - base.driver.angle) / dt
+        guess = predicted(history)
+        loads = friction_loads(base.case, guess) if guess is not None else FrictionLoads()
+        saved = [snapshot(m) for m in models] if passes > 1 else []
+        for attempt in range(passes):
+            if attempt:
+                for state in saved:
+                    restore(state)
+                loads = friction_loads(base.case, history.pop())
+            values, correction, state = step_models(models, extras, loads, rate)
+            history.append(state)
         if on_step is not None:
             on_step()
-        readings.append(Reading(crank_angle(model), pose_values(model) | reactions(model, slide)))
+        readings.append(Reading(crank_angle(base), pose_values(base) | values, correction))
+        del history[:-2]
     return readings
 
 
@@ -480,30 +550,44 @@ def lead_ladder(case: Case, settings: SolverSettings, first: Rung | None = None)
                       f"{window.reason}")
     length = case.geometry.scale
     attempts = steps = 0
+    diverged = ""
     while True:
         attempts += 1
-        model = build_model(case, settings.with_(iterations=rung.iterations), mass_mode="real",
-                            driver_kind="kinematic")
-        readings = run_drive(model, drive, rung.lead)
-        steps += len(readings)
+        models = build_models(case, settings.with_(iterations=rung.iterations))
+        try:
+            readings = run_drive(models, drive, rung.lead)
+            diverged = ""
+        except Diverged as error:
+            readings, diverged = [], str(error)
+        steps += len(readings) * len(models)
         rough = roughness(readings, length)
-        tracking = readings[rung.lead - 1].theta12 - case.theta12
+        tracking = readings[rung.lead - 1].theta12 - case.theta12 if readings else math.inf
         if rough <= SMOOTHNESS and abs(tracking) <= TRACKING_LIMIT:
             break
         climbed = next_rung(rung, window, settings)
         if climbed is None:
             break
         rung = climbed
+    model = models[0]
     diag |= {
         "steps": steps, "attempts": attempts, "lead_steps": rung.lead,
         "iterations": rung.iterations, "wall_time_s": time.perf_counter() - start,
-        "residual_velocity": residual_velocity(model), "joint_separation": joint_separation(model),
-        "pose_drift": pose_drift(model, crank_angle(model)), "roughness": rough,
-        "curvature": curvature(readings, length), "tracking_error": tracking,
+        "roughness": rough, "tracking_error": tracking,
     }
+    if readings:
+        diag |= {
+            "residual_velocity": residual_velocity(model),
+            "joint_separation": joint_separation(model),
+            "pose_drift": pose_drift(model, crank_angle(model)),
+            "curvature": curvature(readings, length),
+            "fictitious_inertia_correction": readings[rung.lead - 1].correction,
+        }
     if rough <= SMOOTHNESS and abs(tracking) <= TRACKING_LIMIT:
         return Driven(True, reading_at(readings, rung.lead, case.theta12), rung, diag)
-    if rough > SMOOTHNESS:
+    if diverged:
+        what = (f"the simulation diverged ({diverged}) even at {rung.iterations} solver "
+                "iterations per step")
+    elif rough > SMOOTHNESS:
         what = (f"step-to-step noise {rough:.3g} in the forces over the last {SMOOTH_READINGS} "
                 f"steps (4th difference, limit {SMOOTHNESS:g}): the start-up transient did not "
                 "die or the solver did not keep up")
@@ -571,31 +655,34 @@ def drive_once(case: Case, settings: SolverSettings, first: Rung | None = None
             {}, coarsest)
 
 
+def build_models(case: Case, settings: SolverSettings) -> list[Model]:
+    """The models a driven run steps in lockstep: the case with its real masses and, when
+    it is moving and some link is massless, the same with twice that link's fictitious inertia."""
+    models = [build_model(case, settings, mass_mode="real", driver_kind="kinematic")]
+    if not case.motion.is_static and has_fictitious_inertia(case):
+        heavier = settings.with_(driven_fictitious_mass=2.0 * settings.driven_fictitious_mass)
+        models.append(build_model(case, heavier, mass_mode="real", driver_kind="kinematic"))
+    return models
+
+
 def drive(case: Case, settings: SolverSettings = DRIVEN) -> Solution:
     """The ``pymunk`` backend for dynamic and friction cases: drive through θ12 and read there.
 
     Fictitious inertia of massless links: with the motion prescribed, every
     reaction is affine in the fictitious masses and inertias, F(k) = F₀ + k·G
-    when they are all scaled by k. A dynamic case with such links is
-    therefore run twice, at k = 1 and k = 2, and reported as F₀ = 2·F(1) − F(2):
-    the massless answer, from pymunk's numbers alone (the second run starts
-    from the lead-in and iterations the first one needed). In a quasi-static
+    when they are all scaled by k, as long as every other load is the same.
+    A dynamic case with such links is therefore run at k = 1 and k = 2 in
+    lockstep (:func:`build_models`), every step's friction loads taken from
+    the combination F₀ = 2·F(1) − F(2) and applied to both, and F₀ is what
+    is read and judged: the massless answer, from pymunk's numbers alone.
+    Friction taken from each run's own reactions is not affine in k (μ·|F(k)|),
+    and the fictitious inertia forces are no small part of them (1 kg links at
+    16.6 rad/s: ~1000 N against ~130 N of load on a random slider-crank), so
+    extrapolating two independent runs was 39 % off there. In a quasi-static
     friction run the fictitious inertia force, m·ω²·L ≈ 1e-5 N, is left as is.
     """
     singular = singular_solution(case, BACKEND)
     if singular is not None:
         return singular
-    first, values, rung = drive_once(case, settings)
-    if first.status != "ok" or case.motion.is_static or not has_fictitious_inertia(case):
-        return first
-    heavier = settings.with_(driven_fictitious_mass=2.0 * settings.driven_fictitious_mass)
-    second, values2, _ = drive_once(case, heavier, first=rung)
-    if second.status != "ok":
-        return second
-    extrapolated = {q: 2.0 * values[q] - values2[q] for q in values}
-    diag = dict(first.diagnostics)
-    diag["wall_time_s"] = float(diag["wall_time_s"]) + float(second.diagnostics["wall_time_s"])
-    diag["steps"] = int(diag["steps"]) + int(second.diagnostics["steps"])
-    diag["fictitious_inertia_correction"] = max(
-        abs(values[q] - extrapolated[q]) for q in values if q[0] in "FTM")
-    return Solution(case.name, BACKEND, extrapolated, diagnostics=diag)
+    solution, _, _ = drive_once(case, settings)
+    return solution
