@@ -65,7 +65,7 @@ from mechcheck.sim_models.pymunk.friction import (
     speeds,
 )
 from mechcheck.sim_models.pymunk.loads import apply_load_set
-from mechcheck.sim_models.pymunk.model import Model, build_model
+from mechcheck.sim_models.pymunk.model import Model, build_model, has_fictitious_inertia
 from mechcheck.sim_models.pymunk.readout import (
     Values,
     crank_angle,
@@ -492,12 +492,6 @@ def run_drive(models: list[Model], drive: Drive, lead: int,
     return readings
 
 
-def has_fictitious_inertia(case: Case) -> bool:
-    """True when some link is massless or has zero inertia (it gets a fictitious one)."""
-    return any(case.mass_of(k) is None or case.mass_of(k).inertia == 0.0  # type: ignore[union-attr]
-               for k in (2, 3, 4))
-
-
 @dataclass(frozen=True)
 class Rung:
     """One attempt's lead-in (steps before t*) and solver iterations per step."""
@@ -657,10 +651,12 @@ def drive_once(case: Case, settings: SolverSettings, first: Rung | None = None
 
 def build_models(case: Case, settings: SolverSettings) -> list[Model]:
     """The models a driven run steps in lockstep: the case with its real masses and, when
-    it is moving and some link is massless, the same with twice that link's fictitious inertia."""
+    it is moving and some link has fictitious mass or inertia (a massless link, or a
+    near-point mass: :func:`~mechcheck.sim_models.pymunk.model.added_inertia`),
+    the same with twice all of it."""
     models = [build_model(case, settings, mass_mode="real", driver_kind="kinematic")]
-    if not case.motion.is_static and has_fictitious_inertia(case):
-        heavier = settings.with_(driven_fictitious_mass=2.0 * settings.driven_fictitious_mass)
+    if not case.motion.is_static and has_fictitious_inertia(case, settings):
+        heavier = settings.with_(fictitious_scale=2.0 * settings.fictitious_scale)
         models.append(build_model(case, heavier, mass_mode="real", driver_kind="kinematic"))
     return models
 
