@@ -1,9 +1,10 @@
 """Joint friction emulated from pymunk's reactions and velocities, consistent within a step.
 
-- Coulomb at a pin (i, j): the SimpleMotor(rate = 0) between i and j gets
-  ``max_force = μ·r·|F_ij|``. While the joint turns, the motor saturates and
-  applies exactly that moment against the relative rotation (its sense is
-  found by the solver itself): the friction-circle moment.
+- Coulomb at a pin (i, j): the friction-circle moment −μ·r·|F_ij|·sign(ω_j − ω_i)
+  on j and the opposite on i. (It was a SimpleMotor(rate = 0) whose
+  ``max_force`` was set to μ·r·|F_ij|: the motor's sense came from the
+  solver's clamp, which did not saturate where the joint turns slowly, and a
+  non-finite limit made Chipmunk abort the whole process on a C assertion.)
 - Coulomb on the slide: a force −μ_s·|N|·sign(ṡ) along u at pin B, N the
   guide's normal reaction.
 - Viscous: −c·(ω_j − ω_i) on j (and the opposite on i), −c·ṡ·u on the slider.
@@ -44,10 +45,8 @@ class Diverged(RuntimeError):
 
 @dataclass(frozen=True)
 class FrictionLoads:
-    """One step's friction: motor torque limits per Coulomb pin (N·m), viscous
-    moments per link (N·m) and the force along u on the slider at B (N)."""
+    """One step's friction: moments per link (N·m) and the force along u on the slider at B (N)."""
 
-    limits: dict[str, float] = field(default_factory=dict)
     torques: dict[int, float] = field(default_factory=dict)
     slide: float = 0.0
 
@@ -73,41 +72,29 @@ def friction_loads(case: Case, state: State) -> FrictionLoads:
     f = case.friction
     if f is None:
         return FrictionLoads()
-    limits: dict[str, float] = {}
     torques = {2: 0.0, 3: 0.0, 4: 0.0}
     for joint, (i, _, j, _) in pin_anchors(case).items():
         name = PIN_REACTIONS[joint]
-        arm = f.pin_moment_arm(joint)
-        if arm > 0.0:
-            limits[joint] = arm * math.hypot(state[f"{name}_x"], state[f"{name}_y"])
-        c = f.viscous.get(joint, 0.0)
-        if c:
-            moment = -c * relative_speed(state, i, j)
-            torques[j] += moment
-            if i != 1:
-                torques[i] -= moment
+        turning = relative_speed(state, i, j)
+        moment = (-f.pin_moment_arm(joint) * math.hypot(state[f"{name}_x"], state[f"{name}_y"])
+                  * sign(turning) - f.viscous.get(joint, 0.0) * turning)
+        torques[j] += moment
+        if i != 1:
+            torques[i] -= moment
     slide = 0.0
     if case.mechanism == "slider_crank":
         _, (nx, ny) = slide_axes(case)
         normal = state["F14_x"] * nx + state["F14_y"] * ny
         sdot = state["sdot"]
         slide = -f.slide_coefficient() * abs(normal) * sign(sdot) - f.viscous.get("slide", 0.0) * sdot
-    return FrictionLoads(limits, torques, slide)
+    return FrictionLoads(torques, slide)
 
 
 def apply_friction(model: Model, loads: FrictionLoads,
                    extras: dict[int, tuple[float, float, float]]) -> None:
-    """Set the motors' limits and the explicit forces the velocity callbacks apply.
-
-    Chipmunk aborts the whole process on a negative or NaN ``max_force``
-    (a C assertion), so a limit that is not a finite non-negative number
-    stops the run as :class:`Diverged` instead.
-    """
-    for joint, motor in model.motors.items():
-        limit = loads.limits.get(joint, 0.0)
-        if not 0.0 <= limit < math.inf:
-            raise Diverged(f"the friction moment limit at pin {joint} became {limit!r}")
-        motor.max_force = limit
+    """Set the explicit forces the velocity callbacks apply (a non-finite one stops the run)."""
+    if not all(math.isfinite(v) for v in (loads.slide, *loads.torques.values())):
+        raise Diverged("a friction load became non-finite")
     (ux, uy), _ = slide_axes(model.case)
     extras.clear()
     for link in model.bodies:

@@ -23,7 +23,7 @@ No collision shapes are added, so nothing collides.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -44,8 +44,8 @@ class Model:
 
     ``pins`` maps joint names to pivots, ``groove``/``slider_lock`` exist for a
     slider-crank only, ``drive`` is the lock on the drive link, ``driver`` the
-    body it is locked to, ``motors`` the friction motors per pin (empty when
-    frictionless), ``reach`` a characteristic radius per link for speeds.
+    body it is locked to, ``reach`` a characteristic radius per link for speeds.
+    Friction is applied as explicit loads (:mod:`~mechcheck.sim_models.pymunk.friction`).
     """
 
     case: Case
@@ -58,12 +58,11 @@ class Model:
     reach: dict[int, float]
     groove: pymunk.GrooveJoint | None = None
     slider_lock: pymunk.GearJoint | None = None
-    motors: dict[str, pymunk.SimpleMotor] = field(default_factory=dict)
     mass_mode: MassMode = "fictitious"
 
     def constraints(self) -> list[pymunk.Constraint]:
-        """Every constraint, motors included."""
-        out: list[pymunk.Constraint] = [*self.pins.values(), self.drive, *self.motors.values()]
+        """Every constraint."""
+        out: list[pymunk.Constraint] = [*self.pins.values(), self.drive]
         if self.groove is not None and self.slider_lock is not None:
             out += [self.groove, self.slider_lock]
         return out
@@ -216,27 +215,6 @@ def make_slide(case: Case, static: pymunk.Body,
     return groove, lock
 
 
-def make_friction_motors(case: Case, static: pymunk.Body,
-                         bodies: dict[int, pymunk.Body]) -> dict[str, pymunk.SimpleMotor]:
-    """A SimpleMotor(rate = 0) at every pin with Coulomb friction, body a = link i.
-
-    Its ``max_force`` is set every step to μ·r·|F_ij| (see
-    :mod:`mechcheck.sim_models.pymunk.friction`); it starts at 0 so it does nothing
-    before the first reaction is known.
-    """
-    f = case.friction
-    if f is None:
-        return {}
-    motors = {}
-    for name, (i, _, j, _) in pin_anchors(case).items():
-        if f.pin_moment_arm(name) > 0.0:
-            a = static if i == 1 else bodies[i]
-            motor = pymunk.SimpleMotor(a, bodies[j], 0.0)
-            motor.max_force = 0.0
-            motors[name] = motor
-    return motors
-
-
 def make_space(settings: SolverSettings) -> pymunk.Space:
     """An empty space: no gravity (weights are explicit forces), constant settings."""
     space = pymunk.Space()
@@ -258,12 +236,11 @@ def build_model(case: Case, settings: SolverSettings, *, mass_mode: MassMode = "
     static = space.static_body
     bodies = make_bodies(case, settings, mass_mode)
     pins = make_pins(case, static, bodies)
-    motors = make_friction_motors(case, static, bodies)
     driver = static if driver_kind == "static" else pymunk.Body(body_type=pymunk.Body.KINEMATIC)
     drive = pymunk.GearJoint(driver, bodies[case.drive_link], 0.0, 1.0)
     model = Model(case, settings, space, bodies, pins, drive, driver,
                   reach={k: max(v, 1e-12) for k, v in link_lengths(case).items()},
-                  motors=motors, mass_mode=mass_mode)
+                  mass_mode=mass_mode)
     if _has_slider(case):
         model.groove, model.slider_lock = make_slide(case, static, bodies[4])
     space.add(*bodies.values())
