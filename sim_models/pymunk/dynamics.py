@@ -54,6 +54,7 @@ import numpy as np
 import pymunk
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.equilibrium import relative_omega
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.pymunk.friction import (
@@ -394,22 +395,25 @@ def interpolate(a: Reading, b: Reading, c: Reading, theta: float) -> Values:
             + 0.5 * w * w * (c.values[q] - 2.0 * b.values[q] + a.values[q]) for q in c.values}
 
 
-def reading_at(readings: list[Reading], lead: int, theta: float) -> Values:
-    """The reading at θ12*: where the crank passes it within a step of t*, else at t* itself.
+def reading_at(readings: list[Reading], lead: int, theta: float) -> tuple[Values, int]:
+    """The reading at θ12* and how many of ``readings`` it draws on.
 
+    It is where the crank passes θ12* within a step of t*, else at t* itself.
     ``readings[i]`` is step i + 1, step ``lead`` ends at t*. The crank follows
     its clock to ~1e-6 rad; interpolating to where it actually passes θ12*
     removes that. When it does not pass θ12* within a step of t* (it is
     momentarily at rest there, ω(t*) = 0, or moves less per step than its
-    tracking error), the reading at t* is taken as it is.
+    tracking error), the reading at t* is taken as it is. The step past t*
+    is drawn on (and judged, :func:`lead_ladder`) only when the crank passes
+    θ12* during it.
     """
     for k in (lead, lead - 1):  # a crossing between steps k and k + 1
         if k < 2 or k >= len(readings):
             continue
         a, b, c = readings[k - 2], readings[k - 1], readings[k]
         if b.theta12 != c.theta12 and (b.theta12 - theta) * (c.theta12 - theta) <= 0.0:
-            return interpolate(a, b, c, theta)
-    return dict(readings[lead - 1].values)
+            return interpolate(a, b, c, theta), k + 1
+    return dict(readings[lead - 1].values), lead
 
 
 def _force_table(readings: list[Reading], length: float) -> np.ndarray:
@@ -554,7 +558,8 @@ def lead_ladder(case: Case, settings: SolverSettings, first: Rung | None = None)
         except Diverged as error:
             readings, diverged = [], str(error)
         steps += len(readings) * len(models)
-        rough = roughness(readings, length)
+        used = reading_at(readings, rung.lead, case.theta12) if readings else None
+        rough = roughness(readings[:used[1]], length) if used else math.inf
         tracking = readings[rung.lead - 1].theta12 - case.theta12 if readings else math.inf
         if rough <= SMOOTHNESS and abs(tracking) <= TRACKING_LIMIT:
             break
@@ -577,7 +582,8 @@ def lead_ladder(case: Case, settings: SolverSettings, first: Rung | None = None)
             "fictitious_inertia_correction": readings[rung.lead - 1].correction,
         }
     if rough <= SMOOTHNESS and abs(tracking) <= TRACKING_LIMIT:
-        return Driven(True, reading_at(readings, rung.lead, case.theta12), rung, diag)
+        assert used is not None
+        return Driven(True, used[0], rung, diag)
     if diverged:
         what = (f"the simulation diverged ({diverged}) even at {rung.iterations} solver "
                 "iterations per step")
@@ -661,6 +667,49 @@ def build_models(case: Case, settings: SolverSettings) -> list[Model]:
     return models
 
 
+def coulomb_speeds(case: Case, drive: Drive, t: np.ndarray) -> dict[str, np.ndarray]:
+    """Relative speed of every Coulomb term along the prescribed motion at the times ``t``
+    (closed-form kinematics: ω_j − ω_i at a pin, ṡ on the slide)."""
+    f = case.friction
+    if f is None:
+        return {}
+    pose = pose_of(case, np.atleast_1d(drive.theta12(t)), omega=1.0, alpha=0.0)
+    crank = drive.omega + drive.alpha * (t - drive.t_star)
+    out = {joint: relative_omega(pose, joint) * crank
+           for joint in ("A0", "A", "B", "B0") if f.pin_moment_arm(joint) > 0.0}
+    if pose.s14_dot is not None and f.slide_coefficient() > 0.0:
+        out["slide"] = pose.s14_dot * crank
+    return out
+
+
+def coulomb_reversal(case: Case, settings: SolverSettings) -> str:
+    """Why no driven reading can be judged: a Coulomb term's relative motion reverses (or
+    stops) where the reading is judged; empty when none does.
+
+    A reading is accepted only when it is smooth over the NOISE_SPAN steps up
+    to it at two successive time steps, the finer at most ``settings.dt / 2``
+    (:func:`drive_once`). A Coulomb force reversing inside that stretch jumps
+    by twice its size there: no smooth reading exists, however fine the step.
+    Kinematics only (the prescribed motion); no force enters.
+    """
+    omega, alpha = drive_motion(case)
+    drive = Drive(case, omega, alpha)
+    dt = settings.dt / 2.0
+    t = drive.t_star + dt * np.arange(-NOISE_SPAN, 1)
+    for joint, speed in coulomb_speeds(case, drive, t).items():
+        scale = float(np.abs(speed).max())
+        sense = np.where(np.abs(speed) <= 1e-12 * scale, 0.0, np.sign(speed))
+        if scale == 0.0 or np.any(sense != sense[-1]) or sense[-1] == 0.0:
+            what = ("is at rest at the reading" if sense[-1] == 0.0 else
+                    f"reverses within {NOISE_SPAN * dt:.3g} s before the reading")
+            return (f"the relative motion of the Coulomb friction at {joint} {what} (prescribed "
+                    f"motion ω = {omega:g} rad/s, α = {alpha:g} rad/s²): its friction force "
+                    f"jumps by twice its size there, inside the {NOISE_SPAN} steps of "
+                    f"{dt:g} s over which a driven reading must be smooth, so no reading can "
+                    "be told from noise")
+    return ""
+
+
 def drive(case: Case, settings: SolverSettings = DRIVEN) -> Solution:
     """The ``pymunk`` backend for dynamic and friction cases: drive through θ12 and read there.
 
@@ -680,5 +729,9 @@ def drive(case: Case, settings: SolverSettings = DRIVEN) -> Solution:
     singular = singular_solution(case, BACKEND)
     if singular is not None:
         return singular
+    reversal = coulomb_reversal(case, settings)
+    if reversal:
+        return Solution(case.name, BACKEND, {}, status="indeterminate", message=reversal,
+                        diagnostics={"method": "driven"})
     solution, _, _ = drive_once(case, settings)
     return solution
