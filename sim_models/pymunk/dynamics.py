@@ -690,18 +690,23 @@ def coulomb_reversal(case: Case, settings: SolverSettings) -> str:
     to it at two successive time steps, the finer at most ``settings.dt / 2``
     (:func:`drive_once`). A Coulomb force reversing inside that stretch jumps
     by twice its size there: no smooth reading exists, however fine the step.
+    The step after t* counts too: where the crank is nearly at rest at t*
+    its tracking error (~1e-7 rad) can put the crossing of θ12* into that
+    step, and the reading then draws on it (measured: ω = −6e-8 rad/s,
+    α = 168 rad/s², a reversal 4e-10 s after t*, was ``not_settled``).
     Kinematics only (the prescribed motion); no force enters.
     """
     omega, alpha = drive_motion(case)
     drive = Drive(case, omega, alpha)
     dt = settings.dt / 2.0
-    t = drive.t_star + dt * np.arange(-NOISE_SPAN, 1)
+    t = drive.t_star + dt * np.arange(-NOISE_SPAN, 2)
     for joint, speed in coulomb_speeds(case, drive, t).items():
         scale = float(np.abs(speed).max())
         sense = np.where(np.abs(speed) <= 1e-12 * scale, 0.0, np.sign(speed))
-        if scale == 0.0 or np.any(sense != sense[-1]) or sense[-1] == 0.0:
-            what = ("is at rest at the reading" if sense[-1] == 0.0 else
-                    f"reverses within {NOISE_SPAN * dt:.3g} s before the reading")
+        if scale == 0.0 or np.any(sense != sense[-2]) or sense[-2] == 0.0:
+            what = ("is at rest at the reading" if sense[-2] == 0.0 else
+                    f"reverses within {NOISE_SPAN * dt:.3g} s before the reading or one step "
+                    "after it")
             return (f"the relative motion of the Coulomb friction at {joint} {what} (prescribed "
                     f"motion ω = {omega:g} rad/s, α = {alpha:g} rad/s²): its friction force "
                     f"jumps by twice its size there, inside the {NOISE_SPAN} steps of "
