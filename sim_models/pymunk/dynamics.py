@@ -54,9 +54,9 @@ import numpy as np
 import pymunk
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.equilibrium import relative_omega
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
+from mechcheck.sim_models.coulomb import coulomb_reversal as sense_change
 from mechcheck.sim_models.pymunk.friction import (
     Diverged,
     FrictionLoads,
@@ -667,21 +667,6 @@ def build_models(case: Case, settings: SolverSettings) -> list[Model]:
     return models
 
 
-def coulomb_speeds(case: Case, drive: Drive, t: np.ndarray) -> dict[str, np.ndarray]:
-    """Relative speed of every Coulomb term along the prescribed motion at the times ``t``
-    (closed-form kinematics: ω_j − ω_i at a pin, ṡ on the slide)."""
-    f = case.friction
-    if f is None:
-        return {}
-    pose = pose_of(case, np.atleast_1d(drive.theta12(t)), omega=1.0, alpha=0.0)
-    crank = drive.omega + drive.alpha * (t - drive.t_star)
-    out = {joint: relative_omega(pose, joint) * crank
-           for joint in ("A0", "A", "B", "B0") if f.pin_moment_arm(joint) > 0.0}
-    if pose.s14_dot is not None and f.slide_coefficient() > 0.0:
-        out["slide"] = pose.s14_dot * crank
-    return out
-
-
 def coulomb_reversal(case: Case, settings: SolverSettings) -> str:
     """Why no driven reading can be judged: a Coulomb term's relative motion reverses (or
     stops) where the reading is judged; empty when none does.
@@ -697,22 +682,17 @@ def coulomb_reversal(case: Case, settings: SolverSettings) -> str:
     Kinematics only (the prescribed motion); no force enters.
     """
     omega, alpha = drive_motion(case)
-    drive = Drive(case, omega, alpha)
     dt = settings.dt / 2.0
-    t = drive.t_star + dt * np.arange(-NOISE_SPAN, 2)
-    for joint, speed in coulomb_speeds(case, drive, t).items():
-        scale = float(np.abs(speed).max())
-        sense = np.where(np.abs(speed) <= 1e-12 * scale, 0.0, np.sign(speed))
-        if scale == 0.0 or np.any(sense != sense[-2]) or sense[-2] == 0.0:
-            what = ("is at rest at the reading" if sense[-2] == 0.0 else
-                    f"reverses within {NOISE_SPAN * dt:.3g} s before the reading or one step "
-                    "after it")
-            return (f"the relative motion of the Coulomb friction at {joint} {what} (prescribed "
-                    f"motion ω = {omega:g} rad/s, α = {alpha:g} rad/s²): its friction force "
-                    f"jumps by twice its size there, inside the {NOISE_SPAN} steps of "
-                    f"{dt:g} s over which a driven reading must be smooth, so no reading can "
-                    "be told from noise")
-    return ""
+    joint, what = sense_change(case, omega, alpha, dt * np.arange(-NOISE_SPAN, 2), NOISE_SPAN)
+    if not joint:
+        return ""
+    if what.startswith("reverses"):
+        what = f"reverses within {NOISE_SPAN * dt:.3g} s before the reading or one step after it"
+    return (f"the relative motion of the Coulomb friction at {joint} {what} (prescribed "
+            f"motion ω = {omega:g} rad/s, α = {alpha:g} rad/s²): its friction force "
+            f"jumps by twice its size there, inside the {NOISE_SPAN} steps of "
+            f"{dt:g} s over which a driven reading must be smooth, so no reading can "
+            "be told from noise")
 
 
 def drive(case: Case, settings: SolverSettings = DRIVEN) -> Solution:
@@ -734,9 +714,9 @@ def drive(case: Case, settings: SolverSettings = DRIVEN) -> Solution:
     singular = singular_solution(case, BACKEND)
     if singular is not None:
         return singular
-    reversal = coulomb_reversal(case, settings)
-    if reversal:
-        return Solution(case.name, BACKEND, {}, status="indeterminate", message=reversal,
+    why = coulomb_reversal(case, settings)
+    if why:
+        return Solution(case.name, BACKEND, {}, status="indeterminate", message=why,
                         diagnostics={"method": "driven"})
     solution, _, _ = drive_once(case, settings)
     return solution
