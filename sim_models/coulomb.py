@@ -23,6 +23,12 @@ from mechcheck.analytic.kinematics import pose_of
 #: judged count as zero (closed forms give ±1e-17 where a speed vanishes).
 ZERO_SPEED = 1e-12
 
+#: rad/s: a crank slower than this is at rest for a simulator. In 1 s it
+#: turns 1e-9 rad, below what a driven run tracks its clock to (~1e-7 rad
+#: per reading); measured: MuJoCo read T12 7.8e-3 off at ω = −3e-232 rad/s,
+#: α = 0, where only the sign of ω sets the Coulomb senses.
+REST_OMEGA = 1e-9
+
 
 def coulomb_speeds(case: Case, omega: float, alpha: float, tau: np.ndarray) -> dict[str, np.ndarray]:
     """Relative speed of every Coulomb term at the times ``tau`` from the reading along the
@@ -44,9 +50,10 @@ def coulomb_reversal(case: Case, omega: float, alpha: float, tau: np.ndarray,
                      at: int) -> tuple[str, str]:
     """(joint, what) of the first Coulomb term whose relative motion stops at ``tau[at]``
     (the reading) or changes sense anywhere over ``tau``; ("", "") when none does."""
+    resting = np.abs(omega + alpha * tau) <= REST_OMEGA
     for joint, speed in coulomb_speeds(case, omega, alpha, tau).items():
         scale = float(np.abs(speed).max())
-        sense = np.where(np.abs(speed) <= ZERO_SPEED * scale, 0.0, np.sign(speed))
+        sense = np.where((np.abs(speed) <= ZERO_SPEED * scale) | resting, 0.0, np.sign(speed))
         if scale == 0.0 or sense[at] == 0.0:
             return joint, "is at rest at the reading"
         if np.any(sense != sense[at]):
