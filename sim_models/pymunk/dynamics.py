@@ -263,8 +263,8 @@ BodyState = tuple[pymunk.Body, float, tuple[float, float], tuple[float, float], 
 
 def snapshot(model: Model) -> list[BodyState]:
     """Every moving body's and the clock's angle, position and velocities (to repeat a step)."""
-    return [(b, b.angle, tuple(b.position), tuple(b.velocity), b.angular_velocity)
-            for b in (*model.bodies.values(), model.driver)]
+    return [(b, b.angle, (b.position.x, b.position.y), (b.velocity.x, b.velocity.y),
+             b.angular_velocity) for b in (*model.bodies.values(), model.driver)]
 
 
 def restore(saved: list[BodyState]) -> None:
@@ -491,8 +491,8 @@ def run_drive(models: list[Model], drive: Drive, lead: int,
         saved = [snapshot(m) for m in models] if passes > 1 else []
         for attempt in range(passes):
             if attempt:
-                for state in saved:
-                    restore(state)
+                for bodies in saved:
+                    restore(bodies)
                 loads = friction_loads(base.case, history.pop())
             values, raw, state = step_models(models, extras, loads, rate)
             history.append(state)
