@@ -15,6 +15,7 @@ from __future__ import annotations
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.forces import pose_verdicts, withheld_solution
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.coulomb import at_rest_reason
 from mechcheck.sim_models.mujoco import solve as exact
 from mechcheck.sim_models.mujoco.dynamics import driven
 from mechcheck.sim_models.mujoco.linkage import settle_linkage, solve_linkage_at_pose
@@ -30,7 +31,11 @@ def settle(case: Case) -> Solution:
 
     A pose whose forces do not exist or are not unique (a change point beyond
     the analytic backend's singular line, a friction reversal) is not
-    simulated: a soft model would settle to whatever its bending allows.
+    simulated: a soft model would settle to whatever its bending allows. Nor
+    is a moving case whose Coulomb friction is at rest at the reading
+    (ω = 0, α ≠ 0: :func:`~mechcheck.sim_models.coulomb.at_rest_reason`);
+    measured: the run read the sense of its lead-in, 1.1e-2 off where the
+    case's direction is the other one.
     """
     if case.mechanism == "linkage":
         return noting_warnings(lambda: settle_linkage(case))
@@ -39,6 +44,11 @@ def settle(case: Case) -> Solution:
         return withheld_solution(case, "mujoco", verdict)
     if case.kind == "static":
         return noting_warnings(lambda: settle_static(case))
+    at_rest = "" if case.motion.is_static else at_rest_reason(case, case.motion.omega,
+                                                              case.motion.alpha)
+    if at_rest:
+        return Solution(case.name, "mujoco", {}, status="indeterminate", message=at_rest,
+                        diagnostics={"method": "driven"})
     return noting_warnings(lambda: driven(case))
 
 

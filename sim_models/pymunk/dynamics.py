@@ -56,15 +56,17 @@ import pymunk
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
+from mechcheck.sim_models.coulomb import coulomb_reversal as sense_change
 from mechcheck.sim_models.pymunk.friction import (
-    apply_viscous_pin_moments,
-    sign,
-    slide_friction_force,
-    slide_speed,
-    update_pin_friction,
+    Diverged,
+    FrictionLoads,
+    State,
+    apply_friction,
+    friction_loads,
+    speeds,
 )
 from mechcheck.sim_models.pymunk.loads import apply_load_set
-from mechcheck.sim_models.pymunk.model import Model, build_model, slide_axes
+from mechcheck.sim_models.pymunk.model import Model, build_model, has_fictitious_inertia
 from mechcheck.sim_models.pymunk.readout import (
     Values,
     crank_angle,
@@ -163,6 +165,13 @@ TRACKING_LIMIT = 1.0e-4
 STEP_AGREEMENT = 3.0e-4
 MAX_REFINEMENT = 4
 
+#: Passes per step of a run with friction: the step under the loads of its
+#: predicted state, then once more under the loads of the state that pass
+#: made (:mod:`~mechcheck.sim_models.pymunk.friction`). One correction leaves
+#: the loads' error at the friction's feedback gain times the prediction's
+#: O(dt²) error; the time-step check (STEP_AGREEMENT) measures what is left.
+FRICTION_PASSES = 2
+
 
 @dataclass
 class Drive:
@@ -229,8 +238,8 @@ def seed_state(model: Model, drive: Drive, t: float, angles: dict[int, float]) -
 def install_force_callbacks(model: Model, extras: dict[int, tuple[float, float, float]]) -> None:
     """Apply loads (at the integrated pose) and this step's friction forces inside pymunk.
 
-    ``extras[link] = (fx, fy, torque)`` holds friction forces computed before
-    the step from the previous step's state; the slider's force acts at B.
+    ``extras[link] = (fx, fy, torque)`` holds the friction forces of the step
+    (:func:`~mechcheck.sim_models.pymunk.friction.apply_friction`); the slider's force acts at B.
     """
     case = model.case
     for link, body in model.bodies.items():
@@ -249,25 +258,64 @@ def install_force_callbacks(model: Model, extras: dict[int, tuple[float, float, 
         body.velocity_func = velocity
 
 
-def friction_extras(model: Model) -> tuple[dict[int, tuple[float, float, float]], float]:
-    """Update the motor limits and compute this step's explicit friction forces.
+BodyState = tuple[pymunk.Body, float, tuple[float, float], tuple[float, float], float]
 
-    Returns the per-link extras and the slide force along u (part of F14).
+
+def snapshot(model: Model) -> list[BodyState]:
+    """Every moving body's and the clock's angle, position and velocities (to repeat a step)."""
+    return [(b, b.angle, (b.position.x, b.position.y), (b.velocity.x, b.velocity.y),
+             b.angular_velocity) for b in (*model.bodies.values(), model.driver)]
+
+
+def restore(saved: list[BodyState]) -> None:
+    """Put the bodies back where :func:`snapshot` found them (angle first: pymunk
+    rotates about the centre of gravity)."""
+    for body, angle, position, velocity, spin in saved:
+        body.angle = angle
+        body.position = position
+        body.velocity = velocity
+        body.angular_velocity = spin
+
+
+def combined_reactions(models: list[Model], slide: float) -> tuple[Values, Values]:
+    """The reactions of one step, free of fictitious inertia (see :func:`drive`), and the
+    base model's own.
+
+    ``models`` is the case as built and, when it has massless links, the same
+    with twice their fictitious inertia; every friction load is the same on
+    both, so F₀ = 2·F(1) − F(2) holds exactly as without friction.
     """
-    update_pin_friction(model)
-    extras: dict[int, tuple[float, float, float]] = {}
-    torques = {link: b.torque for link, b in model.bodies.items()}
-    apply_viscous_pin_moments(model)  # accumulates into body.torque; move it to extras
-    for link, b in model.bodies.items():
-        extras[link] = (0.0, 0.0, b.torque - torques[link])
-        b.torque = torques[link]
-    slide = 0.0
-    if model.groove is not None:
-        slide = slide_friction_force(model, sign(slide_speed(model)))
-        (ux, uy), _ = slide_axes(model.case)
-        _, _, tq = extras[4]
-        extras[4] = (slide * ux, slide * uy, tq)
-    return extras, slide
+    values = [reactions(m, slide) for m in models]
+    if len(values) == 1:
+        return values[0], values[0]
+    return {q: 2.0 * v - values[1][q] for q, v in values[0].items()}, values[0]
+
+
+def predicted(history: list[State]) -> State | None:
+    """The next step's state extrapolated linearly from the last two (error O(dt²))."""
+    if not history:
+        return None
+    if len(history) == 1:
+        return history[-1]
+    last, before = history[-1], history[-2]
+    return {q: 2.0 * v - before[q] for q, v in last.items()}
+
+
+def step_models(models: list[Model], extras: list[dict[int, tuple[float, float, float]]],
+                loads: FrictionLoads, rate: float) -> tuple[Values, Values, State]:
+    """One step of every model under ``loads``; returns the reactions, the base model's own
+    (:func:`combined_reactions`) and the state they make."""
+    dt = models[0].settings.dt
+    for model, mine in zip(models, extras, strict=True):
+        if model.case.friction is not None:
+            apply_friction(model, loads, mine)
+        model.driver.angular_velocity = rate
+        model.space.step(dt)
+    values, raw = combined_reactions(models, loads.slide)
+    state = values | speeds(models[0])
+    if not all(math.isfinite(v) for v in (*state.values(), *raw.values())):
+        raise Diverged("a reaction or speed became non-finite")
+    return values, raw, state
 
 
 @dataclass(frozen=True)
@@ -276,6 +324,8 @@ class Reading:
 
     theta12: float
     values: Values
+    correction: float = 0.0  # largest force (N) or torque (N·m) the fictitious-inertia twin removed
+    raw: Values | None = None  # the base model's own reactions when a twin ran beside it
 
 
 @dataclass(frozen=True)
@@ -317,7 +367,8 @@ def singularity_ahead(case: Case, drive: Drive, t: np.ndarray, condition: np.nda
     point of the rocker drive is where dθ14/dθ12 changes sign there.
     """
     bad = ~np.isfinite(condition)
-    rising = np.nonzero(bad[n:] | (np.append(np.diff(condition[n:]), -1.0) < 0.0))[0]
+    finite = np.where(bad, np.finfo(float).max, condition)  # inf − inf would warn (a change point)
+    rising = np.nonzero(bad[n:] | (np.append(np.diff(finite[n:]), -1.0) < 0.0))[0]
     m = n + int(rising[0])
     where = f"θ12 ≈ {math.degrees(float(drive.theta12(t[m]))):.2f}°, {m} steps before θ12*"
     if case.drive_link == 4:
@@ -344,33 +395,35 @@ def interpolate(a: Reading, b: Reading, c: Reading, theta: float) -> Values:
             + 0.5 * w * w * (c.values[q] - 2.0 * b.values[q] + a.values[q]) for q in c.values}
 
 
-def reading_at(readings: list[Reading], lead: int, theta: float) -> Values:
-    """The reading at θ12*: where the crank passes it within a step of t*, else at t* itself.
+def reading_at(readings: list[Reading], lead: int, theta: float) -> tuple[Values, int]:
+    """The reading at θ12* and how many of ``readings`` it draws on.
 
+    It is where the crank passes θ12* within a step of t*, else at t* itself.
     ``readings[i]`` is step i + 1, step ``lead`` ends at t*. The crank follows
     its clock to ~1e-6 rad; interpolating to where it actually passes θ12*
     removes that. When it does not pass θ12* within a step of t* (it is
     momentarily at rest there, ω(t*) = 0, or moves less per step than its
-    tracking error), the reading at t* is taken as it is.
+    tracking error), the reading at t* is taken as it is. The step past t*
+    is drawn on (and judged, :func:`lead_ladder`) only when the crank passes
+    θ12* during it.
     """
     for k in (lead, lead - 1):  # a crossing between steps k and k + 1
         if k < 2 or k >= len(readings):
             continue
         a, b, c = readings[k - 2], readings[k - 1], readings[k]
         if b.theta12 != c.theta12 and (b.theta12 - theta) * (c.theta12 - theta) <= 0.0:
-            return interpolate(a, b, c, theta)
-    return dict(readings[lead - 1].values)
+            return interpolate(a, b, c, theta), k + 1
+    return dict(readings[lead - 1].values), lead
 
 
-def _force_table(readings: list[Reading], length: float) -> np.ndarray:
+def _force_table(rows: list[Values], length: float) -> np.ndarray:
     """Forces and torques / length of the readings, one row per reading (N)."""
-    names = [q for q in readings[-1].values if q[0] in "FTM"]
-    return np.array([[r.values[q] / (length if q[0] in "TM" else 1.0) for q in names]
-                     for r in readings])
+    names = [q for q in rows[-1] if q[0] in "FTM"]
+    return np.array([[r[q] / (length if q[0] in "TM" else 1.0) for q in names] for r in rows])
 
 
-def _relative_difference(readings: list[Reading], order: int, length: float) -> float:
-    table = _force_table(readings, length)
+def _relative_difference(rows: list[Values], order: int, length: float) -> float:
+    table = _force_table(rows, length)
     scale = max(float(np.abs(table[-1]).max()), FORCE_FLOOR_N)  # an unloaded case is smooth too
     return float(np.abs(np.diff(table, n=order, axis=0)).max()) / scale
 
@@ -378,16 +431,24 @@ def _relative_difference(readings: list[Reading], order: int, length: float) -> 
 def roughness(readings: list[Reading], length: float) -> float:
     """Largest 4th difference of the forces over the last SMOOTH_READINGS steps, relative to their scale.
 
+    Judged on the reported forces and on the base model's own: a solver that
+    does not keep up shows in both, but where the fictitious inertia carries
+    all the force (an unloaded massless case, whose reported forces are 0) only
+    in the latter (measured: such a slider-crank next to its limit position,
+    read at 100 iterations, was 2.2e-3 rad off in θ13 with 0 roughness).
     ``inf`` when there are fewer than NOISE_SPAN readings (nothing to judge).
     """
     if len(readings) < NOISE_SPAN:
         return math.inf
-    return _relative_difference(readings[-NOISE_SPAN:], 4, length)
+    last = readings[-NOISE_SPAN:]
+    return max(_relative_difference([r.values for r in last], 4, length),
+               _relative_difference([r.raw or r.values for r in last], 4, length))
 
 
 def curvature(readings: list[Reading], length: float) -> float:
     """Last 2nd difference of the forces relative to their scale (diagnostic: how fast they vary)."""
-    return _relative_difference(readings[-3:], 2, length) if len(readings) >= 3 else math.inf
+    return (_relative_difference([r.values for r in readings[-3:]], 2, length)
+            if len(readings) >= 3 else math.inf)
 
 
 def force_change(new: Values, old: Values, length: float) -> float:
@@ -398,34 +459,51 @@ def force_change(new: Values, old: Values, length: float) -> float:
     return max(abs(new[q] - old[q]) / unit[q] for q in names) / scale
 
 
-def run_drive(model: Model, drive: Drive, lead: int, on_step: Callable[[], None] | None = None
-              ) -> list[Reading]:
-    """Step from ``lead`` steps before t* to one step past it; returns every step's reading."""
-    dt = model.settings.dt
+def run_drive(models: list[Model], drive: Drive, lead: int,
+              on_step: Callable[[], None] | None = None) -> list[Reading]:
+    """Step from ``lead`` steps before t* to one step past it; returns every step's reading.
+
+    ``models`` run in lockstep (the case and, with massless links, its twice
+    heavier twin, see :func:`combined_reactions`). With friction every step
+    is taken FRICTION_PASSES times from the same start: first with the loads
+    of the predicted state, then with those of the state the last pass made
+    (:mod:`~mechcheck.sim_models.pymunk.friction`). Raises :class:`Diverged`
+    when a number goes non-finite.
+    """
+    base = models[0]
+    dt = base.settings.dt
     t0 = drive.t_star - lead * dt
     steps = lead + 1
     angles = drive.link_angles(t0 + dt * np.arange(steps + 1), anchor=lead)
-    targets = angles[model.case.drive_link][1:]
-    seed_state(model, drive, t0, {link: float(a[0]) for link, a in angles.items()})
-    extras: dict[int, tuple[float, float, float]] = {}
-    install_force_callbacks(model, extras)
+    targets = angles[base.case.drive_link][1:]
+    extras: list[dict[int, tuple[float, float, float]]] = []
+    for model in models:
+        seed_state(model, drive, t0, {link: float(a[0]) for link, a in angles.items()})
+        extras.append({})
+        install_force_callbacks(model, extras[-1])
+    passes = FRICTION_PASSES if base.case.friction is not None else 1
+    history: list[State] = []
     readings: list[Reading] = []
     for step in range(1, steps + 1):
-        new_extras, slide = friction_extras(model)
-        extras.clear()
-        extras.update(new_extras)
-        model.driver.angular_velocity = (float(targets[step - 1]) - model.driver.angle) / dt
-        model.space.step(dt)
+        rate = (float(targets[step - 1]) - base.driver.angle) / dt
+        guess = predicted(history)
+        loads = friction_loads(base.case, guess) if guess is not None else FrictionLoads()
+        saved = [snapshot(m) for m in models] if passes > 1 else []
+        for attempt in range(passes):
+            if attempt:
+                for bodies in saved:
+                    restore(bodies)
+                loads = friction_loads(base.case, history.pop())
+            values, raw, state = step_models(models, extras, loads, rate)
+            history.append(state)
         if on_step is not None:
             on_step()
-        readings.append(Reading(crank_angle(model), pose_values(model) | reactions(model, slide)))
+        twin = len(models) > 1
+        correction = max(abs(v - values[q]) for q, v in raw.items()) if twin else 0.0
+        readings.append(Reading(crank_angle(base), pose_values(base) | values, correction,
+                                raw if twin else None))
+        del history[:-2]
     return readings
-
-
-def has_fictitious_inertia(case: Case) -> bool:
-    """True when some link is massless or has zero inertia (it gets a fictitious one)."""
-    return any(case.mass_of(k) is None or case.mass_of(k).inertia == 0.0  # type: ignore[union-attr]
-               for k in (2, 3, 4))
 
 
 @dataclass(frozen=True)
@@ -480,30 +558,46 @@ def lead_ladder(case: Case, settings: SolverSettings, first: Rung | None = None)
                       f"{window.reason}")
     length = case.geometry.scale
     attempts = steps = 0
+    diverged = ""
     while True:
         attempts += 1
-        model = build_model(case, settings.with_(iterations=rung.iterations), mass_mode="real",
-                            driver_kind="kinematic")
-        readings = run_drive(model, drive, rung.lead)
-        steps += len(readings)
-        rough = roughness(readings, length)
-        tracking = readings[rung.lead - 1].theta12 - case.theta12
+        models = build_models(case, settings.with_(iterations=rung.iterations))
+        try:
+            readings = run_drive(models, drive, rung.lead)
+            diverged = ""
+        except Diverged as error:
+            readings, diverged = [], str(error)
+        steps += len(readings) * len(models)
+        used = reading_at(readings, rung.lead, case.theta12) if readings else None
+        rough = roughness(readings[:used[1]], length) if used else math.inf
+        tracking = readings[rung.lead - 1].theta12 - case.theta12 if readings else math.inf
         if rough <= SMOOTHNESS and abs(tracking) <= TRACKING_LIMIT:
             break
         climbed = next_rung(rung, window, settings)
         if climbed is None:
             break
         rung = climbed
+    model = models[0]
     diag |= {
         "steps": steps, "attempts": attempts, "lead_steps": rung.lead,
         "iterations": rung.iterations, "wall_time_s": time.perf_counter() - start,
-        "residual_velocity": residual_velocity(model), "joint_separation": joint_separation(model),
-        "pose_drift": pose_drift(model, crank_angle(model)), "roughness": rough,
-        "curvature": curvature(readings, length), "tracking_error": tracking,
+        "roughness": rough, "tracking_error": tracking,
     }
+    if readings:
+        diag |= {
+            "residual_velocity": residual_velocity(model),
+            "joint_separation": joint_separation(model),
+            "pose_drift": pose_drift(model, crank_angle(model)),
+            "curvature": curvature(readings, length),
+            "fictitious_inertia_correction": readings[rung.lead - 1].correction,
+        }
     if rough <= SMOOTHNESS and abs(tracking) <= TRACKING_LIMIT:
-        return Driven(True, reading_at(readings, rung.lead, case.theta12), rung, diag)
-    if rough > SMOOTHNESS:
+        assert used is not None
+        return Driven(True, used[0], rung, diag)
+    if diverged:
+        what = (f"the simulation diverged ({diverged}) even at {rung.iterations} solver "
+                "iterations per step")
+    elif rough > SMOOTHNESS:
         what = (f"step-to-step noise {rough:.3g} in the forces over the last {SMOOTH_READINGS} "
                 f"steps (4th difference, limit {SMOOTHNESS:g}): the start-up transient did not "
                 "die or the solver did not keep up")
@@ -571,31 +665,68 @@ def drive_once(case: Case, settings: SolverSettings, first: Rung | None = None
             {}, coarsest)
 
 
+def build_models(case: Case, settings: SolverSettings) -> list[Model]:
+    """The models a driven run steps in lockstep: the case with its real masses and, when
+    it is moving and some link has fictitious mass or inertia (a massless link, or a
+    near-point mass: :func:`~mechcheck.sim_models.pymunk.model.added_inertia`),
+    the same with twice all of it."""
+    models = [build_model(case, settings, mass_mode="real", driver_kind="kinematic")]
+    if not case.motion.is_static and has_fictitious_inertia(case, settings):
+        heavier = settings.with_(fictitious_scale=2.0 * settings.fictitious_scale)
+        models.append(build_model(case, heavier, mass_mode="real", driver_kind="kinematic"))
+    return models
+
+
+def coulomb_reversal(case: Case, settings: SolverSettings) -> str:
+    """Why no driven reading can be judged: a Coulomb term's relative motion reverses (or
+    stops) where the reading is judged; empty when none does.
+
+    A reading is accepted only when it is smooth over the NOISE_SPAN steps up
+    to it at two successive time steps, the finer at most ``settings.dt / 2``
+    (:func:`drive_once`). A Coulomb force reversing inside that stretch jumps
+    by twice its size there: no smooth reading exists, however fine the step.
+    The step after t* counts too: where the crank is nearly at rest at t*
+    its tracking error (~1e-7 rad) can put the crossing of θ12* into that
+    step, and the reading then draws on it (measured: ω = −6e-8 rad/s,
+    α = 168 rad/s², a reversal 4e-10 s after t*, was ``not_settled``).
+    Kinematics only (the prescribed motion); no force enters.
+    """
+    omega, alpha = drive_motion(case)
+    dt = settings.dt / 2.0
+    joint, what = sense_change(case, omega, alpha, dt * np.arange(-NOISE_SPAN, 2), NOISE_SPAN)
+    if not joint:
+        return ""
+    if what.startswith("reverses"):
+        what = f"reverses within {NOISE_SPAN * dt:.3g} s before the reading or one step after it"
+    return (f"the relative motion of the Coulomb friction at {joint} {what} (prescribed "
+            f"motion ω = {omega:g} rad/s, α = {alpha:g} rad/s²): its friction force "
+            f"jumps by twice its size there, inside the {NOISE_SPAN} steps of "
+            f"{dt:g} s over which a driven reading must be smooth, so no reading can "
+            "be told from noise")
+
+
 def drive(case: Case, settings: SolverSettings = DRIVEN) -> Solution:
     """The ``pymunk`` backend for dynamic and friction cases: drive through θ12 and read there.
 
     Fictitious inertia of massless links: with the motion prescribed, every
     reaction is affine in the fictitious masses and inertias, F(k) = F₀ + k·G
-    when they are all scaled by k. A dynamic case with such links is
-    therefore run twice, at k = 1 and k = 2, and reported as F₀ = 2·F(1) − F(2):
-    the massless answer, from pymunk's numbers alone (the second run starts
-    from the lead-in and iterations the first one needed). In a quasi-static
+    when they are all scaled by k, as long as every other load is the same.
+    A dynamic case with such links is therefore run at k = 1 and k = 2 in
+    lockstep (:func:`build_models`), every step's friction loads taken from
+    the combination F₀ = 2·F(1) − F(2) and applied to both, and F₀ is what
+    is read and judged: the massless answer, from pymunk's numbers alone.
+    Friction taken from each run's own reactions is not affine in k (μ·|F(k)|),
+    and the fictitious inertia forces are no small part of them (1 kg links at
+    16.6 rad/s: ~1000 N against ~130 N of load on a random slider-crank), so
+    extrapolating two independent runs was 39 % off there. In a quasi-static
     friction run the fictitious inertia force, m·ω²·L ≈ 1e-5 N, is left as is.
     """
     singular = singular_solution(case, BACKEND)
     if singular is not None:
         return singular
-    first, values, rung = drive_once(case, settings)
-    if first.status != "ok" or case.motion.is_static or not has_fictitious_inertia(case):
-        return first
-    heavier = settings.with_(driven_fictitious_mass=2.0 * settings.driven_fictitious_mass)
-    second, values2, _ = drive_once(case, heavier, first=rung)
-    if second.status != "ok":
-        return second
-    extrapolated = {q: 2.0 * values[q] - values2[q] for q in values}
-    diag = dict(first.diagnostics)
-    diag["wall_time_s"] = float(diag["wall_time_s"]) + float(second.diagnostics["wall_time_s"])
-    diag["steps"] = int(diag["steps"]) + int(second.diagnostics["steps"])
-    diag["fictitious_inertia_correction"] = max(
-        abs(values[q] - extrapolated[q]) for q in values if q[0] in "FTM")
-    return Solution(case.name, BACKEND, extrapolated, diagnostics=diag)
+    why = coulomb_reversal(case, settings)
+    if why:
+        return Solution(case.name, BACKEND, {}, status="indeterminate", message=why,
+                        diagnostics={"method": "driven"})
+    solution, _, _ = drive_once(case, settings)
+    return solution

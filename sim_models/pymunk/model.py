@@ -23,7 +23,7 @@ No collision shapes are added, so nothing collides.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -44,8 +44,8 @@ class Model:
 
     ``pins`` maps joint names to pivots, ``groove``/``slider_lock`` exist for a
     slider-crank only, ``drive`` is the lock on the drive link, ``driver`` the
-    body it is locked to, ``motors`` the friction motors per pin (empty when
-    frictionless), ``reach`` a characteristic radius per link for speeds.
+    body it is locked to, ``reach`` a characteristic radius per link for speeds.
+    Friction is applied as explicit loads (:mod:`~mechcheck.sim_models.pymunk.friction`).
     """
 
     case: Case
@@ -58,12 +58,11 @@ class Model:
     reach: dict[int, float]
     groove: pymunk.GrooveJoint | None = None
     slider_lock: pymunk.GearJoint | None = None
-    motors: dict[str, pymunk.SimpleMotor] = field(default_factory=dict)
     mass_mode: MassMode = "fictitious"
 
     def constraints(self) -> list[pymunk.Constraint]:
-        """Every constraint, motors included."""
-        out: list[pymunk.Constraint] = [*self.pins.values(), self.drive, *self.motors.values()]
+        """Every constraint."""
+        out: list[pymunk.Constraint] = [*self.pins.values(), self.drive]
         if self.groove is not None and self.slider_lock is not None:
             out += [self.groove, self.slider_lock]
         return out
@@ -99,16 +98,66 @@ def pin_anchors(case: Case) -> dict[str, tuple[int, Vec, int, Vec]]:
     return anchors
 
 
+#: Gauss–Seidel keeps up with a link only while its moment of inertia about
+#: the centre of gravity is not tiny against m·d², d the centre's largest
+#: distance from the link's pins: then the pin's rows and the rotation are
+#: nearly parallel in the mass metric and the iteration stalls. Measured on a
+#: random crank (3.55 kg, centre 0.24 m from A0): m·d²/I = 20 settles at 100
+#: iterations, 200 needs 800, 660 and above diverge even at 1600; a slider
+#: with I = 2e-313 made every run non-finite. Below I = m·d²/POINT_RATIO a
+#: link gets fictitious inertia that brings the ratio to INERTIA_RATIO, removed
+#: with the massless links' (see :func:`body_inertia`).
+POINT_RATIO = 100.0
+INERTIA_RATIO = 10.0
+
+
+def link_pins(case: Case, link: int) -> list[Vec]:
+    """The pins of a link in its own frame (the slider's only pin is B at its origin)."""
+    length = link_lengths(case)[link]
+    if link == 4 and _has_slider(case):
+        return [(0.0, 0.0)]
+    return [(0.0, 0.0), (length, 0.0)]
+
+
+def added_inertia(case: Case, link: int, settings: SolverSettings) -> float:
+    """Fictitious moment of inertia a massive link gets in a driven run (0 when it needs none).
+
+    A link whose inertia about its centre of gravity is below m·d²/POINT_RATIO
+    (or is not a usable number for pymunk, e.g. a subnormal 2e-313: 1/I
+    overflows) gets ``fictitious_scale`` × (the fictitious bar's L²/12 times
+    ``driven_fictitious_mass`` + m·d²/INERTIA_RATIO).
+    """
+    real = case.mass_of(link)
+    assert real is not None
+    length = link_lengths(case)[link]
+    d2 = max((px - real.com[0]) ** 2 + (py - real.com[1]) ** 2 for px, py in link_pins(case, link))
+    floor = real.mass * max(d2, 1e-8 * length**2) / POINT_RATIO
+    if real.inertia > floor:
+        return 0.0
+    bar = settings.driven_fictitious_mass * length**2 / 12.0
+    return settings.fictitious_scale * (bar + real.mass * d2 / INERTIA_RATIO)
+
+
+def has_fictitious_inertia(case: Case, settings: SolverSettings) -> bool:
+    """True when a driven run gives some link fictitious mass or inertia (:func:`body_inertia`)."""
+    return any(case.mass_of(k) is None or added_inertia(case, k, settings) > 0.0
+               for k in (2, 3, 4))
+
+
 def body_inertia(case: Case, link: int, settings: SolverSettings,
                  mode: MassMode) -> tuple[float, float, Vec]:
     """(mass, moment about the centre of gravity, centre of gravity in the link frame).
 
     ``fictitious``: every link gets ``settings.fictitious_mass`` as a uniform
     bar between its pins (statics: inertia is irrelevant at rest).
-    ``real``: the Case's mass and inertia; a massless link (or a point
-    mass with zero inertia) gets ``settings.driven_fictitious_mass`` (see
-    :class:`~mechcheck.sim_models.pymunk.settings.SolverSettings`), whose inertia
-    forces are the price of pymunk refusing massless bodies.
+    ``real``: the Case's mass and inertia; a massless link gets
+    ``settings.driven_fictitious_mass`` × ``settings.fictitious_scale`` as a
+    uniform bar, and a link with (nearly) no inertia about its centre of
+    gravity the :func:`added_inertia` (see
+    :class:`~mechcheck.sim_models.pymunk.settings.SolverSettings`): the price
+    of pymunk refusing massless bodies and of its solver stalling on point
+    masses off the pins. A driven run removes their inertia forces by
+    extrapolation (:func:`mechcheck.sim_models.pymunk.dynamics.drive`).
     """
     length = link_lengths(case)[link]
     bar_centre = (0.5 * length, 0.0) if not (link == 4 and _has_slider(case)) else (0.0, 0.0)
@@ -116,11 +165,10 @@ def body_inertia(case: Case, link: int, settings: SolverSettings,
         m = settings.fictitious_mass
         return m, m * length**2 / 12.0, bar_centre
     real = case.mass_of(link)
-    light = settings.driven_fictitious_mass
+    light = settings.driven_fictitious_mass * settings.fictitious_scale
     if real is None:
         return light, light * length**2 / 12.0, bar_centre
-    inertia = real.inertia if real.inertia > 0.0 else light * length**2 / 12.0
-    return real.mass, inertia, real.com
+    return real.mass, real.inertia + added_inertia(case, link, settings), real.com
 
 
 def _has_slider(case: Case) -> bool:
@@ -167,27 +215,6 @@ def make_slide(case: Case, static: pymunk.Body,
     return groove, lock
 
 
-def make_friction_motors(case: Case, static: pymunk.Body,
-                         bodies: dict[int, pymunk.Body]) -> dict[str, pymunk.SimpleMotor]:
-    """A SimpleMotor(rate = 0) at every pin with Coulomb friction, body a = link i.
-
-    Its ``max_force`` is set every step to μ·r·|F_ij| (see
-    :mod:`mechcheck.sim_models.pymunk.friction`); it starts at 0 so it does nothing
-    before the first reaction is known.
-    """
-    f = case.friction
-    if f is None:
-        return {}
-    motors = {}
-    for name, (i, _, j, _) in pin_anchors(case).items():
-        if f.pin_moment_arm(name) > 0.0:
-            a = static if i == 1 else bodies[i]
-            motor = pymunk.SimpleMotor(a, bodies[j], 0.0)
-            motor.max_force = 0.0
-            motors[name] = motor
-    return motors
-
-
 def make_space(settings: SolverSettings) -> pymunk.Space:
     """An empty space: no gravity (weights are explicit forces), constant settings."""
     space = pymunk.Space()
@@ -209,12 +236,11 @@ def build_model(case: Case, settings: SolverSettings, *, mass_mode: MassMode = "
     static = space.static_body
     bodies = make_bodies(case, settings, mass_mode)
     pins = make_pins(case, static, bodies)
-    motors = make_friction_motors(case, static, bodies)
     driver = static if driver_kind == "static" else pymunk.Body(body_type=pymunk.Body.KINEMATIC)
     drive = pymunk.GearJoint(driver, bodies[case.drive_link], 0.0, 1.0)
     model = Model(case, settings, space, bodies, pins, drive, driver,
                   reach={k: max(v, 1e-12) for k, v in link_lengths(case).items()},
-                  motors=motors, mass_mode=mass_mode)
+                  mass_mode=mass_mode)
     if _has_slider(case):
         model.groove, model.slider_lock = make_slide(case, static, bodies[4])
     space.add(*bodies.values())

@@ -52,6 +52,10 @@ class SolverSettings:
         its inertia force m·a does enter the reactions, so it is chosen small
         against the loads; the error it causes is measured, not hidden (see
         :mod:`mechcheck.sim_models.pymunk.dynamics`).
+    fictitious_scale : factor on all fictitious inertia of a driven run (the
+        massless links' and what near-point links get, see
+        :func:`mechcheck.sim_models.pymunk.model.body_inertia`); the twin run
+        that removes it by extrapolation has 2.
     settle_speed : 1/s, settled when every body's largest point speed
         (|v| + |ω|·L), divided by the mechanism's length scale L, is below
         this. Relative, so that a case in metres and one of centimetre links
@@ -74,6 +78,7 @@ class SolverSettings:
     damping: float = 0.01
     fictitious_mass: float = 1000.0
     driven_fictitious_mass: float = 1.0e-4
+    fictitious_scale: float = 1.0
     settle_speed: float = 1.0e-9
     settle_force_change: float = 1.0e-10
     settle_patience: int = 3

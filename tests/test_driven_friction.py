@@ -1,0 +1,184 @@
+"""Driven cases with friction, both simulators, against the analytic backend (issue 10, item 9).
+
+Expected values come from ``mechcheck.analytic.forces`` (Newton on the
+friction-circle equations), tolerances from the one policy (simulators,
+``friction`` kind: 1e-3 of the quantity's scale). A simulator may withhold
+forces as ``indeterminate`` only where a Coulomb term's relative motion
+reverses or stops where its reading is judged; the test confirms that from
+finite differences of the closed-form *positions* along the prescribed
+motion (not from the velocity formulas the backends use).
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings, strategies as st
+
+import mechcheck
+from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.sim_models.pymunk.dynamics import DRIVEN, NOISE_SPAN
+from mechcheck.testing import assert_solution_close
+
+from .strategies import cases
+
+SIMULATORS = ("mujoco", "pymunk")
+
+
+def angles_along(case: Case, tau: np.ndarray) -> dict[str, np.ndarray]:
+    """Closed-form link angles (and s14) at times τ from the reading, prescribed crank motion."""
+    omega, alpha = case.motion.omega, case.motion.alpha
+    pose = pose_of(case, case.theta12 + omega * tau + 0.5 * alpha * tau * tau)
+    out = {f"w{k}": np.unwrap(pose.links[k].angle) for k in (2, 3, 4)}
+    if case.mechanism == "slider_crank":
+        assert pose.s14 is not None
+        out["s"] = pose.s14
+    return out
+
+
+def coulomb_reverses_near_reading(case: Case, span: float) -> bool:
+    """True when some Coulomb term's relative motion is zero at the reading or changes sense
+    within ``span`` s before it or one pymunk step after it (central differences of positions)."""
+    f = case.friction
+    assert f is not None
+    h = DRIVEN.dt / 2.0
+    tau = np.concatenate([np.linspace(-span, h, 200), [0.0]])
+    step = 1e-7
+    ahead, behind = angles_along(case, tau + step), angles_along(case, tau - step)
+    rate = {k: (ahead[k] - behind[k]) / (2.0 * step) for k in ahead}
+    rate["w1"] = np.zeros_like(tau)
+    links = {"A0": (1, 2), "A": (2, 3), "B": (3, 4), "B0": (1, 4)}
+    speeds = [rate[f"w{j}"] - rate[f"w{i}"] for joint, (i, j) in links.items()
+              if f.pin_moment_arm(joint) > 0.0]
+    if case.mechanism == "slider_crank" and f.slide_coefficient() > 0.0:
+        speeds.append(rate["s"])
+    for v in speeds:
+        scale = np.abs(v).max()
+        # Differences of positions carry ~1e-9 rad/s of rounding: below that a speed is zero.
+        if abs(v[-1]) <= max(1e-6 * scale, 1e-8) or np.any(np.sign(v) != np.sign(v[-1])):
+            return True
+    crank = case.motion.omega + case.motion.alpha * tau  # a crank turning < 1e-9 rad in 1 s rests
+    return bool(speeds) and bool(np.any(np.abs(crank) <= 1e-9))
+
+
+def check(case: Case, backend: str) -> None:
+    """The backend agrees with the analytic one, or withholds forces for a confirmed reason."""
+    solution = mechcheck.solve(case, backend)
+    if solution.status == "indeterminate":
+        span = NOISE_SPAN * DRIVEN.dt / 2.0 if backend == "pymunk" else 0.0
+        assert coulomb_reverses_near_reading(case, span), solution.message
+        return
+    assert_solution_close(case, solution, complete=True)
+
+
+def issue_slider_crank() -> Case:
+    """The issue's worst case, reconstructed: a slider-crank at ω = −29.6 rad/s, μ = 0.174
+    on every pin and the slide, massless crank and slider (pymunk was 4.6e-3 off in T12)."""
+    return Case(name="issue-slider-crank", geometry=SliderCrankGeometry(0.25, 0.7, offset=0.05),
+                theta12=math.radians(50.0), ground_angle=0.0, branch="right",
+                loads=(Load(4, force=(-150.0, 0.0)), Load(3, at=(0.3, 0.0), force=(0.0, -40.0))),
+                masses=(Mass(3, 1.2, (0.3, 0.0), 0.05),), motion=Motion(-29.6, 0.0),
+                friction=Friction(mu=0.174, pin_radius={"A0": 0.02, "A": 0.02, "B": 0.015}))
+
+
+def fast_four_bar() -> Case:
+    """A massless four-bar at 25 rad/s with pin friction and viscous terms."""
+    return Case(name="fast-four-bar", geometry=FourBarGeometry(0.6, 0.2, 0.5, 0.4),
+                theta12=math.radians(70.0), branch="open",
+                loads=(Load(4, at=(0.3, 0.0), force=(0.0, -120.0)),), motion=Motion(25.0, 80.0),
+                friction=Friction(mu=0.3, pin_radius={"A0": 0.03, "A": 0.02, "B": 0.02, "B0": 0.03},
+                                  viscous={"A": 0.3, "B0": 0.2}))
+
+
+def aborting_case() -> Case:
+    """A random draw that made Chipmunk abort the whole process ("maxForce must be positive", a
+    C assertion): a massive coupler with 5.7e-158 kg·m² about its centre made the run non-finite."""
+    return Case(name="chipmunk-abort",
+                geometry=FourBarGeometry(0.5845414461863723, 0.16967686173787216,
+                                         0.6106521509858792, 0.06807329314948889),
+                theta12=3.1836811790967262e-273, branch="crossed",
+                ground_angle=-1.4071934496391532, gravity=(-2.4494520103788346, 10.0),
+                loads=(Load(4, at=(-0.07606059295083722, 1.3624607384233663e-10),
+                            force=(2.9223379177141433e-223, -0.5), torque=-16.251046329670782),
+                       Load(2, at=(0.2228626792943721, -0.3493562381363504),
+                            force=(-40.34369802742188, 110.71894313151398),
+                            torque=12.001055068393214)),
+                masses=(Mass(2, 3.757437510256293, (0.041802291035983985, 0.16071739273315144),
+                             0.01038988560582558),
+                        Mass(3, 4.259420441694431, (-1e-05, 1.6773518718561844e-32),
+                             5.679646219992299e-158),
+                        Mass(4, 2.00001, (0.1632627904516749, 0.47095192799608077),
+                             0.027807703272166293)),
+                motion=Motion(-7.004456182201409, -29.978523539906433),
+                friction=Friction(mu=0.2268464367843947,
+                                  pin_radius={"A": 0.01761622720583045, "B": 0.005578058457959886},
+                                  direction=-1))
+
+
+#: Solves the pickled case of stdin with one backend and prints its status: a C assertion
+#: in the simulator kills this child, not the test run.
+CHILD = """
+import pickle, sys, warnings
+warnings.simplefilter("ignore")
+import mechcheck
+print(mechcheck.solve(pickle.loads(sys.stdin.buffer.read()), sys.argv[1]).status)
+"""
+
+
+DETERMINISTIC = {"issue-slider-crank": issue_slider_crank, "fast-four-bar": fast_four_bar}
+
+
+@pytest.mark.parametrize("backend", SIMULATORS)
+@pytest.mark.parametrize("make", DETERMINISTIC.values(), ids=DETERMINISTIC.keys())
+def test_fast_driven_friction_cases_agree(make: object, backend: str) -> None:
+    """Fast driven cases with Coulomb and viscous friction meet the friction target in both simulators."""
+    check(make(), backend)  # type: ignore[operator]
+
+
+@pytest.mark.parametrize("backend", SIMULATORS)
+def test_case_that_aborted_chipmunk_runs(backend: str) -> None:
+    """A near-point coupler no longer kills the process (a C assertion) nor diverges."""
+    child = subprocess.run([sys.executable, "-c", CHILD, backend], capture_output=True,
+                           input=pickle.dumps(aborting_case()), timeout=600, check=False)
+    assert child.returncode == 0, child.stderr.decode()[-500:]
+    assert child.stdout.decode().split() == ["ok"]
+    check(aborting_case(), backend)
+
+
+def test_crank_at_rest_is_indeterminate_in_both() -> None:
+    """ω = 0 with α ≠ 0: the Coulomb senses are the case's convention, not the motion's."""
+    case = issue_slider_crank().with_(name="at-rest", motion=Motion(0.0, 150.0),
+                                      friction=Friction(mu=0.174, pin_radius={"A0": 0.02},
+                                                        direction=1))
+    assert coulomb_reverses_near_reading(case, 0.0)
+    for backend in SIMULATORS:
+        solution = mechcheck.solve(case, backend)
+        assert solution.status == "indeterminate", (backend, solution.status, solution.message)
+        assert "at rest" in solution.message and not solution.values
+
+
+@pytest.mark.slow
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(case=cases(friction=True, dynamic=True), backend=st.sampled_from(SIMULATORS))
+def test_random_driven_friction_cases_agree(case: Case, backend: str) -> None:
+    """Random driven four-bars and slider-cranks with Coulomb and viscous friction, both simulators.
+
+    Left out, each a separate open finding (issue 10 report), there before
+    this test: a draw whose every coefficient is 0 (a frictionless case: one,
+    unloaded and at rest at the reading next to a slider-crank's limit
+    position, is ``not_settled`` in MuJoCo), ω = α = 0 (a static friction
+    case: one was ``not_settled`` in MuJoCo's quasi-static run), and a
+    ``not_settled`` verdict that the same case without friction also gets
+    (pymunk: point masses on a slider-crank at θ12 = 0, ω = 2 rad/s, whose
+    readings converge only at first order in dt)."""
+    assume(case.has_friction and not case.motion.is_static)
+    if mechcheck.solve(case, backend).status == "not_settled":
+        # Not this item's: the frictionless case fails the same way (reported separately).
+        assume(mechcheck.solve(case.with_(friction=None), backend).status != "not_settled")
+    check(case, backend)
