@@ -260,7 +260,7 @@ def path(plan: AssurPlan, values: Array) -> Path:
     h = plan.step
     first = math.floor(min(float(values.min(initial=0.0)), 0.0) / h)
     last = math.ceil(max(float(values.max(initial=0.0)), 0.0) / h)
-    nodes = np.arange(first, last + 1) * h
+    nodes = np.arange(first, last + 1, dtype=np.float64) * h
     placed = place(plan, nodes)
     zero = -first
     lo, hi = -math.inf, math.inf
@@ -302,7 +302,7 @@ def _unwrap_from(raw: Array, zero: int) -> Array:
 def _lock(plan: AssurPlan, good: float, bad: float) -> float:
     """The last driver value that closes, between ``good`` and ``bad``."""
     for _ in range(LOCK_ROUNDS):
-        samples = np.linspace(good, bad, LOCK_SAMPLES)
+        samples = np.linspace(good, bad, LOCK_SAMPLES, dtype=np.float64)
         closed = place(plan, samples).closed
         first_bad = int(np.argmin(closed[1:])) + 1 if not closed[1:].all() else LOCK_SAMPLES - 1
         good, bad = float(samples[first_bad - 1]), float(samples[first_bad])
