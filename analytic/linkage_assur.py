@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -87,6 +88,25 @@ class AssurPlan:
 
     linkage: Linkage
     groups: tuple[Group, ...]
+
+    @cached_property
+    def carriers(self) -> dict[str, str]:
+        """The link each point's position is reported on: the first that carries it."""
+        return {name: next(link.name for link in self.linkage.links if name in link.points)
+                for name in self.linkage.points}
+
+    @cached_property
+    def joints_on(self) -> dict[str, list[Joint]]:
+        """Each moving link's joints."""
+        return {link: [j for j in self.linkage.joints if link in j.links]
+                for link in self.linkage.moving_links}
+
+    @cached_property
+    def couples(self) -> dict[str, int]:
+        """How many drivers' couples act on each moving link."""
+        return {link: sum(1 for d in self.linkage.drivers
+                          if link in self.linkage.joint(d.joint).links)
+                for link in self.linkage.moving_links}
 
     @property
     def step(self) -> float:

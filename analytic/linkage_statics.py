@@ -50,7 +50,7 @@ from mechcheck.analytic.linkage_kinematics import Array, LinkagePose
 from mechcheck.analytic.values import GROUND
 
 #: Poses per chunk: ~30 live arrays of this many doubles stay within a core's L2 cache.
-CHUNK = 4096
+CHUNK = 8192
 
 
 @dataclass(frozen=True)
@@ -119,9 +119,10 @@ def static_results(plan: AssurPlan, values: Array) -> StaticResults:
     for name in names:
         if name.startswith(("F_", "Q_")):
             out[name][singular] = np.nan
-    zeros = np.zeros_like(q)
-    zeros[~inside] = np.nan
-    pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, zeros, zeros.copy(), locked)
+    rates = [np.zeros(q.shape), np.zeros(q.shape)]   # untouched pages cost nothing
+    for rate in rates:
+        rate[~inside] = np.nan
+    pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, *rates, locked)
     return StaticResults(pose, out, singular)
 
 
@@ -166,22 +167,16 @@ class _Chunk:
     def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array,
               part: slice) -> None:
         linkage = self.linkage
-        nan = ~self.inside
         for name, p0 in linkage.points.items():
-            carrier = next(link.name for link in linkage.links if name in link.points)
-            x, y = self.point(carrier, p0)
+            x, y = self.point(self.plan.carriers[name], p0)
             out[f"x_{name}"][part] = x
             out[f"y_{name}"][part] = y
-            if carrier != GROUND:
-                out[f"x_{name}"][part][nan] = np.nan
-                out[f"y_{name}"][part][nan] = np.nan
         for k, link in enumerate(linkage.moving_links):
             _, _, tx, ty = self.frame(link)
             q[part, 3 * k] = tx
             q[part, 3 * k + 1] = ty
             q[part, 3 * k + 2] = self.angle[link]
             out[f"phi_{link}"][part] = self.angle[link]
-        q[part][nan] = np.nan
         for joint in linkage.joints:
             i, j = joint.links
             out[f"q_{joint.name}"][part] = self._phi(j) - self._phi(i)
@@ -191,11 +186,14 @@ class _Chunk:
         forces = self.eliminate(self.known(springs))
         for name, f in forces.items():
             out[name][part] = f
-        for name in out:
-            if not name.startswith(("x_", "y_")):
-                out[name][part][nan] = np.nan
         locked[part] = self.locked
         bound[part] = self.condition_bound()
+        nan = ~self.inside
+        if nan.any():   # a pose the path does not reach has no pose and no forces
+            q[part][nan] = np.nan
+            for name in out:
+                if not name.startswith(("x_", "y_")) or self.plan.carriers[name[2:]] != GROUND:
+                    out[name][part][nan] = np.nan
 
     def _phi(self, link: str) -> Array | float:
         return 0.0 if link == GROUND else self.angle[link]
@@ -289,14 +287,13 @@ class _Chunk:
         """An upper bound of :func:`.linkage_forces.condition` (see the module)."""
         linkage = self.linkage
         size = linkage.scale
-        joints_on = {link: [j for j in linkage.joints if link in j.links]
-                     for link in linkage.moving_links}
-        points = {j.name: self.point(j.links[1], linkage.points[j.at]) for j in linkage.joints}
-        couples = {link: sum(1 for d in linkage.drivers if link in linkage.joint(d.joint).links)
-                   for link in linkage.moving_links}
+        joints_on = self.plan.joints_on
+        radius = {}     # |joint point|² / size²
+        for j in linkage.joints:
+            x, y = self.point(j.links[1], linkage.points[j.at])
+            radius[j.name] = (x * x + y * y) / size**2
         force_row = {link: float(len(js)) for link, js in joints_on.items()}   # squared norms
-        moment_row = {link: sum((points[j.name][0] ** 2 + points[j.name][1] ** 2) / size**2
-                                for j in js) + couples[link] / size**4
+        moment_row = {link: sum(radius[j.name] for j in js) + self.plan.couples[link] / size**4
                       for link, js in joints_on.items()}
         groups = self.plan.groups
         inverse = [self._group_inverse(g, force_row, moment_row, size) for g in groups]
