@@ -119,10 +119,10 @@ def static_results(plan: AssurPlan, values: Array) -> StaticResults:
     for name in names:
         if name.startswith(("F_", "Q_")):
             out[name][singular] = np.nan
-    rates = [np.zeros(q.shape), np.zeros(q.shape)]   # untouched pages cost nothing
-    for rate in rates:
-        rate[~inside] = np.nan
-    pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, *rates, locked)
+    qdot, qddot = np.zeros(q.shape), np.zeros(q.shape)   # untouched pages cost nothing
+    qdot[~inside] = np.nan
+    qddot[~inside] = np.nan
+    pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
     return StaticResults(pose, out, singular)
 
 
