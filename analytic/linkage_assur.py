@@ -41,6 +41,9 @@ Array = NDArray[np.float64]
 #: A body's placement at N poses: cos φ, sin φ, t_x, t_y (floats for the ground).
 Frame = tuple[Array | float, Array | float, Array | float, Array | float]
 GROUND_FRAME: Frame = (1.0, 0.0, 0.0, 0.0)
+#: The grid on which the path is followed: 2° of the driver, the continuation's largest step
+#: (:data:`.linkage_kinematics.STEP_ROTATION`), so both look for locks as finely.
+GRID_STEP = math.radians(2.0)
 #: Refinement of a lock: the bracket shrinks by this many samples per round, for this many
 #: rounds (33⁸ ≈ 1.4e12: a 2° bracket to 1e-14 rad, below the continuation's 2⁻⁴⁰).
 LOCK_SAMPLES = 33
@@ -110,9 +113,8 @@ class AssurPlan:
 
     @property
     def step(self) -> float:
-        """The grid of the driver's travel: the continuation's step (2° of rotation)."""
-        from mechcheck.analytic.linkage_kinematics import STEP_ROTATION
-        return STEP_ROTATION
+        """The grid of the driver's travel (:data:`GRID_STEP`)."""
+        return GRID_STEP
 
 
 def assur_plan(linkage: Linkage) -> AssurPlan | None:

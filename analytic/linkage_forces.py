@@ -364,6 +364,24 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
         else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, len(linkage.drivers))
     found = static_results(linkage.assur_plan, vals)
     pose = found.pose
+    singular = _singular_by_bound(pose, found.condition_bound)
+    for name, value in found.values.items():
+        if name.startswith(("F_", "Q_")):
+            value[singular] = np.nan
     n = vals.shape[0]
     return LinkageResults(pose, found.values, lambda: condition(pose, coefficient_matrix(pose)),
-                          found.singular, np.ones(n, dtype=bool), np.zeros(n, dtype="<U1"))
+                          singular, np.ones(n, dtype=bool), np.zeros(n, dtype="<U1"))
+
+
+def _singular_by_bound(pose: LinkagePose, bound: Array) -> NDArray[np.bool_]:
+    """Condition number > :data:`SINGULAR_CONDITION` at each assembled pose: not where an upper
+    bound of it is below (with a margin for the bound's rounding), else by :func:`condition`."""
+    assembled = pose.assembled
+    singular = np.zeros(assembled.shape, dtype=bool)
+    undecided = assembled & ~(bound * (1.0 + 1e-9) < SINGULAR_CONDITION)
+    if undecided.any():
+        rest = np.zeros_like(pose.q[undecided])
+        near = LinkagePose(pose.linkage, pose.drivers[undecided], pose.q[undecided], rest, rest,
+                           pose.locked_at[undecided])
+        singular[undecided] = ~(condition(near, coefficient_matrix(near)) <= SINGULAR_CONDITION)
+    return singular

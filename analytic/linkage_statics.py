@@ -17,7 +17,8 @@ right-hand side costs a few operations per link. Poses are processed in chunks t
 the temporaries in cache.
 
 **The singular verdict** is that of :func:`.linkage_forces.condition`, the 2-norm condition
-number of the scaled K, without its SVD where a cheap bound decides: the rows of the scaled
+number of the scaled K, without its SVD where a cheap bound decides it (in
+:func:`.linkage_forces.solve_linkage`): the rows of the scaled
 matrix S are unit vectors, so σ_max ≤ ‖S‖_F = √m; and ‖S⁻¹‖_F is bounded block by block
 from the triangular structure, each group's inverse in closed form (the dyad's through its
 2×2). A pose whose bound is below the threshold is not singular; only the others (near a
@@ -31,7 +32,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from mechcheck.analytic.linkage import Linkage, TorsionSpring
 from mechcheck.analytic.linkage_assur import (
@@ -84,18 +84,17 @@ def link_constants(linkage: Linkage) -> dict[str, LinkConstants]:
 
 @dataclass(frozen=True)
 class StaticResults:
-    """What :func:`static_results` computes: the pose, every quantity, which poses are
-    singular (decided as :func:`.linkage_forces.condition` would)."""
+    """What :func:`static_results` computes: the pose, every quantity (forces at every
+    assembled pose, singular or not), and per pose an upper bound of the condition number."""
 
     pose: LinkagePose
     values: dict[str, Array]
-    singular: NDArray[np.bool_]
+    condition_bound: Array
 
 
 def static_results(plan: AssurPlan, values: Array) -> StaticResults:
-    """Statics at each driver value (N, 1): pose, reactions, efforts, springs, verdicts."""
-    from mechcheck.analytic.linkage_forces import SINGULAR_CONDITION
-
+    """Statics at each driver value (N, 1): pose, reactions, efforts, springs, and the bound
+    from which :func:`.linkage_forces.solve_linkage` decides the singular verdicts."""
     linkage = plan.linkage
     value = np.ascontiguousarray(values[:, 0], dtype=float)
     n = value.shape[0]
@@ -110,28 +109,12 @@ def static_results(plan: AssurPlan, values: Array) -> StaticResults:
         part = slice(start, min(start + CHUNK, n))
         chunk = _Chunk(plan, route, value[part], constants)
         chunk.write(out, q, locked, bound, part)
-    inside = np.isfinite(q).all(axis=1) if n else np.zeros(0, dtype=bool)
-    singular = np.zeros(n, dtype=bool)
-    undecided = inside & ~(bound * (1.0 + 1e-9) < SINGULAR_CONDITION)
-    if undecided.any():
-        singular[undecided] = ~(_exact_condition(linkage, values[undecided], q[undecided])
-                                <= SINGULAR_CONDITION)
-    for name in names:
-        if name.startswith(("F_", "Q_")):
-            out[name][singular] = np.nan
+    inside = np.isfinite(q).all(axis=1)
     qdot, qddot = np.zeros(q.shape), np.zeros(q.shape)   # untouched pages cost nothing
     qdot[~inside] = np.nan
     qddot[~inside] = np.nan
     pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
-    return StaticResults(pose, out, singular)
-
-
-def _exact_condition(linkage: Linkage, values: Array, q: Array) -> Array:
-    from mechcheck.analytic.linkage_forces import coefficient_matrix, condition
-
-    zeros = np.zeros_like(q)
-    pose = LinkagePose(linkage, values, q, zeros, zeros, np.full(q.shape[0], np.nan))
-    return condition(pose, coefficient_matrix(pose))
+    return StaticResults(pose, out, bound)
 
 
 def quantity_names(linkage: Linkage) -> list[str]:

@@ -1,5 +1,6 @@
 """The closed-form Assur-group path (analytic/linkage_assur.py, linkage_statics.py) against
-the general engine's other methods: positions against Newton continuation from the drawn
+the general engine's other methods (through solve_linkage, which takes the group path for
+a static linkage that decomposes): positions against Newton continuation from the drawn
 pose, statics against the dense member-equilibrium solve with its SVD condition number, on
 every built-in linkage that decomposes and on random ones. Locks are also checked against
 the law of cosines."""
@@ -32,7 +33,6 @@ from mechcheck.analytic.linkage_kinematics import (
     solve_batched,
 )
 from mechcheck.analytic.linkage_loads import known_vector
-from mechcheck.analytic.linkage_statics import static_results
 from mechcheck.casefile import builtin_case_files, linkage_case
 from mechcheck.linkage_file import LinkageCaseSpec
 
@@ -79,7 +79,8 @@ def dense_statics(linkage: Linkage, values: np.ndarray) -> tuple[dict[str, np.nd
 def assert_same_statics(linkage: Linkage, values: np.ndarray) -> None:
     """Every quantity, NaN pattern, lock fraction and singular verdict of the group-by-group
     statics equals the dense method's (1e-9 of each quantity's scale, where cond < 1e4)."""
-    fast = static_results(linkage.assur_plan, values)  # type: ignore[arg-type]
+    fast = solve_linkage(linkage, values)
+    assert linkage.assur_plan is not None and not linkage.is_moving
     expected, cond, pose = dense_statics(linkage, values)
     assembled = np.isfinite(cond)
     assert np.array_equal(fast.pose.assembled, assembled)
@@ -143,7 +144,7 @@ def test_singular_verdicts_next_to_a_lock_follow_the_exact_condition_number() ->
     linkage = static(LINKAGES["locking-fourbar"])
     hi = path(linkage.assur_plan, np.radians([180.0])).hi  # type: ignore[arg-type]
     values = (hi - np.array([0.0, 1e-15, 1e-13, 1e-11, 1e-9, 1e-7, 1e-5, 1e-3]))[:, None]
-    fast = static_results(linkage.assur_plan, values)  # type: ignore[arg-type]
+    fast = solve_linkage(linkage, values)
     rest = np.zeros_like(fast.pose.q)
     pose = LinkagePose(linkage, values, fast.pose.q, rest, rest, fast.pose.locked_at)
     cond = condition(pose, coefficient_matrix(pose))
