@@ -29,12 +29,15 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
 from mechcheck.analytic.linkage_kinematics import joint_jacobian_at_drawn_pose
 from mechcheck.analytic.values import GROUND, CaseError, FrozenMap, Vec2, finite
+
+if TYPE_CHECKING:
+    from mechcheck.analytic.linkage_assur import AssurPlan
 
 IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 JointKind = Literal["revolute", "prismatic"]
@@ -344,6 +347,12 @@ class Linkage:
             return 0
         s = np.linalg.svd(jac, compute_uv=False)
         return int((s > 1e-9 * max(1.0, float(s[0]))).sum())
+
+    @cached_property
+    def assur_plan(self) -> AssurPlan | None:
+        """The closed-form decomposition into a crank and RRR dyads, if it has one."""
+        from mechcheck.analytic.linkage_assur import assur_plan
+        return assur_plan(self)
 
     @property
     def dof(self) -> int:

@@ -19,7 +19,9 @@ this is exactly the seed's method: three equations per member, solved at once.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -222,20 +224,27 @@ def condition(pose: LinkagePose, k: Array) -> Array:
 @dataclass(frozen=True)
 class LinkageResults:
     """Every output quantity (LINKAGES.md names; SI, radians) at N poses, the condition
-    number, Newton's iterations and convergence, and per pose why forces are withheld
+    number (computed when first asked for), which poses it puts above
+    :data:`SINGULAR_CONDITION`, Newton's convergence, and per pose why forces are withheld
     (empty string: they are not)."""
 
     pose: LinkagePose
     values: dict[str, Array]
-    condition: Array
+    condition_of: Callable[[], Array]
+    ill_conditioned: NDArray[np.bool_]
     converged: NDArray[np.bool_]
     reversing: NDArray[np.str_]
     #: Free coordinates only: 1 where the equilibrium pose is stable, 0 where not.
     stable: Array | None = None
 
+    @cached_property
+    def condition(self) -> Array:
+        """The condition number of the scaled equilibrium matrix per pose (:func:`condition`)."""
+        return self.condition_of()
+
     @property
     def singular(self) -> NDArray[np.bool_]:
-        return ~(self.condition <= SINGULAR_CONDITION) & self.pose.assembled
+        return self.ill_conditioned & self.pose.assembled
 
     @property
     def indeterminate(self) -> NDArray[np.bool_]:
@@ -306,6 +315,9 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     iteration did not converge or whose friction reverses, have NaN forces.
     """
     free = linkage.dof - len(linkage.drivers)
+    if free == 0 and linkage.assur_plan is not None and not linkage.has_coulomb_friction \
+            and _at_rest(linkage, velocities, accelerations):
+        return _static_by_groups(linkage, values)
     stable = None
     if free > 0:
         pose, stable = equilibrium_poses(linkage, values)
@@ -330,5 +342,46 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     x[withheld] = np.nan
     if stable is not None:  # an equilibrium not found is no pose to report forces at
         converged = converged & np.isfinite(stable)
-    return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms), cond,
-                          converged, reversing, stable)
+    return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms),
+                          lambda: cond, ~(cond <= SINGULAR_CONDITION), converged, reversing, stable)
+
+
+def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:
+    """Every driver's velocity and acceleration zero: a static case."""
+    own = [(d.velocity, d.acceleration) for d in linkage.drivers]
+    v = np.asarray([v for v, _ in own] if velocities is None else velocities, dtype=float)
+    a = np.asarray([a for _, a in own] if accelerations is None else accelerations, dtype=float)
+    return not (np.any(v) or np.any(a))
+
+
+def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
+    """A static case of a linkage with an Assur plan: :mod:`.linkage_statics`, group by
+    group; the condition number computed densely only if asked for."""
+    from mechcheck.analytic.linkage_statics import static_results
+
+    assert linkage.assur_plan is not None
+    vals = np.array([[d.value for d in linkage.drivers]]) if values is None \
+        else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, len(linkage.drivers))
+    found = static_results(linkage.assur_plan, vals)
+    pose = found.pose
+    singular = _singular_by_bound(pose, found.condition_bound)
+    for name, value in found.values.items():
+        if name.startswith(("F_", "Q_")):
+            value[singular] = np.nan
+    n = vals.shape[0]
+    return LinkageResults(pose, found.values, lambda: condition(pose, coefficient_matrix(pose)),
+                          singular, np.ones(n, dtype=bool), np.zeros(n, dtype="<U1"))
+
+
+def _singular_by_bound(pose: LinkagePose, bound: Array) -> NDArray[np.bool_]:
+    """Condition number > :data:`SINGULAR_CONDITION` at each assembled pose: not where an upper
+    bound of it is below (with a margin for the bound's rounding), else by :func:`condition`."""
+    assembled = pose.assembled
+    singular = np.zeros(assembled.shape, dtype=bool)
+    undecided = assembled & ~(bound * (1.0 + 1e-9) < SINGULAR_CONDITION)
+    if undecided.any():
+        rest = np.zeros_like(pose.q[undecided])
+        near = LinkagePose(pose.linkage, pose.drivers[undecided], pose.q[undecided], rest, rest,
+                           pose.locked_at[undecided])
+        singular[undecided] = ~(condition(near, coefficient_matrix(near)) <= SINGULAR_CONDITION)
+    return singular

@@ -338,7 +338,21 @@ def _steps(linkage: Linkage, values: Array) -> int:
 
 def positions(linkage: Linkage, values: Array) -> tuple[Array, Array]:
     """q (N, 3n) at each row of driver values (N, d), reached from the drawn pose; rows that
-    lock are NaN, with the fraction s of their travel where they locked (else NaN)."""
+    lock are NaN, with the fraction s of their travel where they locked (else NaN).
+
+    In closed form where the linkage decomposes into a crank and RRR dyads
+    (:mod:`.linkage_assur`), else by continuation (:func:`continuation_positions`).
+    """
+    plan = linkage.assur_plan
+    if plan is not None and values.shape[0]:
+        from mechcheck.analytic.linkage_assur import assur_positions
+        return assur_positions(plan, values)
+    return continuation_positions(linkage, values)
+
+
+def continuation_positions(linkage: Linkage, values: Array) -> tuple[Array, Array]:
+    """:func:`positions` by continuation: Newton's method from the drawn pose in steps of at
+    most :data:`STEP_ROTATION` (or :data:`STEP_DISPLACEMENT`), bisecting where it locks."""
     n = values.shape[0]
     q = np.zeros((n, Layout(linkage).size))
     locked = np.full(n, np.nan)

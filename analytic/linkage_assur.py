@@ -1,0 +1,380 @@
+"""Closed-form positions of a linkage that decomposes into Assur groups, vectorised over poses.
+
+A linkage decomposes when, starting from the ground, its links can be placed one group at a
+time, each group attached only to bodies already placed:
+
+- a **crank**: a link turned by a driven revolute joint about a placed body;
+- an **RRR dyad**: two links a, b joined by a revolute joint M, a pinned at P1 to a placed
+  body and b at P2 to another. M is where the circles of radii |M−P1| and |M−P2| meet,
+  on the side of P1→P2 it was drawn on (the dyad's branch).
+
+The order of the groups and each dyad's branch are fixed once from the drawn pose
+(:func:`assur_plan`). This is the same pose as the continuation Newton method of
+:mod:`.linkage_kinematics` reaches (LINKAGES.md "Which assembly"): along the driver's path a
+dyad can change branch only where its two circles touch (discriminant zero), and there the
+linkage locks. So a pose is reachable exactly when it lies in the interval of driver values
+about 0 where every dyad's discriminant stays positive; that interval is found once per call
+on a grid of the driver's travel (the continuation's step) and refined by bisection. Link
+angles come from atan2 and are carried continuously (whole turns included) from the grid.
+
+Linkages that do not decompose this way (triads, prismatic dyads, several drivers, free
+coordinates, redundant joints) have no plan and keep the Newton path.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mechcheck.analytic.values import GROUND, Vec2
+
+if TYPE_CHECKING:
+    from mechcheck.analytic.linkage import Joint, Linkage
+
+Array = NDArray[np.float64]
+#: A body's placement at N poses: cos φ, sin φ, t_x, t_y (floats for the ground).
+Frame = tuple[Array | float, Array | float, Array | float, Array | float]
+GROUND_FRAME: Frame = (1.0, 0.0, 0.0, 0.0)
+#: The grid on which the path is followed: 2° of the driver, the continuation's largest step
+#: (:data:`.linkage_kinematics.STEP_ROTATION`), so both look for locks as finely.
+GRID_STEP = math.radians(2.0)
+#: Refinement of a lock: the bracket shrinks by this many samples per round, for this many
+#: rounds (33⁸ ≈ 1.4e12: a 2° bracket to 1e-14 rad, below the continuation's 2⁻⁴⁰).
+LOCK_SAMPLES = 33
+LOCK_ROUNDS = 9
+#: A link whose angle stays within ±this on the grid of the travel never crosses atan2's
+#: cut at ±π between grid nodes: its raw angle is already the continuous one.
+NO_WRAP = math.pi / 2
+
+
+@dataclass(frozen=True)
+class Crank:
+    """``link`` turned by the driven revolute ``joint`` about the placed ``body``."""
+
+    link: str
+    joint: Joint
+    body: str
+    point: Vec2
+    #: +1 when ``link`` is joint.links[1] (q = φ_link − φ_body), −1 when links[0].
+    sense: float
+
+
+@dataclass(frozen=True)
+class Dyad:
+    """Links a, b; joints (a–body1 at P1, a–b at M, b–body2 at P2); drawn points; branch."""
+
+    links: tuple[str, str]
+    joints: tuple[Joint, Joint, Joint]
+    bodies: tuple[str, str]
+    p1: Vec2
+    m: Vec2
+    p2: Vec2
+    branch: float
+
+    @property
+    def lengths(self) -> tuple[float, float]:
+        return (math.dist(self.m, self.p1), math.dist(self.m, self.p2))
+
+
+Group = Crank | Dyad
+
+
+@dataclass(frozen=True)
+class AssurPlan:
+    """The groups of a linkage in the order they are placed."""
+
+    linkage: Linkage
+    groups: tuple[Group, ...]
+
+    @cached_property
+    def carriers(self) -> dict[str, str]:
+        """The link each point's position is reported on: the first that carries it."""
+        return {name: next(link.name for link in self.linkage.links if name in link.points)
+                for name in self.linkage.points}
+
+    @cached_property
+    def joints_on(self) -> dict[str, list[Joint]]:
+        """Each moving link's joints."""
+        return {link: [j for j in self.linkage.joints if link in j.links]
+                for link in self.linkage.moving_links}
+
+    @cached_property
+    def couples(self) -> dict[str, int]:
+        """How many drivers' couples act on each moving link."""
+        return {link: sum(1 for d in self.linkage.drivers
+                          if link in self.linkage.joint(d.joint).links)
+                for link in self.linkage.moving_links}
+
+    @property
+    def step(self) -> float:
+        """The grid of the driver's travel (:data:`GRID_STEP`)."""
+        return GRID_STEP
+
+
+def assur_plan(linkage: Linkage) -> AssurPlan | None:
+    """The linkage's crank-and-RRR-dyad decomposition, or None if it has none (see module)."""
+    if (len(linkage.drivers) != 1 or linkage.dof != 1 or linkage.redundant
+            or any(j.kind != "revolute" for j in linkage.joints)):
+        return None
+    driven = {d.joint for d in linkage.drivers}
+    placed = {GROUND}
+    used: set[str] = set()
+    groups: list[Group] = []
+    while len(placed) < len(linkage.links):
+        group = _next_group(linkage, placed, used, driven)
+        if group is None:
+            return None
+        groups.append(group)
+        placed.update([group.link] if isinstance(group, Crank) else group.links)
+        used.update([group.joint.name] if isinstance(group, Crank)
+                    else (j.name for j in group.joints))
+    if len(used) != len(linkage.joints):
+        return None
+    return AssurPlan(linkage, tuple(groups))
+
+
+def _next_group(linkage: Linkage, placed: set[str], used: set[str],
+                driven: set[str]) -> Group | None:
+    free = [j for j in linkage.joints if j.name not in used]
+    for joint in free:
+        if joint.name in driven and (joint.links[0] in placed) != (joint.links[1] in placed):
+            inner = 0 if joint.links[0] in placed else 1
+            return Crank(joint.links[1 - inner], joint, joint.links[inner],
+                         linkage.points[joint.at], 1.0 if inner == 0 else -1.0)
+    for middle in free:
+        a, b = middle.links
+        if middle.name in driven or a in placed or b in placed:
+            continue
+        ends = [_anchor(free, link, placed, driven) for link in (a, b)]
+        if ends[0] is None or ends[1] is None:
+            continue
+        dyad = _dyad(linkage, (a, b), (ends[0], middle, ends[1]), placed)
+        if dyad is not None:
+            return dyad
+    return None
+
+
+def _anchor(free: list[Joint], link: str, placed: set[str], driven: set[str]) -> Joint | None:
+    """The undriven joint pinning ``link`` to a placed body, if exactly one."""
+    pins = [j for j in free if link in j.links and j.name not in driven
+            and j.links[j.links.index(link) - 1] in placed]
+    return pins[0] if len(pins) == 1 else None
+
+
+def _dyad(linkage: Linkage, links: tuple[str, str], joints: tuple[Joint, Joint, Joint],
+          placed: set[str]) -> Dyad | None:
+    p1, m, p2 = (linkage.points[j.at] for j in joints)
+    bodies = (_other(joints[0], links[0]), _other(joints[2], links[1]))
+    d = (p2[0] - p1[0], p2[1] - p1[1])
+    side = d[0] * (m[1] - p1[1]) - d[1] * (m[0] - p1[0])
+    scale = linkage.scale
+    # Drawn at a toggle (no side), or with a zero-length link: no branch to keep.
+    if abs(side) <= 1e-12 * scale * scale or min(math.dist(m, p1), math.dist(m, p2)) == 0.0:
+        return None
+    return Dyad(links, joints, bodies, p1, m, p2, math.copysign(1.0, side))
+
+
+def _other(joint: Joint, link: str) -> str:
+    return joint.links[1] if joint.links[0] == link else joint.links[0]
+
+
+# -- placing the groups -------------------------------------------------------------------
+
+def on_body(frame: Frame, p: Vec2) -> tuple[Array | float, Array | float]:
+    """Where the point drawn at ``p`` on a body with this frame is now."""
+    c, s, tx, ty = frame
+    return c * p[0] - s * p[1] + tx, s * p[0] + c * p[1] + ty
+
+
+@dataclass
+class Placement:
+    """Every body's frame and raw angle at N poses, each dyad's points (P1, M, P2), and
+    whether every dyad closed (discriminant ≥ 0)."""
+
+    frames: dict[str, Frame]
+    angles: dict[str, Array]
+    points: dict[int, tuple[Array | float, ...]]
+    closed: NDArray[np.bool_]
+
+
+def place(plan: AssurPlan, value: Array) -> Placement:
+    """Place every group at driver values ``value`` (N,); angles raw (atan2) for dyad links,
+    exact for cranks (relative to their body's raw angle)."""
+    frames: dict[str, Frame] = {GROUND: GROUND_FRAME}
+    angles: dict[str, Array] = {GROUND: np.zeros(1)}
+    points: dict[int, tuple[Array | float, ...]] = {}
+    closed = np.ones(value.shape, dtype=bool)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for index, group in enumerate(plan.groups):
+            if isinstance(group, Crank):
+                phi = angles[group.body] + group.sense * value
+                c, s = np.cos(phi), np.sin(phi)
+                px, py = on_body(frames[group.body], group.point)
+                p0 = group.point
+                frames[group.link] = (c, s, px - (c * p0[0] - s * p0[1]),
+                                      py - (s * p0[0] + c * p0[1]))
+                angles[group.link] = phi
+                continue
+            x1, y1 = on_body(frames[group.bodies[0]], group.p1)
+            x2, y2 = on_body(frames[group.bodies[1]], group.p2)
+            l1, l2 = group.lengths
+            dx, dy = x2 - x1, y2 - y1
+            dd = dx * dx + dy * dy
+            k = 0.5 * (l1 * l1 - l2 * l2 + dd)
+            disc = l1 * l1 * dd - k * k
+            closed &= disc >= 0.0
+            root = group.branch * np.sqrt(disc)
+            mx = x1 + (k * dx - root * dy) / dd
+            my = y1 + (k * dy + root * dx) / dd
+            points[index] = (x1, y1, mx, my, x2, y2)
+            for link, (px, py), length in ((group.links[0], (x1, y1), l1),
+                                           (group.links[1], (x2, y2), l2)):
+                frames[link], angles[link] = _turned(group.m, (px, py), (mx, my), length, group.p1
+                                                     if link == group.links[0] else group.p2)
+    return Placement(frames, angles, points, closed)
+
+
+def _turned(m0: Vec2, pivot: tuple[Array | float, Array | float], m: tuple[Array, Array],
+            length: float, pivot0: Vec2) -> tuple[Frame, Array]:
+    """The frame of a link whose drawn segment pivot0→m0 now runs pivot→m."""
+    ux, uy = m0[0] - pivot0[0], m0[1] - pivot0[1]
+    vx, vy = m[0] - pivot[0], m[1] - pivot[1]
+    inv = 1.0 / (length * length)
+    c = (ux * vx + uy * vy) * inv
+    s = (ux * vy - uy * vx) * inv
+    return (c, s, m[0] - (c * m0[0] - s * m0[1]), m[1] - (s * m0[0] + c * m0[1])), \
+        np.arctan2(s, c)
+
+
+# -- the path from the drawn pose ---------------------------------------------------------
+
+@dataclass(frozen=True)
+class Path:
+    """The reachable driver interval [lo, hi] about 0 and every dyad link's continuous angle
+    at the grid nodes k·step, k = first … (NaN beyond the interval)."""
+
+    lo: float
+    hi: float
+    step: float
+    first: int
+    node_angles: dict[str, Array]
+
+    def lift(self, link: str, value: Array, raw: Array) -> Array:
+        """The continuous angle of ``link`` at ``value`` from its raw atan2 angle."""
+        nodes = self.node_angles[link]
+        reachable = np.flatnonzero(np.isfinite(nodes))
+        if np.all(np.abs(nodes[reachable]) < NO_WRAP):
+            return raw
+        index = np.clip(np.rint(value / self.step).astype(np.int64) - self.first,
+                        reachable[0], reachable[-1])
+        ref = nodes[index]
+        return raw + math.tau * np.rint((ref - raw) / math.tau)
+
+
+def path(plan: AssurPlan, values: Array) -> Path:
+    """The path of the drivers from the drawn pose over the travel of ``values`` (N,)."""
+    h = plan.step
+    first = math.floor(min(float(values.min(initial=0.0)), 0.0) / h)
+    last = math.ceil(max(float(values.max(initial=0.0)), 0.0) / h)
+    nodes = np.arange(first, last + 1, dtype=np.float64) * h
+    placed = place(plan, nodes)
+    zero = -first
+    lo, hi = -math.inf, math.inf
+    ok = placed.closed.copy()
+    up = np.flatnonzero(~ok[zero:])
+    if up.size:
+        hi = _lock(plan, float(nodes[zero + up[0] - 1]), float(nodes[zero + up[0]]))
+        ok[zero + up[0]:] = False
+    down = np.flatnonzero(~ok[:zero + 1][::-1])
+    if down.size:
+        lo = _lock(plan, float(nodes[zero - down[0] + 1]), float(nodes[zero - down[0]]))
+        ok[:zero - down[0] + 1] = False
+    angles = {}
+    for link in _dyad_links(plan):
+        raw = np.where(ok, placed.angles[link], np.nan)
+        angles[link] = _unwrap_from(raw, zero)
+    return Path(lo, hi, h, first, angles)
+
+
+def _dyad_links(plan: AssurPlan) -> Iterator[str]:
+    for group in plan.groups:
+        if isinstance(group, Dyad):
+            yield from group.links
+
+
+def _unwrap_from(raw: Array, zero: int) -> Array:
+    """Carry an angle continuously outward from node ``zero`` (where it is ~0)."""
+    out = raw.copy()
+    for order in (range(zero + 1, raw.size), range(zero - 1, -1, -1)):
+        previous = out[zero]
+        for k in order:
+            if not np.isfinite(out[k]):
+                break
+            out[k] += math.tau * round((previous - out[k]) / math.tau)
+            previous = out[k]
+    return out
+
+
+def _lock(plan: AssurPlan, good: float, bad: float) -> float:
+    """The last driver value that closes, between ``good`` and ``bad``."""
+    for _ in range(LOCK_ROUNDS):
+        samples = np.linspace(good, bad, LOCK_SAMPLES, dtype=np.float64)
+        closed = place(plan, samples).closed
+        first_bad = int(np.argmin(closed[1:])) + 1 if not closed[1:].all() else LOCK_SAMPLES - 1
+        good, bad = float(samples[first_bad - 1]), float(samples[first_bad])
+        if good == bad or abs(bad - good) <= 4e-16 * max(abs(good), abs(bad)):
+            break
+    return good
+
+
+# -- positions ----------------------------------------------------------------------------
+
+def assur_positions(plan: AssurPlan, values: Array) -> tuple[Array, Array]:
+    """q (N, 3n) and the locked fraction (N,), as :func:`.linkage_kinematics.positions`."""
+    value = values[:, 0]
+    route = path(plan, value)
+    placed = place(plan, value)
+    q, locked = coordinates(plan, route, value, placed)
+    return q, locked
+
+
+def reachable(route: Path, value: Array, placed: Placement) -> tuple[NDArray[np.bool_], Array]:
+    """Which poses the path reaches, and the fraction of the travel where the others lock."""
+    inside = (value >= route.lo) & (value <= route.hi) & placed.closed
+    with np.errstate(invalid="ignore", divide="ignore"):
+        locked = np.where(value > route.hi, route.hi / value,
+                          np.where(value < route.lo, route.lo / value, np.nan))
+    return inside, np.where(inside, np.nan, locked)
+
+
+def coordinates(plan: AssurPlan, route: Path, value: Array,
+                placed: Placement) -> tuple[Array, Array]:
+    """q (N, 3n) with continuous angles, NaN rows where the path does not reach."""
+    linkage = plan.linkage
+    inside, locked = reachable(route, value, placed)
+    q = np.empty((value.shape[0], 3 * len(linkage.moving_links)))
+    for k, link in enumerate(linkage.moving_links):
+        _, _, tx, ty = placed.frames[link]
+        q[:, 3 * k] = tx
+        q[:, 3 * k + 1] = ty
+        q[:, 3 * k + 2] = continuous_angle(plan, route, link, value, placed)
+    q[~inside] = np.nan
+    return q, locked
+
+
+def continuous_angle(plan: AssurPlan, route: Path, link: str, value: Array,
+                     placed: Placement) -> Array:
+    raw = placed.angles[link]
+    if link in route.node_angles:
+        return route.lift(link, value, raw)
+    group = next(g for g in plan.groups if isinstance(g, Crank) and g.link == link)
+    if group.body == GROUND:
+        return raw
+    return raw - placed.angles[group.body] + continuous_angle(plan, route, group.body, value,
+                                                               placed)

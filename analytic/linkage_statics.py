@@ -1,0 +1,324 @@
+"""Statics of a linkage with an Assur plan (:mod:`.linkage_assur`), fused and vectorised.
+
+The same member-equilibrium equations as :mod:`.linkage_forces`, K x + b = 0, solved group
+by group in reverse Assur order instead of as one dense system: K is block triangular in
+that order (a group's links feel only its own joints and those of later groups). Per group:
+
+- **RRR dyad** (links a, b; pins P1, M, P2): moments of a about P1 and of b about P2 give a
+  2×2 system for the middle pin's force, r1 × G = h1, r2 × G = h2 with r = M − P and
+  determinant r1 × r2 (zero at the dyad's toggle); the pins' forces follow from the force
+  sums;
+- **crank**: its pin carries the resultant of what acts on it, the driver its moment.
+
+What a solved group's joints exert on the bodies it hangs from is added to their known
+forces. A static case needs no velocities or accelerations, and every constant load and
+weight on a link folds into four numbers (force and its moment's cos/sin parts), so the
+right-hand side costs a few operations per link. Poses are processed in chunks that keep
+the temporaries in cache.
+
+**The singular verdict** is that of :func:`.linkage_forces.condition`, the 2-norm condition
+number of the scaled K, without its SVD where a cheap bound decides it (in
+:func:`.linkage_forces.solve_linkage`): the rows of the scaled
+matrix S are unit vectors, so σ_max ≤ ‖S‖_F = √m; and ‖S⁻¹‖_F is bounded block by block
+from the triangular structure, each group's inverse in closed form (the dyad's through its
+2×2). A pose whose bound is below the threshold is not singular; only the others (near a
+toggle) get the exact SVD. The exact condition numbers themselves are computed when asked
+for (:attr:`.linkage_forces.LinkageResults.condition`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mechcheck.analytic.linkage import Linkage, TorsionSpring
+from mechcheck.analytic.linkage_assur import (
+    AssurPlan,
+    Crank,
+    Dyad,
+    Path,
+    Placement,
+    continuous_angle,
+    on_body,
+    path,
+    place,
+    reachable,
+)
+from mechcheck.analytic.linkage_kinematics import Array, LinkagePose
+from mechcheck.analytic.values import GROUND
+
+#: Poses per chunk: ~30 live arrays of this many doubles stay within a core's L2 cache.
+CHUNK = 8192
+
+
+@dataclass(frozen=True)
+class LinkConstants:
+    """Every constant force on a link (loads, weights) as F and the parts of its moment
+    about the origin: Σ p0 × f (turns with cos φ), Σ p0 · f (with −sin φ), and couples."""
+
+    fx: float
+    fy: float
+    cross: float
+    dot: float
+    torque: float
+
+
+def link_constants(linkage: Linkage) -> dict[str, LinkConstants]:
+    forces: dict[str, list[tuple[tuple[float, float], tuple[float, float], float]]] = {
+        link: [] for link in linkage.moving_links}
+    for load in linkage.loads:
+        if load.link in forces:
+            forces[load.link].append((load.at, load.force, load.torque))
+    g = linkage.gravity
+    for m in linkage.masses:
+        if m.link in forces:
+            forces[m.link].append((m.com, (m.mass * g[0], m.mass * g[1]), 0.0))
+    return {link: LinkConstants(
+        sum(f[0] for _, f, _ in items), sum(f[1] for _, f, _ in items),
+        sum(p[0] * f[1] - p[1] * f[0] for p, f, _ in items),
+        sum(p[0] * f[0] + p[1] * f[1] for p, f, _ in items),
+        sum(t for _, _, t in items)) for link, items in forces.items()}
+
+
+@dataclass(frozen=True)
+class StaticResults:
+    """What :func:`static_results` computes: the pose, every quantity (forces at every
+    assembled pose, singular or not), and per pose an upper bound of the condition number."""
+
+    pose: LinkagePose
+    values: dict[str, Array]
+    condition_bound: Array
+
+
+def static_results(plan: AssurPlan, values: Array) -> StaticResults:
+    """Statics at each driver value (N, 1): pose, reactions, efforts, springs, and the bound
+    from which :func:`.linkage_forces.solve_linkage` decides the singular verdicts."""
+    linkage = plan.linkage
+    value = np.ascontiguousarray(values[:, 0], dtype=float)
+    n = value.shape[0]
+    route = path(plan, value)
+    names = quantity_names(linkage)
+    out = {name: np.empty(n) for name in names}
+    q = np.empty((n, 3 * len(linkage.moving_links)))
+    locked = np.empty(n)
+    bound = np.empty(n)
+    constants = link_constants(linkage)
+    for start in range(0, n, CHUNK):
+        part = slice(start, min(start + CHUNK, n))
+        chunk = _Chunk(plan, route, value[part], constants)
+        chunk.write(out, q, locked, bound, part)
+    inside = np.isfinite(q).all(axis=1)
+    qdot, qddot = np.zeros(q.shape), np.zeros(q.shape)   # untouched pages cost nothing
+    qdot[~inside] = np.nan
+    qddot[~inside] = np.nan
+    pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
+    return StaticResults(pose, out, bound)
+
+
+def quantity_names(linkage: Linkage) -> list[str]:
+    """The quantities of :func:`.linkage_forces.solve_linkage`, in its order."""
+    names = [f"{axis}_{p}" for p in linkage.points for axis in "xy"]
+    names += [f"phi_{link}" for link in linkage.moving_links]
+    names += [f"q_{j.name}" for j in linkage.joints]
+    names += [f"F_{j.name}_{axis}" for j in linkage.joints for axis in "xy"]
+    names += [f"Q_{d.joint}" for d in linkage.drivers]
+    return names + [f"S_{s.name}" for s in linkage.springs]
+
+
+class _Chunk:
+    """One chunk of poses: placed, loaded, solved, bounded."""
+
+    def __init__(self, plan: AssurPlan, route: Path, value: Array,
+                 constants: dict[str, LinkConstants]) -> None:
+        self.plan = plan
+        self.linkage = plan.linkage
+        self.value = value
+        self.placed: Placement = place(plan, value)
+        self.inside, self.locked = reachable(route, value, self.placed)
+        self.angle = {link: continuous_angle(plan, route, link, value, self.placed)
+                      for link in self.linkage.moving_links}
+        self.constants = constants
+
+    def frame(self, link: str) -> tuple[Array | float, ...]:
+        return self.placed.frames[link]
+
+    def point(self, link: str, p0: tuple[float, float]) -> tuple[Array | float, Array | float]:
+        return on_body(self.placed.frames[link], p0)
+
+    def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array,
+              part: slice) -> None:
+        linkage = self.linkage
+        for name, p0 in linkage.points.items():
+            x, y = self.point(self.plan.carriers[name], p0)
+            out[f"x_{name}"][part] = x
+            out[f"y_{name}"][part] = y
+        for k, link in enumerate(linkage.moving_links):
+            _, _, tx, ty = self.frame(link)
+            q[part, 3 * k] = tx
+            q[part, 3 * k + 1] = ty
+            q[part, 3 * k + 2] = self.angle[link]
+            out[f"phi_{link}"][part] = self.angle[link]
+        for joint in linkage.joints:
+            i, j = joint.links
+            out[f"q_{joint.name}"][part] = self._phi(j) - self._phi(i)
+        springs = self.spring_forces()
+        for name, s in springs.items():
+            out[f"S_{name}"][part] = s
+        forces = self.eliminate(self.known(springs))
+        for name, f in forces.items():
+            out[name][part] = f
+        locked[part] = self.locked
+        bound[part] = self.condition_bound()
+        nan = ~self.inside
+        if nan.any():   # a pose the path does not reach has no pose and no forces
+            q[part][nan] = np.nan
+            for name in out:
+                if not name.startswith(("x_", "y_")) or self.plan.carriers[name[2:]] != GROUND:
+                    out[name][part][nan] = np.nan
+
+    def _phi(self, link: str) -> Array | float:
+        return 0.0 if link == GROUND else self.angle[link]
+
+    # -- known forces ---------------------------------------------------------------------
+    def spring_forces(self) -> dict[str, Array]:
+        out = {}
+        for spring in self.linkage.springs:
+            if isinstance(spring, TorsionSpring):
+                i, j = self.linkage.joint(spring.joint).links
+                stretch = self._phi(j) - self._phi(i) - spring.free_rotation
+                out[spring.name] = spring.stiffness * stretch + 0.0 * self.value
+                continue
+            (la, pa), (lb, pb) = spring.ends
+            ax, ay = self.point(la, pa)
+            bx, by = self.point(lb, pb)
+            length = np.hypot(bx - ax, by - ay)
+            out[spring.name] = spring.stiffness * (length - spring.free_length)
+        return out
+
+    def known(self, springs: dict[str, Array]) -> dict[str, list[Array | float]]:
+        """b per moving link: [Fx, Fy, M about the origin], every known force."""
+        b: dict[str, list[Array | float]] = {}
+        for link in self.linkage.moving_links:
+            k = self.constants[link]
+            c, s, tx, ty = self.frame(link)
+            b[link] = [k.fx, k.fy, c * k.cross - s * k.dot + tx * k.fy - ty * k.fx + k.torque]
+        for spring in self.linkage.springs:
+            tension = springs[spring.name]
+            if isinstance(spring, TorsionSpring):
+                i, j = self.linkage.joint(spring.joint).links
+                _add(b, j, 0.0, 0.0, 0.0, 0.0, -tension)
+                _add(b, i, 0.0, 0.0, 0.0, 0.0, tension)
+                continue
+            (la, pa), (lb, pb) = spring.ends
+            ax, ay = self.point(la, pa)
+            bx, by = self.point(lb, pb)
+            length = np.hypot(bx - ax, by - ay)
+            fx, fy = tension * (bx - ax) / length, tension * (by - ay) / length
+            _add(b, la, fx, fy, ax, ay)   # tension pulls a toward b
+            _add(b, lb, -fx, -fy, bx, by)
+        return b
+
+    # -- elimination ----------------------------------------------------------------------
+    def eliminate(self, b: dict[str, list[Array | float]]) -> dict[str, Array | float]:
+        """Every joint's reaction and driver's effort, groups in reverse Assur order."""
+        out: dict[str, Array | float] = {}
+        for index in range(len(self.plan.groups) - 1, -1, -1):
+            group = self.plan.groups[index]
+            if isinstance(group, Crank):
+                self._crank(group, b, out)
+            else:
+                self._dyad(index, group, b, out)
+        return out
+
+    def _crank(self, group: Crank, b: dict[str, list[Array | float]],
+               out: dict[str, Array | float]) -> None:
+        fx, fy, m = b[group.link]
+        px, py = self.point(group.link, group.point)
+        couple = px * fy - py * fx - m      # the driver's couple on the crank
+        sense = 1.0 if group.joint.links[1] == group.link else -1.0
+        name = group.joint.name
+        out[f"F_{name}_x"], out[f"F_{name}_y"] = -sense * fx, -sense * fy
+        out[f"Q_{name}"] = sense * couple
+        _add(b, group.body, fx, fy, px, py, -couple)
+
+    def _dyad(self, index: int, group: Dyad, b: dict[str, list[Array | float]],
+              out: dict[str, Array | float]) -> None:
+        x1, y1, mx, my, x2, y2 = self.placed.points[index]
+        a, c = group.links
+        fax, fay, ma = b[a]
+        fbx, fby, mb = b[c]
+        h1 = x1 * fay - y1 * fax - ma
+        h2 = mb - (x2 * fby - y2 * fbx)
+        r1x, r1y, r2x, r2y = mx - x1, my - y1, mx - x2, my - y2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / (r1x * r2y - r1y * r2x)
+        gx = (h1 * r2x - r1x * h2) * inv   # the middle pin's force on a
+        gy = (r2y * h1 - r1y * h2) * inv
+        g1x, g1y = -gx - fax, -gy - fay     # the pin at P1 on a
+        g2x, g2y = gx - fbx, gy - fby       # the pin at P2 on b
+        for joint, link, fx, fy in ((group.joints[0], a, g1x, g1y), (group.joints[1], a, gx, gy),
+                                    (group.joints[2], c, g2x, g2y)):
+            sense = 1.0 if joint.links[1] == link else -1.0
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = sense * fx, sense * fy
+        _add(b, group.bodies[0], -g1x, -g1y, x1, y1)
+        _add(b, group.bodies[1], -g2x, -g2y, x2, y2)
+
+    # -- the condition bound --------------------------------------------------------------
+    def condition_bound(self) -> Array:
+        """An upper bound of :func:`.linkage_forces.condition` (see the module)."""
+        linkage = self.linkage
+        size = linkage.scale
+        joints_on = self.plan.joints_on
+        radius = {}     # |joint point|² / size²
+        for j in linkage.joints:
+            x, y = self.point(j.links[1], linkage.points[j.at])
+            radius[j.name] = (x * x + y * y) / size**2
+        force_row = {link: float(len(js)) for link, js in joints_on.items()}   # squared norms
+        moment_row = {link: sum(radius[j.name] for j in js) + self.plan.couples[link] / size**4
+                      for link, js in joints_on.items()}
+        groups = self.plan.groups
+        inverse = [self._group_inverse(g, force_row, moment_row, size) for g in groups]
+        links = [{g.link} if isinstance(g, Crank) else set(g.links) for g in groups]
+        hung = [[g.body] if isinstance(g, Crank) else list(g.bodies) for g in groups]
+        total = 0.0 * self.value
+        for h in range(len(groups)):
+            column: dict[int, Array] = {h: inverse[h]}
+            for g in range(h - 1, -1, -1):
+                acc = 0.0 * self.value
+                for k in range(g + 1, h + 1):
+                    touched = sum(1 for body in hung[k] if body in links[g])
+                    if touched and k in column:
+                        acc = acc + math.sqrt(3.0 * touched) * column[k]
+                column[g] = inverse[g] * acc
+            total = total + sum(x * x for x in column.values())
+        rows = 3 * len(linkage.moving_links)
+        return np.sqrt(rows * total)
+
+    def _group_inverse(self, group: Crank | Dyad, force_row: dict[str, float],
+                       moment_row: dict[str, Array | float], size: float) -> Array:
+        """A bound of ‖S_gg⁻¹‖_F, the group's diagonal block of the scaled matrix."""
+        if isinstance(group, Crank):
+            px, py = self.point(group.link, group.point)
+            f, m = force_row[group.link], moment_row[group.link]
+            return np.sqrt(2.0 * f + size**2 * (py * py + px * px) * f + size**4 * m)
+        x1, y1, mx, my, x2, y2 = self.placed.points[self.plan.groups.index(group)]
+        a, c = group.links
+        l1, l2 = group.lengths
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = math.sqrt(l1 * l1 + l2 * l2) / np.abs((mx - x1) * (my - y2) - (my - y1) * (mx - x2))
+        t = np.sqrt((y1 * y1 + x1 * x1) * force_row[a] + size**2 * moment_row[a]
+                    + (y2 * y2 + x2 * x2) * force_row[c] + size**2 * moment_row[c])
+        return math.sqrt(3.0) * w * t + math.sqrt(2.0 * (force_row[a] + force_row[c]))
+
+
+def _add(b: dict[str, list[Array | float]], link: str, fx: Array | float, fy: Array | float,
+         px: Array | float, py: Array | float, couple: Array | float = 0.0) -> None:
+    """Add a force (fx, fy) at (px, py) and a couple to a moving link's known forces."""
+    if link == GROUND:
+        return
+    row = b[link]
+    row[0] = row[0] + fx
+    row[1] = row[1] + fy
+    row[2] = row[2] + px * fy - py * fx + couple
