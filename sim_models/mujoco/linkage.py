@@ -23,6 +23,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
 from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, real_inertial, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import EXACT
@@ -33,9 +34,9 @@ SETTLE_REFUSALS = {
     "dynamic": "the mujoco backend settles linkages held by their drivers; a driven "
                "(moving) linkage is not simulated yet",
     "friction": "the mujoco backend does not emulate joint friction of linkages yet",
-    "free": "the mujoco backend holds every coordinate by a driver; settling free "
-            "coordinates to their equilibrium is not modelled yet",
 }
+FREE_SWEEP_REFUSAL = ("the mujoco backend settles free coordinates case by case, from the "
+                      "drawn pose; a sweep of them is not simulated")
 COULOMB_REFUSAL = ("the mujoco_solve backend does not emulate Coulomb friction of "
                    "linkages yet")
 
@@ -72,9 +73,11 @@ def unbuildable(case: Case) -> str | None:
 def settle_refusal(case: Case) -> str | None:
     if case.kind != "static":
         return SETTLE_REFUSALS[case.kind]
-    if case.linkage.dof > len(case.linkage.drivers):
-        return SETTLE_REFUSALS["free"]
     return None
+
+
+def has_free_coordinates(case: Case) -> bool:
+    return case.linkage.dof > len(case.linkage.drivers)
 
 
 def settle_linkage(case: Case, rig: LinkageRig | None = None,
@@ -92,6 +95,8 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
     gated = withheld_at(case, "mujoco", results)
     if gated is not None:
         return gated
+    if has_free_coordinates(case):
+        return settle_free(case, results)
     qpos = seed(rig, rig.joint_states(results.pose)[0][0], driver_values(case))
     result = settle_refined(rig, qpos)
     return settled_solution(rig, qpos, result, time.perf_counter() - start)
@@ -199,7 +204,8 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     first = np.asarray(first, dtype=float)
     why = unbuildable(case)
     if backend == "mujoco":
-        why = why or settle_refusal(case)
+        why = why or settle_refusal(case) or (FREE_SWEEP_REFUSAL if has_free_coordinates(case)
+                                              else None)
     if why is not None:
         return [refused(case, backend, why)] * len(first)
     if results is None:

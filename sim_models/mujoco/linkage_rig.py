@@ -39,6 +39,7 @@ from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.mujoco.linkage_model import (
+    CLOCK,
     LinkageTree,
     body_name,
     build_spec,
@@ -127,6 +128,18 @@ class LinkageRig:
                                          dtype=int)
         # Joint speeds and pose errors as point speeds and lengths: hinges times the size.
         self.weight = np.where(self.hinge[m.dof_jntid], self.scale, 1.0)
+        clock = int(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, CLOCK))
+        self.clock: int | None = int(m.jnt_dofadr[clock]) if clock >= 0 else None
+        if self.clock is not None:
+            self.weight[self.clock] = 0.0  # the clock is time, not the mechanism
+        # A driven run's extra armature on each driven joint, subtracted from its effort.
+        self.drive_armature = {j: float(m.dof_armature[self.dof[j]]) - settings.armature
+                               for j in self.drive_rows}
+        #: Friction emulated from the reactions (:mod:`.linkage_friction`): xfrc_applied
+        #: added to the loads, and each prismatic joint's friction force along its axis,
+        #: which is part of its reported reaction.
+        self.extra = np.zeros((m.nbody, 6))
+        self.sliding: dict[str, float] = {}
 
     def _id(self, kind: mujoco.mjtObj, name: str) -> int:
         found = int(mujoco.mj_name2id(self.model, kind, name))
@@ -195,6 +208,20 @@ class LinkageRig:
         self.data.qpos[:] = qpos
         self.data.qvel[:] = qvel
 
+    def joint_rates(self, qvel: Array) -> dict[str, float]:
+        """Every joint's coordinate rate q̇ (LINKAGES.md) from joint velocities."""
+        omega = dict(zip(self.linkage.moving_links, self.rotation @ qvel, strict=True))
+        omega[GROUND] = 0.0
+        return {j.name: float(qvel[self.dof[j.name]]) if j.name in self.dof
+                else float(omega[j.links[1]] - omega[j.links[0]]) for j in self.linkage.joints}
+
+    def set_timestep(self, dt: float) -> None:
+        """Change the time step, with the constraints' time constant (as
+        :meth:`.rig.Rig.set_timestep`)."""
+        self.model.opt.timestep = dt
+        if self.settings.solref_timeconst is None:
+            self.model.eq_solref[:, 0] = 2.0 * dt
+
     def set_targets(self, values: Array) -> None:
         """Hold each driven joint at its value (rad or m, from the drawn pose)."""
         for driver, value in zip(self.linkage.drivers, values, strict=True):
@@ -205,6 +232,8 @@ class LinkageRig:
         """xfrc_applied from the current pose (see :func:`.rig.xfrc_of_loads`)."""
         xfrc_of_loads(self.data, self.loads, self.incidence, self.body_forces,
                       np.zeros(self.model.nbody))
+        if self.sliding or self.extra.any():
+            self.data.xfrc_applied[:] += self.extra
         if self.carried.any():
             self.apply_carried()
 
@@ -253,7 +282,8 @@ class LinkageRig:
         m, d = self.model, self.data
         mujoco.mj_rnePostConstraint(m, d)
         total = self.total_constraint_forces()
-        efforts = {j: float(total[rows[0]]) for j, rows in self.drive_rows.items()}
+        efforts = {j: float(total[rows[0]] - self.drive_armature[j] * d.qacc[self.dof[j]])
+                   for j, rows in self.drive_rows.items()}
         values = {f"Q_{j}": q for j, q in efforts.items()}
         for joint in self.linkage.joints:
             values.update(self._reaction(joint, total, efforts.get(joint.name, 0.0)))
@@ -276,7 +306,9 @@ class LinkageRig:
         assert joint.axis is not None
         b0 = self.body[joint.links[0]]
         u = (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
-        f = f - effort * u  # the driver's effort is reported as Q, not in F
+        # The driver's effort is reported as Q, not in F; emulated friction along the axis
+        # is applied as a load, but it is part of the joint's reaction.
+        f = f + (self.sliding.get(name, 0.0) - effort) * u
         return {f"M_{name}": moment, f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
 
     def _springs(self) -> dict[str, float]:
