@@ -23,6 +23,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
 from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, real_inertial, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
@@ -31,9 +32,10 @@ from mechcheck.sim_models.mujoco.settle import settle_refined, settled_solution
 from mechcheck.sim_models.mujoco.solve import impose_rigid_forces
 
 SETTLE_REFUSALS = {
-    "dynamic": "the mujoco backend settles linkages held by their drivers; a driven "
-               "(moving) linkage is not simulated yet",
-    "friction": "the mujoco backend does not emulate joint friction of linkages yet",
+    "dynamic": "a sweep in the mujoco backend settles linkages held by their drivers; a "
+               "sweep of a driven (moving) linkage is not simulated",
+    "friction": "a sweep in the mujoco backend settles linkages held by their drivers; a "
+                "sweep with Coulomb friction (a quasi-static motion) is not simulated",
 }
 FREE_SWEEP_REFUSAL = ("the mujoco backend settles free coordinates case by case, from the "
                       "drawn pose; a sweep of them is not simulated")
@@ -71,9 +73,16 @@ def unbuildable(case: Case) -> str | None:
 
 
 def settle_refusal(case: Case) -> str | None:
-    if case.kind != "static":
-        return SETTLE_REFUSALS[case.kind]
+    """Why a sweep does not settle the case (it holds the drivers at rest), or None."""
+    if is_driven(case):
+        return SETTLE_REFUSALS["friction" if case.has_coulomb_friction else "dynamic"]
     return None
+
+
+def is_driven(case: Case) -> bool:
+    """A moving case, or a static one with Coulomb friction (a quasi-static motion);
+    viscous friction alone does nothing at rest."""
+    return case.linkage.is_moving or case.has_coulomb_friction
 
 
 def has_free_coordinates(case: Case) -> bool:
@@ -87,16 +96,18 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
     ``rig`` and ``results`` (the analytic pose analysis) may be given by a sweep.
     """
     start = time.perf_counter()
-    why = unbuildable(case) or settle_refusal(case)
+    why = unbuildable(case)
     if why is not None:
         return refused(case, "mujoco", why)
-    rig = rig or LinkageRig(case)
     results = results if results is not None else analytic_results(case)
     gated = withheld_at(case, "mujoco", results)
     if gated is not None:
         return gated
+    if is_driven(case):
+        return drive_linkage(case, results)
     if has_free_coordinates(case):
         return settle_free(case, results)
+    rig = rig or LinkageRig(case)
     qpos = seed(rig, rig.joint_states(results.pose)[0][0], driver_values(case))
     result = settle_refined(rig, qpos)
     return settled_solution(rig, qpos, result, time.perf_counter() - start)

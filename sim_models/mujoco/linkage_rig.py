@@ -140,6 +140,7 @@ class LinkageRig:
         #: which is part of its reported reaction.
         self.extra = np.zeros((m.nbody, 6))
         self.sliding: dict[str, float] = {}
+        self.viscous = True
 
     def _id(self, kind: mujoco.mjtObj, name: str) -> int:
         found = int(mujoco.mj_name2id(self.model, kind, name))
@@ -232,7 +233,7 @@ class LinkageRig:
         """xfrc_applied from the current pose (see :func:`.rig.xfrc_of_loads`)."""
         xfrc_of_loads(self.data, self.loads, self.incidence, self.body_forces,
                       np.zeros(self.model.nbody))
-        if self.sliding or self.extra.any():
+        if self.extra.any():
             self.data.xfrc_applied[:] += self.extra
         if self.carried.any():
             self.apply_carried()
@@ -303,13 +304,24 @@ class LinkageRig:
         point = self.point_on(joint.links[1], self.linkage.points[joint.at])
         f, moment = parent_force(self.model, self.data, self.body[t.child], point)
         f, moment = t.sign * f, t.sign * moment  # by links[0] on links[1]
-        assert joint.axis is not None
-        b0 = self.body[joint.links[0]]
-        u = (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
+        u = self.axis_of(joint)
         # The driver's effort is reported as Q, not in F; emulated friction along the axis
         # is applied as a load, but it is part of the joint's reaction.
         f = f + (self.sliding.get(name, 0.0) - effort) * u
         return {f"M_{name}": moment, f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
+
+    def axis_of(self, joint: Joint) -> Array:
+        """A prismatic joint's current sliding direction (fixed in links[0])."""
+        assert joint.axis is not None
+        b0 = self.body[joint.links[0]]
+        return (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
+
+    def without_viscous(self) -> None:
+        """No damper anywhere (a quasi-static run: the analytic motion has no speed, so
+        no viscous force; the simulated one is slow but not still)."""
+        self.model.dof_damping[:] = 0.0
+        self.model.tendon_damping[:] = 0.0
+        self.viscous = False
 
     def _springs(self) -> dict[str, float]:
         d = self.data
@@ -322,7 +334,7 @@ class LinkageRig:
                 dof = self.dof[torsion.joint]  # = its qpos address (hinges and slides only)
                 out[f"S_{torsion.name}"] = float(
                     torsion.stiffness * (d.qpos[dof] - torsion.free_rotation)
-                    + torsion.damping * d.qvel[dof])
+                    + (torsion.damping * d.qvel[dof] if self.viscous else 0.0))
         return out
 
     def _pose(self) -> dict[str, float]:
