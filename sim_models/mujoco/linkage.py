@@ -21,15 +21,24 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
-from mechcheck.analytic.linkage_forces import LinkageResults
+from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
+from mechcheck.sim_models.mujoco.linkage_friction import (
+    apply_friction,
+    clear_friction,
+    friction_change,
+)
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, real_inertial, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import EXACT
 from mechcheck.sim_models.mujoco.settle import settle_refined, settled_solution
-from mechcheck.sim_models.mujoco.solve import impose_rigid_forces
+from mechcheck.sim_models.mujoco.solve import (
+    FRICTION_MAX_PASSES,
+    FRICTION_RTOL,
+    impose_rigid_forces,
+)
 
 SETTLE_REFUSALS = {
     "dynamic": "a sweep in the mujoco backend settles linkages held by their drivers; a "
@@ -39,8 +48,6 @@ SETTLE_REFUSALS = {
 }
 FREE_SWEEP_REFUSAL = ("the mujoco backend settles free coordinates case by case, from the "
                       "drawn pose; a sweep of them is not simulated")
-COULOMB_REFUSAL = ("the mujoco_solve backend does not emulate Coulomb friction of "
-                   "linkages yet")
 
 
 def refused(case: Case, backend: str, why: str) -> Solution:
@@ -150,8 +157,6 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
     """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose (row
     ``index`` of ``results``, the analytic pose analysis, which a sweep may give)."""
     start = time.perf_counter()
-    if case.has_coulomb_friction:
-        return refused(case, "mujoco_solve", COULOMB_REFUSAL)
     why = unbuildable(case)
     if why is not None:
         return refused(case, "mujoco_solve", why)
@@ -162,25 +167,54 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
         return gated
     states = rig.joint_states(results.pose)
     return exact_solution(case, rig, tuple(a[index] for a in states),
-                          results.pose.drivers[index], start)
+                          results.pose.drivers[index], start, senses_at(results, index))
 
 
-def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
-                   targets: np.ndarray, start: float) -> Solution:
-    """The exact solve at the analytic joint ``state`` (qpos, qvel, qacc) with the drivers
-    at ``targets``; ``start`` times it."""
+def senses_at(results: LinkageResults, index: int) -> dict[str, float]:
+    """The sense of each Coulomb joint's relative motion at pose ``index``, as the analytic
+    motion prescribes it (the drivers' velocities or quasi-static senses)."""
+    return {t.joint.name: float(t.sense[index]) for t in coulomb_terms(results.pose)}
+
+
+def constraint_solve(rig: LinkageRig, qacc: np.ndarray) -> tuple[dict[str, float], float]:
+    """The rigid constraint forces at the rig's state and the reading; the equations'
+    residual."""
     m, d = rig.model, rig.data
-    qpos, qvel, qacc = state
-    rig.set_state(qpos, qvel)
-    rig.set_targets(targets)
     mujoco.mj_kinematics(m, d)  # load points and centres of mass for the loads
     mujoco.mj_comPos(m, d)
     rig.apply_loads()
     mujoco.mj_forward(m, d)
     residual = impose_rigid_forces(m, d, qacc)
-    values = rig.read()
+    return rig.read(), residual
+
+
+def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
+                   targets: np.ndarray, start: float,
+                   senses: dict[str, float] | None = None) -> Solution:
+    """The exact solve at the analytic joint ``state`` (qpos, qvel, qacc) with the drivers
+    at ``targets``; ``start`` times it.
+
+    With Coulomb friction (``senses``: each joint's sense of motion) the friction loads
+    come from the reactions and the reactions from the loads, repeated until they agree
+    to :data:`.solve.FRICTION_RTOL` (as the four-bar's :func:`.solve.solve_with_friction`).
+    """
+    qpos, qvel, qacc = state
+    clear_friction(rig)
+    rig.set_state(qpos, qvel)
+    rig.set_targets(targets)
+    values, residual = constraint_solve(rig, qacc)
+    passes = 0
+    if senses:
+        for passes in range(1, FRICTION_MAX_PASSES + 1):  # noqa: B007 - reported
+            apply_friction(rig, values, {j.name: senses.get(j.name, 0.0)
+                                         for j in case.linkage.joints})
+            new, residual = constraint_solve(rig, qacc)
+            change, values = friction_change(new, values), new
+            if change <= FRICTION_RTOL:
+                break
     diagnostics: dict[str, float | str] = {
-        "method": "constraint_solve", "steps": 0, "wall_time_s": time.perf_counter() - start,
+        "method": "constraint_solve", "steps": passes,
+        "wall_time_s": time.perf_counter() - start,
         "residual_velocity": 0.0, "loop_violation": rig.loop_violation(), "pose_drift": 0.0,
         "equation_residual": residual,
     }
@@ -240,5 +274,6 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
             history = [*history[-1:], (float(first[i]), rig.total_constraint_forces())] \
                 if result.settled else []
         else:
-            out.append(exact_solution(case, rig, tuple(a[i] for a in states), targets[i], start))
+            out.append(exact_solution(case, rig, tuple(a[i] for a in states), targets[i], start,
+                                      senses_at(results, i)))
     return out
