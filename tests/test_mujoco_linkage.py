@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, example, given, settings
 
-from mechcheck.analytic.case import Case, CaseError
+from mechcheck.analytic.case import Case, CaseError, Load
 from mechcheck.analytic.linkage import Joint, Link, Linkage, LinkMass, PointLoad
 from mechcheck.analytic.linkage_backends import analytic_results, solution_from, solve
 from mechcheck.casefile import linkage_case
@@ -363,3 +363,21 @@ def test_exact_solve_with_friction_on_random_linkages(table: dict[str, Any]) -> 
     backend (1e-9)."""
     case = random_case(table)
     assert_close(case, solve_at_pose(case))
+
+
+@pytest.mark.parametrize("backend", [settle, solve_at_pose])
+@pytest.mark.parametrize("at", [(6e-8, 0.0), (0.0, 6e-8), (2e-7, 0.0)])
+def test_four_bar_load_next_to_a_pin_keeps_its_moment(backend: Any,
+                                                      at: tuple[float, float]) -> None:
+    """The four-bar's rig (not only the linkage's) places a load site 6e-8 or 2e-7 m from
+    the crank's pivot where it is: MuJoCo's compiler puts such a site exactly on its
+    body's origin ("same frame") unless that is switched off, and the load's moment about
+    A0 was lost (T12 read 1e-15 instead of 3e-8 N·m, measured). By hand, the crank holds
+    the load's moment about A0: T12 = −(r × F), r the load point from A0."""
+    case = builtin_cases()["seed-E1-as-stated"]
+    force = (0.0, 1.0)
+    case = case.with_(loads=(Load(2, at, force, 0.0),), masses=())
+    c, s = np.cos(case.theta12), np.sin(case.theta12)
+    r = (c * at[0] - s * at[1], s * at[0] + c * at[1])
+    expected = -(r[0] * force[1] - r[1] * force[0])
+    assert backend(case).values["T12"] == pytest.approx(expected, rel=1e-6)

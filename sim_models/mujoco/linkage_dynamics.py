@@ -48,6 +48,7 @@ from mechcheck.sim_models.mujoco.dynamics import (
     QUASI_STATIC,
     QUASI_STATIC_SPEED,
     Convergence,
+    LeadLimit,
     halve_timestep,
     lengthen_lead,
     massless_limit,
@@ -210,7 +211,7 @@ def read_drive(rigs: LinkageRigs, motion: Motion, steps: int, dt: float,
                           rigs.base.units)
 
 
-def lead_limit(case: Case, motion: Motion, instant: float):  # type: ignore[no-untyped-def]
+def lead_limit(case: Case, motion: Motion, instant: float) -> LeadLimit:
     """Why a lead-in of ``steps`` of ``dt`` may not be run (see :mod:`.dynamics`)."""
 
     def limit(steps: int, dt: float) -> str:

@@ -47,7 +47,7 @@ from mechcheck.sim_models.mujoco.linkage_model import (
     origin_of,
     spanning_tree,
 )
-from mechcheck.sim_models.mujoco.model import STATIC, Settings
+from mechcheck.sim_models.mujoco.model import STATIC, Settings, place_frames_exactly
 from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, parent_force, xfrc_of_loads
 
 Array = NDArray[np.float64]
@@ -74,12 +74,7 @@ class LinkageRig:
         self.tree: LinkageTree = spanning_tree(linkage)
         self.tree_joints = {t.joint.name: t for t in self.tree.tree}
         self.model = build_spec(case.name, linkage, settings).compile()
-        # MuJoCo's compiler marks a site (or a centre of mass) within ~1e-7 of its body's
-        # origin as "same frame" and then puts it exactly at the origin: a load 6e-8 m
-        # from a pivot lost its moment, 6e-8 of the forces (found by the random linkages).
-        # Off, every site and centre of mass is placed from its own offset.
-        self.model.site_sameframe[:] = 0
-        self.model.body_sameframe[:] = 0
+        place_frames_exactly(self.model)
         self.data = mujoco.MjData(self.model)
         self.scale = linkage.scale
         self.units: dict[str, str] | None = quantity_units(linkage)
