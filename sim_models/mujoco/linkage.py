@@ -1,15 +1,19 @@
 """The MuJoCo backends for ``mechanism = "linkage"`` cases (issue 12).
 
-- :func:`settle_linkage` — backend ``mujoco``: the drivers held by joint equalities at
-  their values, the model started at rest in the analytic pose and settled by the stop
-  rules and refinement passes of :mod:`.settle`, the forces read from MuJoCo's state
-  (:class:`.linkage_rig.LinkageRig`).
+- :func:`settle_linkage` — backend ``mujoco``: a static linkage held by its drivers is
+  started at rest in the analytic pose and settled by the stop rules and refinement
+  passes of :mod:`.settle`, the forces read from MuJoCo's state
+  (:class:`.linkage_rig.LinkageRig`); free coordinates settle to their equilibrium from
+  the drawn pose (:mod:`.linkage_free`); a moving linkage, or a static one with Coulomb
+  friction, is driven through its prescribed (or quasi-static) motion
+  (:mod:`.linkage_dynamics`).
 - :func:`solve_linkage_at_pose` — backend ``mujoco_solve``: the constraint forces that make
-  the analytic motion exact, from MuJoCo's own constraint Jacobian (as :mod:`.solve`).
+  the analytic motion exact, from MuJoCo's own constraint Jacobian (as :mod:`.solve`),
+  Coulomb friction iterated from the solved reactions.
 
 Both give the pose verdict the analytic backend gives (a pose that does not assemble, a
-singular or indeterminate one: no forces), and refuse, with the reason, what they do not
-model yet.
+singular or indeterminate one: no forces), and refuse, with the reason, what the builder
+cannot model (a loop without a revolute joint).
 """
 
 from __future__ import annotations
