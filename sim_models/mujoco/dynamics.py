@@ -62,6 +62,7 @@ driven hinge's armature is no fictitious inertia: it is subtracted exactly
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import mujoco
@@ -247,10 +248,13 @@ def driven_rigs(case: Case) -> DrivenRigs:
     return DrivenRigs(Rig(case, settings), Rig(case, replace(settings, fictitious_scale=2.0)))
 
 
-def massless_limit(base: dict[str, float], doubled: dict[str, float]) -> dict[str, float]:
+def massless_limit(base: dict[str, float], doubled: dict[str, float],
+                   units: dict[str, str] | None = None) -> dict[str, float]:
     """Forces and torques extrapolated linearly to zero fictitious inertia, F₀ = 2·F(k) − F(2k);
-    the pose as the base run reached it (it is prescribed, not an inertia effect)."""
-    return {q: v if quantity_kind(q) == "pose" else 2.0 * v - doubled[q]
+    the pose as the base run reached it (it is prescribed, not an inertia effect).
+    ``units``: a linkage's quantity units (its names do not say their kind)."""
+    table = units or {}
+    return {q: v if quantity_kind(q, table.get(q)) == "pose" else 2.0 * v - doubled[q]
             for q, v in base.items()}
 
 
@@ -320,30 +324,52 @@ class Convergence:
         return ""
 
 
+#: One reading of a driven run with a given number of lead steps and time step.
+Reading = Callable[[int, float], dict[str, float]]
+#: Why a run with this many lead steps and this time step may not be made ("" if it may).
+LeadLimit = Callable[[int, float], str]
+
+
 def converge_lead(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
                   dt: float) -> Convergence:
     """Double the lead time until the start-up transient has died (or may not grow)."""
     friction = case.has_friction
     instant = float(condition(case, pose_of(case, np.array([case.theta12])))[0])
+
+    def read(steps: int, step: float) -> dict[str, float]:
+        return read_drive(rigs, Drive(case.theta12, omega, alpha, steps, step), friction)
+
+    def limit(steps: int, step: float) -> str:
+        worst, where = lead_in_condition(case, Drive(case.theta12, omega, alpha, steps, step))
+        if not worst <= LEAD_CONDITION_GROWTH * instant:
+            return (f"a longer lead-in would pass θ12 = {np.degrees(where):.2f}°, "
+                    f"condition number {worst:.3g} against {instant:.3g} at the instant "
+                    "(a change point, or the rocker dead point of a rocker drive)")
+        return ""
+
+    return lengthen_lead(read, limit, dt, rigs.base.scale, rigs.runs)
+
+
+def lengthen_lead(read: Reading, limit: LeadLimit, dt: float, scale: float, runs: int,
+                  units: dict[str, str] | None = None) -> Convergence:
+    """Double the lead steps from :data:`LEAD_STEPS` until two readings agree within
+    :data:`LEAD_AGREEMENT_RTOL`, the budget :data:`MAX_LEAD_STEPS` is spent or ``limit``
+    forbids a longer lead-in; ``runs`` simulator runs per reading, forces compared
+    relative to ``scale`` (torques divided by it)."""
     steps = LEAD_STEPS
-    out = Convergence(read_drive(rigs, Drive(case.theta12, omega, alpha, steps, dt), friction),
-                      steps, dt, total_steps=rigs.runs * steps)
+    out = Convergence(read(steps, dt), steps, dt, total_steps=runs * steps)
     while not out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
         steps *= 2
-        drive = Drive(case.theta12, omega, alpha, steps, dt)
         if steps > MAX_LEAD_STEPS:
             out.lead_limit = f"step budget {MAX_LEAD_STEPS} reached"
             break
-        worst, where = lead_in_condition(case, drive)
-        if not worst <= LEAD_CONDITION_GROWTH * instant:
-            out.lead_limit = (f"a longer lead-in would pass θ12 = {np.degrees(where):.2f}°, "
-                              f"condition number {worst:.3g} against {instant:.3g} at the instant "
-                              "(a change point, or the rocker dead point of a rocker drive)")
+        out.lead_limit = limit(steps, dt)
+        if out.lead_limit:
             break
-        values = read_drive(rigs, drive, friction)
-        residual = disagreement(values, out.values, rigs.base.scale)
+        values = read(steps, dt)
+        residual = disagreement(values, out.values, scale, units)
         out.values, out.lead_steps = values, steps
-        out.total_steps += rigs.runs * steps
+        out.total_steps += runs * steps
         out.lead_disagreement = residual if np.isfinite(residual) else np.inf
         if not np.isfinite(residual):
             break
@@ -352,7 +378,19 @@ def converge_lead(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
 
 def refine_timestep(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
                     out: Convergence) -> Convergence:
-    """Halve the time step until two runs agree, keeping the number of lead steps.
+    """Halve the time step until two runs agree, keeping the number of lead steps
+    (:func:`halve_timestep`)."""
+
+    def read(steps: int, dt: float) -> dict[str, float]:
+        return read_drive(rigs, Drive(case.theta12, omega, alpha, steps, dt), case.has_friction)
+
+    return halve_timestep(read, out, rigs.base.scale, rigs.runs)
+
+
+def halve_timestep(read: Reading, out: Convergence, scale: float, runs: int,
+                   units: dict[str, str] | None = None) -> Convergence:
+    """Halve the time step until two readings agree within :data:`TIMESTEP_AGREEMENT_RTOL`,
+    keeping the number of lead steps.
 
     Every start-up transient of the soft model has time constants ∝ dt (the
     constraints' 2·dt, and the modes their compliance R/k ∝ dt² gives the
@@ -362,11 +400,10 @@ def refine_timestep(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
     """
     for _ in range(MAX_TIMESTEP_HALVINGS):
         dt = 0.5 * out.dt
-        drive = Drive(case.theta12, omega, alpha, out.lead_steps, dt)
-        values = read_drive(rigs, drive, case.has_friction)
-        residual = disagreement(values, out.values, rigs.base.scale)
+        values = read(out.lead_steps, dt)
+        residual = disagreement(values, out.values, scale, units)
         out.values, out.dt = values, dt
-        out.total_steps += rigs.runs * out.lead_steps
+        out.total_steps += runs * out.lead_steps
         out.timestep_disagreement = residual if np.isfinite(residual) else np.inf
         if not residual > TIMESTEP_AGREEMENT_RTOL:  # converged, or NaN: stop either way
             break

@@ -1,15 +1,19 @@
 """The MuJoCo backends for ``mechanism = "linkage"`` cases (issue 12).
 
-- :func:`settle_linkage` — backend ``mujoco``: the drivers held by joint equalities at
-  their values, the model started at rest in the analytic pose and settled by the stop
-  rules and refinement passes of :mod:`.settle`, the forces read from MuJoCo's state
-  (:class:`.linkage_rig.LinkageRig`).
+- :func:`settle_linkage` — backend ``mujoco``: a static linkage held by its drivers is
+  started at rest in the analytic pose and settled by the stop rules and refinement
+  passes of :mod:`.settle`, the forces read from MuJoCo's state
+  (:class:`.linkage_rig.LinkageRig`); free coordinates settle to their equilibrium from
+  the drawn pose (:mod:`.linkage_free`); a moving linkage, or a static one with Coulomb
+  friction, is driven through its prescribed (or quasi-static) motion
+  (:mod:`.linkage_dynamics`).
 - :func:`solve_linkage_at_pose` — backend ``mujoco_solve``: the constraint forces that make
-  the analytic motion exact, from MuJoCo's own constraint Jacobian (as :mod:`.solve`).
+  the analytic motion exact, from MuJoCo's own constraint Jacobian (as :mod:`.solve`),
+  Coulomb friction iterated from the solved reactions.
 
 Both give the pose verdict the analytic backend gives (a pose that does not assemble, a
-singular or indeterminate one: no forces), and refuse, with the reason, what they do not
-model yet.
+singular or indeterminate one: no forces), and refuse, with the reason, what the builder
+cannot model (a loop without a revolute joint).
 """
 
 from __future__ import annotations
@@ -21,23 +25,33 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
-from mechcheck.analytic.linkage_forces import LinkageResults
+from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
+from mechcheck.sim_models.mujoco.linkage_free import settle_free
+from mechcheck.sim_models.mujoco.linkage_friction import (
+    apply_friction,
+    clear_friction,
+    friction_change,
+)
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, real_inertial, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import EXACT
 from mechcheck.sim_models.mujoco.settle import settle_refined, settled_solution
-from mechcheck.sim_models.mujoco.solve import impose_rigid_forces
+from mechcheck.sim_models.mujoco.solve import (
+    FRICTION_MAX_PASSES,
+    FRICTION_RTOL,
+    impose_rigid_forces,
+)
 
 SETTLE_REFUSALS = {
-    "dynamic": "the mujoco backend settles linkages held by their drivers; a driven "
-               "(moving) linkage is not simulated yet",
-    "friction": "the mujoco backend does not emulate joint friction of linkages yet",
-    "free": "the mujoco backend holds every coordinate by a driver; settling free "
-            "coordinates to their equilibrium is not modelled yet",
+    "dynamic": "a sweep in the mujoco backend settles linkages held by their drivers; a "
+               "sweep of a driven (moving) linkage is not simulated",
+    "friction": "a sweep in the mujoco backend settles linkages held by their drivers; a "
+                "sweep with Coulomb friction (a quasi-static motion) is not simulated",
 }
-COULOMB_REFUSAL = ("the mujoco_solve backend does not emulate Coulomb friction of "
-                   "linkages yet")
+FREE_SWEEP_REFUSAL = ("the mujoco backend settles free coordinates case by case, from the "
+                      "drawn pose; a sweep of them is not simulated")
 
 
 def refused(case: Case, backend: str, why: str) -> Solution:
@@ -70,11 +84,20 @@ def unbuildable(case: Case) -> str | None:
 
 
 def settle_refusal(case: Case) -> str | None:
-    if case.kind != "static":
-        return SETTLE_REFUSALS[case.kind]
-    if case.linkage.dof > len(case.linkage.drivers):
-        return SETTLE_REFUSALS["free"]
+    """Why a sweep does not settle the case (it holds the drivers at rest), or None."""
+    if is_driven(case):
+        return SETTLE_REFUSALS["friction" if case.has_coulomb_friction else "dynamic"]
     return None
+
+
+def is_driven(case: Case) -> bool:
+    """A moving case, or a static one with Coulomb friction (a quasi-static motion);
+    viscous friction alone does nothing at rest."""
+    return case.linkage.is_moving or case.has_coulomb_friction
+
+
+def has_free_coordinates(case: Case) -> bool:
+    return case.linkage.dof > len(case.linkage.drivers)
 
 
 def settle_linkage(case: Case, rig: LinkageRig | None = None,
@@ -84,14 +107,18 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
     ``rig`` and ``results`` (the analytic pose analysis) may be given by a sweep.
     """
     start = time.perf_counter()
-    why = unbuildable(case) or settle_refusal(case)
+    why = unbuildable(case)
     if why is not None:
         return refused(case, "mujoco", why)
-    rig = rig or LinkageRig(case)
     results = results if results is not None else analytic_results(case)
     gated = withheld_at(case, "mujoco", results)
     if gated is not None:
         return gated
+    if is_driven(case):
+        return drive_linkage(case, results)
+    if has_free_coordinates(case):
+        return settle_free(case, results)
+    rig = rig or LinkageRig(case)
     qpos = seed(rig, rig.joint_states(results.pose)[0][0], driver_values(case))
     result = settle_refined(rig, qpos)
     return settled_solution(rig, qpos, result, time.perf_counter() - start)
@@ -134,8 +161,6 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
     """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose (row
     ``index`` of ``results``, the analytic pose analysis, which a sweep may give)."""
     start = time.perf_counter()
-    if case.has_coulomb_friction:
-        return refused(case, "mujoco_solve", COULOMB_REFUSAL)
     why = unbuildable(case)
     if why is not None:
         return refused(case, "mujoco_solve", why)
@@ -146,25 +171,54 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
         return gated
     states = rig.joint_states(results.pose)
     return exact_solution(case, rig, tuple(a[index] for a in states),
-                          results.pose.drivers[index], start)
+                          results.pose.drivers[index], start, senses_at(results, index))
 
 
-def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
-                   targets: np.ndarray, start: float) -> Solution:
-    """The exact solve at the analytic joint ``state`` (qpos, qvel, qacc) with the drivers
-    at ``targets``; ``start`` times it."""
+def senses_at(results: LinkageResults, index: int) -> dict[str, float]:
+    """The sense of each Coulomb joint's relative motion at pose ``index``, as the analytic
+    motion prescribes it (the drivers' velocities or quasi-static senses)."""
+    return {t.joint.name: float(t.sense[index]) for t in coulomb_terms(results.pose)}
+
+
+def constraint_solve(rig: LinkageRig, qacc: np.ndarray) -> tuple[dict[str, float], float]:
+    """The rigid constraint forces at the rig's state and the reading; the equations'
+    residual."""
     m, d = rig.model, rig.data
-    qpos, qvel, qacc = state
-    rig.set_state(qpos, qvel)
-    rig.set_targets(targets)
     mujoco.mj_kinematics(m, d)  # load points and centres of mass for the loads
     mujoco.mj_comPos(m, d)
     rig.apply_loads()
     mujoco.mj_forward(m, d)
     residual = impose_rigid_forces(m, d, qacc)
-    values = rig.read()
+    return rig.read(), residual
+
+
+def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
+                   targets: np.ndarray, start: float,
+                   senses: dict[str, float] | None = None) -> Solution:
+    """The exact solve at the analytic joint ``state`` (qpos, qvel, qacc) with the drivers
+    at ``targets``; ``start`` times it.
+
+    With Coulomb friction (``senses``: each joint's sense of motion) the friction loads
+    come from the reactions and the reactions from the loads, repeated until they agree
+    to :data:`.solve.FRICTION_RTOL` (as the four-bar's :func:`.solve.solve_with_friction`).
+    """
+    qpos, qvel, qacc = state
+    clear_friction(rig)
+    rig.set_state(qpos, qvel)
+    rig.set_targets(targets)
+    values, residual = constraint_solve(rig, qacc)
+    passes = 0
+    if senses:
+        for passes in range(1, FRICTION_MAX_PASSES + 1):  # noqa: B007 - reported
+            apply_friction(rig, values, {j.name: senses.get(j.name, 0.0)
+                                         for j in case.linkage.joints})
+            new, residual = constraint_solve(rig, qacc)
+            change, values = friction_change(new, values), new
+            if change <= FRICTION_RTOL:
+                break
     diagnostics: dict[str, float | str] = {
-        "method": "constraint_solve", "steps": 0, "wall_time_s": time.perf_counter() - start,
+        "method": "constraint_solve", "steps": passes,
+        "wall_time_s": time.perf_counter() - start,
         "residual_velocity": 0.0, "loop_violation": rig.loop_violation(), "pose_drift": 0.0,
         "equation_residual": residual,
     }
@@ -199,7 +253,8 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     first = np.asarray(first, dtype=float)
     why = unbuildable(case)
     if backend == "mujoco":
-        why = why or settle_refusal(case)
+        why = why or settle_refusal(case) or (FREE_SWEEP_REFUSAL if has_free_coordinates(case)
+                                              else None)
     if why is not None:
         return [refused(case, backend, why)] * len(first)
     if results is None:
@@ -223,5 +278,6 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
             history = [*history[-1:], (float(first[i]), rig.total_constraint_forces())] \
                 if result.settled else []
         else:
-            out.append(exact_solution(case, rig, tuple(a[i] for a in states), targets[i], start))
+            out.append(exact_solution(case, rig, tuple(a[i] for a in states), targets[i], start,
+                                      senses_at(results, i)))
     return out

@@ -33,6 +33,8 @@ import numpy as np
 from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, LinkMass, TorsionSpring
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.mujoco.model import (
+    CLOCK_ARMATURE,
+    DRIVE_ARMATURE_INERTIA,
     INERTIA_FLOOR_FRACTION,
     SETTLE_MASS,
     SOLVER_TOLERANCE,
@@ -250,11 +252,42 @@ def build_spec(name: str, linkage: Linkage, settings: Settings = STATIC) -> mujo
         _add_closure(spec, bodies, tree, linkage, joint, settings)
     for spring in linkage.springs:
         _add_spring(spec, bodies, tree, linkage, spring)
+    if settings.clock:
+        _add_clock(spec)
     for driver in linkage.drivers:
+        # Held: q = value. Driven: q = value + v·t + a·t²/2 of the clock's angle t
+        # (:func:`_add_clock`), so the prescribed motion is exact at every step.
         spec.add_equality(name=f"drive_{driver.joint}", type=mujoco.mjtEq.mjEQ_JOINT,
-                          name1=driver.joint, data=[driver.value] + [0.0] * 11,
+                          name1=driver.joint, name2=CLOCK if settings.clock else "",
+                          data=[driver.value] + [0.0] * 11,
                           solref=list(settings.solref), solimp=list(settings.solimp))
     return spec
+
+
+#: The clock hinge of a driven run: it turns at 1 rad/s, so its angle is the time t
+#: (0 at the instant read), and every driver's equality is a polynomial in it.
+CLOCK = "clock"
+
+
+def _add_clock(spec: mujoco.MjSpec) -> None:
+    """A separate grounded body with the clock hinge: an armature of
+    :data:`~.model.CLOCK_ARMATURE` makes the drivers' reactions change its unit speed by
+    ~1e-8 rad/s² (as the four-bar's clock, :mod:`.dynamics`)."""
+    body = spec.worldbody.add_body(name=CLOCK, mass=1.0, inertia=[1.0, 1.0, 1.0],
+                                   explicitinertial=True)
+    body.add_joint(name=CLOCK, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 0.0, 1.0],
+                   armature=CLOCK_ARMATURE)
+
+
+def drive_armature(linkage: Linkage, joint: Joint, settings: Settings) -> float:
+    """The extra armature of a driven joint in a driven run (see
+    :data:`~.model.DRIVE_ARMATURE_INERTIA`): of the order of the real links' inertia
+    (hinge, kg·m²) or mass (slide, kg); subtracted exactly from the driver's effort."""
+    if not settings.drive_armature or not any(d.joint == joint.name for d in linkage.drivers):
+        return 0.0
+    reference = max((m.mass for m in linkage.masses), default=1.0)
+    lever = linkage.scale**2 if joint.kind == "revolute" else 1.0
+    return DRIVE_ARMATURE_INERTIA * reference * lever
 
 
 def _options(spec: mujoco.MjSpec, settings: Settings) -> None:
@@ -289,7 +322,8 @@ def _add_body(parent: mujoco.MjsBody, tree: LinkageTree, linkage: Linkage, t: Tr
         axis = [t.sign * joint.axis[0], t.sign * joint.axis[1], 0.0]
         kind = mujoco.mjtJoint.mjJNT_SLIDE
     stiffness, springref = _torsion(linkage, joint)
-    body.add_joint(name=joint.name, type=kind, axis=axis, armature=settings.armature,
+    body.add_joint(name=joint.name, type=kind, axis=axis,
+                   armature=settings.armature + drive_armature(linkage, joint, settings),
                    stiffness=[stiffness, 0.0, 0.0], springref=springref,
                    damping=[_viscous(linkage, joint), 0.0, 0.0])
     return body

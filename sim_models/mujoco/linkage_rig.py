@@ -39,6 +39,7 @@ from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.mujoco.linkage_model import (
+    CLOCK,
     LinkageTree,
     body_name,
     build_spec,
@@ -46,7 +47,7 @@ from mechcheck.sim_models.mujoco.linkage_model import (
     origin_of,
     spanning_tree,
 )
-from mechcheck.sim_models.mujoco.model import STATIC, Settings
+from mechcheck.sim_models.mujoco.model import STATIC, Settings, place_frames_exactly
 from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, parent_force, xfrc_of_loads
 
 Array = NDArray[np.float64]
@@ -73,12 +74,7 @@ class LinkageRig:
         self.tree: LinkageTree = spanning_tree(linkage)
         self.tree_joints = {t.joint.name: t for t in self.tree.tree}
         self.model = build_spec(case.name, linkage, settings).compile()
-        # MuJoCo's compiler marks a site (or a centre of mass) within ~1e-7 of its body's
-        # origin as "same frame" and then puts it exactly at the origin: a load 6e-8 m
-        # from a pivot lost its moment, 6e-8 of the forces (found by the random linkages).
-        # Off, every site and centre of mass is placed from its own offset.
-        self.model.site_sameframe[:] = 0
-        self.model.body_sameframe[:] = 0
+        place_frames_exactly(self.model)
         self.data = mujoco.MjData(self.model)
         self.scale = linkage.scale
         self.units: dict[str, str] | None = quantity_units(linkage)
@@ -127,6 +123,19 @@ class LinkageRig:
                                          dtype=int)
         # Joint speeds and pose errors as point speeds and lengths: hinges times the size.
         self.weight = np.where(self.hinge[m.dof_jntid], self.scale, 1.0)
+        clock = int(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, CLOCK))
+        self.clock: int | None = int(m.jnt_dofadr[clock]) if clock >= 0 else None
+        if self.clock is not None:
+            self.weight[self.clock] = 0.0  # the clock is time, not the mechanism
+        # A driven run's extra armature on each driven joint, subtracted from its effort.
+        self.drive_armature = {j: float(m.dof_armature[self.dof[j]]) - settings.armature
+                               for j in self.drive_rows}
+        #: Friction emulated from the reactions (:mod:`.linkage_friction`): xfrc_applied
+        #: added to the loads, and each prismatic joint's friction force along its axis,
+        #: which is part of its reported reaction.
+        self.extra = np.zeros((m.nbody, 6))
+        self.sliding: dict[str, float] = {}
+        self.viscous = True
 
     def _id(self, kind: mujoco.mjtObj, name: str) -> int:
         found = int(mujoco.mj_name2id(self.model, kind, name))
@@ -195,6 +204,20 @@ class LinkageRig:
         self.data.qpos[:] = qpos
         self.data.qvel[:] = qvel
 
+    def joint_rates(self, qvel: Array) -> dict[str, float]:
+        """Every joint's coordinate rate q̇ (LINKAGES.md) from joint velocities."""
+        omega = dict(zip(self.linkage.moving_links, self.rotation @ qvel, strict=True))
+        omega[GROUND] = 0.0
+        return {j.name: float(qvel[self.dof[j.name]]) if j.name in self.dof
+                else float(omega[j.links[1]] - omega[j.links[0]]) for j in self.linkage.joints}
+
+    def set_timestep(self, dt: float) -> None:
+        """Change the time step, with the constraints' time constant (as
+        :meth:`.rig.Rig.set_timestep`)."""
+        self.model.opt.timestep = dt
+        if self.settings.solref_timeconst is None:
+            self.model.eq_solref[:, 0] = 2.0 * dt
+
     def set_targets(self, values: Array) -> None:
         """Hold each driven joint at its value (rad or m, from the drawn pose)."""
         for driver, value in zip(self.linkage.drivers, values, strict=True):
@@ -205,6 +228,8 @@ class LinkageRig:
         """xfrc_applied from the current pose (see :func:`.rig.xfrc_of_loads`)."""
         xfrc_of_loads(self.data, self.loads, self.incidence, self.body_forces,
                       np.zeros(self.model.nbody))
+        if self.extra.any():
+            self.data.xfrc_applied[:] += self.extra
         if self.carried.any():
             self.apply_carried()
 
@@ -253,7 +278,8 @@ class LinkageRig:
         m, d = self.model, self.data
         mujoco.mj_rnePostConstraint(m, d)
         total = self.total_constraint_forces()
-        efforts = {j: float(total[rows[0]]) for j, rows in self.drive_rows.items()}
+        efforts = {j: float(total[rows[0]] - self.drive_armature[j] * d.qacc[self.dof[j]])
+                   for j, rows in self.drive_rows.items()}
         values = {f"Q_{j}": q for j, q in efforts.items()}
         for joint in self.linkage.joints:
             values.update(self._reaction(joint, total, efforts.get(joint.name, 0.0)))
@@ -273,11 +299,24 @@ class LinkageRig:
         point = self.point_on(joint.links[1], self.linkage.points[joint.at])
         f, moment = parent_force(self.model, self.data, self.body[t.child], point)
         f, moment = t.sign * f, t.sign * moment  # by links[0] on links[1]
+        u = self.axis_of(joint)
+        # The driver's effort is reported as Q, not in F; emulated friction along the axis
+        # is applied as a load, but it is part of the joint's reaction.
+        f = f + (self.sliding.get(name, 0.0) - effort) * u
+        return {f"M_{name}": moment, f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
+
+    def axis_of(self, joint: Joint) -> Array:
+        """A prismatic joint's current sliding direction (fixed in links[0])."""
         assert joint.axis is not None
         b0 = self.body[joint.links[0]]
-        u = (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
-        f = f - effort * u  # the driver's effort is reported as Q, not in F
-        return {f"M_{name}": moment, f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
+        return (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
+
+    def without_viscous(self) -> None:
+        """No damper anywhere (a quasi-static run: the analytic motion has no speed, so
+        no viscous force; the simulated one is slow but not still)."""
+        self.model.dof_damping[:] = 0.0
+        self.model.tendon_damping[:] = 0.0
+        self.viscous = False
 
     def _springs(self) -> dict[str, float]:
         d = self.data
@@ -290,7 +329,7 @@ class LinkageRig:
                 dof = self.dof[torsion.joint]  # = its qpos address (hinges and slides only)
                 out[f"S_{torsion.name}"] = float(
                     torsion.stiffness * (d.qpos[dof] - torsion.free_rotation)
-                    + torsion.damping * d.qvel[dof])
+                    + (torsion.damping * d.qvel[dof] if self.viscous else 0.0))
         return out
 
     def _pose(self) -> dict[str, float]:

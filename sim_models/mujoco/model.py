@@ -291,7 +291,21 @@ def add_slider(world: mujoco.MjsBody, case: Case, g: SliderCrankGeometry,
 def compile_model(case: Case, settings: Settings = STATIC) -> tuple[mujoco.MjModel, Layout]:
     """Compile ``case`` and locate its parts."""
     model = build_spec(case, settings).compile()
+    place_frames_exactly(model)
     return model, layout_of(case, model, settings)
+
+
+def place_frames_exactly(model: mujoco.MjModel) -> None:
+    """Switch off MuJoCo's same-frame shortcut in a compiled model.
+
+    The compiler marks a site (or a centre of mass) within a small distance of its body's
+    frame as "same frame" and then puts it exactly there: a load 6e-8 m (or 2e-7 m) from
+    a pivot lost its moment (found by the random linkages; the four-bar's loads were moved
+    the same way, measured). Off, every site and centre of mass is placed from its own
+    offset; the cost is a few multiplications per site.
+    """
+    model.site_sameframe[:] = 0
+    model.body_sameframe[:] = 0
 
 
 def zero_fictitious_masses(case: Case, model: mujoco.MjModel, layout: Layout) -> None:
@@ -310,6 +324,7 @@ def zero_fictitious_masses(case: Case, model: mujoco.MjModel, layout: Layout) ->
         model.body_inertia[layout.body[m.link]] = m.inertia
     # MuJoCo caches constant inertia entries of simple bodies at compile time.
     mujoco.mj_setConst(model, mujoco.MjData(model))
+    place_frames_exactly(model)  # mj_setConst sets the same-frame flags again
 
 
 def layout_of(case: Case, model: mujoco.MjModel, settings: Settings) -> Layout:

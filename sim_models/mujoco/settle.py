@@ -29,7 +29,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections import deque
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from typing import Protocol
 
@@ -254,15 +254,21 @@ def seed_at(rig: Rig, theta12: float) -> np.ndarray:
     return q
 
 
-def settle_refined(rig: SettlingRig, qpos: np.ndarray) -> Settled:
+def settle_refined(rig: SettlingRig, qpos: np.ndarray,
+                   restart: Callable[[], None] | None = None,
+                   max_steps: int | None = None) -> Settled:
     """Settle, carry the constraint forces, re-seed the pose, settle again, until
     the passes have converged (:func:`refinement_left` ≤ :data:`REFINE_RTOL`) or
-    one does not settle."""
+    one does not settle.
+
+    ``restart`` replaces the re-seeding in ``qpos`` (free coordinates have no analytic
+    pose to re-seed: they go on from where they settled); ``max_steps`` is each pass's
+    budget (:func:`run_until_settled`)."""
     total = 0
     previous: Settled | None = None
     differences: list[float] = []
     for passes in range(1, MAX_PASSES + 1):
-        result = run_until_settled(rig)
+        result = run_until_settled(rig, max_steps)
         total += result.steps
         if not result.settled or not np.all(np.isfinite(list(result.values.values()))):
             return replace(result, steps=total, settled=False, passes=passes,
@@ -273,7 +279,10 @@ def settle_refined(rig: SettlingRig, qpos: np.ndarray) -> Settled:
                 return replace(result, steps=total, passes=passes, refinement=differences[-1])
         previous = result
         rig.carry()
-        reseed(rig, qpos)
+        if restart is None:
+            reseed(rig, qpos)
+        else:
+            restart()
     return replace(result, steps=total, settled=False, passes=MAX_PASSES,
                    refinement=differences[-1])
 

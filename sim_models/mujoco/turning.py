@@ -36,7 +36,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic.case import Case
-from mechcheck.sim_models.mujoco.model import SETTLE_MASS, Settings, build_spec
+from mechcheck.sim_models.mujoco.model import (
+    SETTLE_MASS,
+    Settings,
+    build_spec,
+    place_frames_exactly,
+)
 from mechcheck.sim_models.turning import (
     CRANK_ARMATURE,
     JOINT_DAMPING,
@@ -102,6 +107,7 @@ class MujocoTurner:
         self.timestep = TIMESTEP
         self.torque_limit = TORQUE_LIMIT * inertia_unit(case) * SERVO_SPEED**2
         self.model = turning_spec(case).compile()
+        place_frames_exactly(self.model)
         self.data = mujoco.MjData(self.model)
         m = self.model
         self.q = [int(m.joint(j).qposadr[0]) for j in ("A0", "A", output_joint(case))]
@@ -164,6 +170,7 @@ HOLD_MAX_STEPS = 20000
 def hold_model(case: Case) -> tuple[mujoco.MjModel, mujoco.MjData, list[int], int, int]:
     """(model, data, qpos addresses of A0, A, B0|slide, drive equality id, body of link 4)."""
     model = build_spec(case, HOLD_SETTINGS).compile()
+    place_frames_exactly(model)
     q = [int(model.joint(j).qposadr[0]) for j in ("A0", "A", output_joint(case))]
     return model, mujoco.MjData(model), q, int(model.equality("drive").id), int(model.body("link4").id)
 

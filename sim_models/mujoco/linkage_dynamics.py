@@ -1,0 +1,271 @@
+"""Driven linkages in MuJoCo (issue 12): every driver follows its prescribed motion by
+forward simulation, and the forces are read at the instant, as the four-bar's driven runs
+(:mod:`.dynamics`, whose convergence checks this module reuses).
+
+The model (:func:`.linkage_model.build_spec` with a clock) has a heavy clock hinge turning
+at 1 rad/s, so its angle is the time t, 0 at the instant read; each driver's joint
+equality is the polynomial q = q* + v·t + a·t²/2 of it, so the prescribed position,
+speed and acceleration hold at every step and the equality's velocity error is zero on the
+prescribed motion. Its force is the driver's effort Q, less the driven joint's armature
+times MuJoCo's q̈ (:func:`.linkage_model.drive_armature`).
+
+The run starts ``steps·dt`` before the instant at rest relative to the prescribed motion:
+the analytic pose and joint velocities there (the analytic side prescribes the motion and
+seeds the start, nothing more). The lead-in is doubled until two readings agree
+(:func:`.dynamics.lengthen_lead`), never through a pose whose condition number grows past
+:data:`.dynamics.LEAD_CONDITION_GROWTH` times the instant's (or that does not assemble),
+then the time step is halved until two readings agree (:func:`.dynamics.halve_timestep`).
+A massless link gets a fictitious mass and every reading is the massless limit
+2·F(k) − F(2k) of the model as built and one with twice the fictitious inertia
+(:func:`.dynamics.massless_limit`).
+
+Coulomb friction (:mod:`.linkage_friction`) is applied every step from the current
+reactions, with the senses of the simulator's own joint velocities; viscous friction is
+MuJoCo's joint damping. A static case with Coulomb friction is a quasi-static motion: the
+heavy settling masses driven at :data:`.dynamics.QUASI_STATIC_SPEED` (rad/s or m/s) in
+each driver's ``sense``, without dampers (the analytic motion has no speed), extrapolated
+to no fictitious inertia like any other.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import mujoco
+import numpy as np
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_forces import LinkageResults, solve_linkage
+from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.solution import Solution, quantity_kind
+from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.mujoco.dynamics import (
+    DYNAMIC,
+    FINAL_FRICTION_PASSES,
+    LEAD_AGREEMENT_RTOL,
+    LEAD_CONDITION_GROWTH,
+    QUASI_STATIC,
+    QUASI_STATIC_SPEED,
+    Convergence,
+    LeadLimit,
+    halve_timestep,
+    lengthen_lead,
+    massless_limit,
+)
+from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
+from mechcheck.sim_models.mujoco.linkage_model import (
+    INERTIA_FLOOR_FRACTION,
+    link_extent,
+    real_inertial,
+    spanning_tree,
+)
+from mechcheck.sim_models.mujoco.linkage_rig import Array, LinkageRig
+from mechcheck.sim_models.mujoco.model import Settings
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Each driver's value, velocity and acceleration at the instant (SI)."""
+
+    value: Array
+    velocity: Array
+    acceleration: Array
+    quasi_static: bool
+
+    def at(self, t: Array) -> tuple[Array, Array, Array]:
+        """Drivers' values, velocities and accelerations (N, d) at the times ``t``."""
+        t = np.asarray(t, dtype=float)[:, None]
+        return (self.value + self.velocity * t + 0.5 * self.acceleration * t**2,
+                self.velocity + self.acceleration * t, np.broadcast_to(self.acceleration,
+                                                                        (t.shape[0],
+                                                                         self.value.size)))
+
+
+def motion_of(case: Case) -> Motion:
+    """The prescribed motion: the drivers' own, or for a static case with Coulomb friction
+    a slow one in each driver's ``sense``."""
+    drivers = case.linkage.drivers
+    value = np.array([d.value for d in drivers])
+    if case.linkage.is_moving:
+        return Motion(value, np.array([d.velocity for d in drivers]),
+                      np.array([d.acceleration for d in drivers]), False)
+    return Motion(value, QUASI_STATIC_SPEED * np.array([float(d.sense) for d in drivers]),
+                  np.zeros(len(drivers)), True)
+
+
+def turns(case: Case, link: str) -> bool:
+    """True when a link can rotate: a revolute joint lies on its path to the ground."""
+    tree = spanning_tree(case.linkage)
+    while link != GROUND:
+        t = tree.parent_joint(link)
+        if t.joint.kind == "revolute":
+            return True
+        link = t.parent
+    return False
+
+
+def has_fictitious_inertia(case: Case, settings: Settings) -> bool:
+    """True when a moving body has inertia the Case does not (see
+    :func:`.linkage_model.model_inertial`); a body that cannot turn may have any inertia."""
+    if settings.masses == "settle":
+        return True
+    for link in case.linkage.moving_links:
+        real = real_inertial(case.linkage, link)
+        if real is None:
+            return True
+        floor = INERTIA_FLOOR_FRACTION * real.mass * link_extent(case.linkage, link) ** 2
+        if real.inertia < floor and turns(case, link):
+            return True
+    return False
+
+
+@dataclass(frozen=True)
+class LinkageRigs:
+    """The model as built and, with fictitious inertia, one with twice of it."""
+
+    base: LinkageRig
+    doubled: LinkageRig | None = None
+
+    @property
+    def runs(self) -> int:
+        return 1 if self.doubled is None else 2
+
+
+def driven_rigs(case: Case, motion: Motion) -> LinkageRigs:
+    settings = QUASI_STATIC if motion.quasi_static else DYNAMIC
+    rigs = [LinkageRig(case, settings)]
+    if has_fictitious_inertia(case, settings):
+        rigs.append(LinkageRig(case, replace(settings, fictitious_scale=2.0)))
+    for rig in rigs:
+        if motion.quasi_static:
+            rig.without_viscous()
+        for k, driver in enumerate(case.linkage.drivers):
+            eq = rig.drive_eq[driver.joint]
+            rig.model.eq_data[eq, :3] = (motion.value[k], motion.velocity[k],
+                                         0.5 * motion.acceleration[k])
+    return LinkageRigs(rigs[0], rigs[1] if len(rigs) > 1 else None)
+
+
+def clock_times(steps: int, dt: float) -> Array:
+    """The clock's angle (time) at each of the ``steps + 1`` forward passes."""
+    return dt * np.arange(-steps, 1, dtype=float)
+
+
+def start_run(rig: LinkageRig, motion: Motion, steps: int, dt: float) -> None:
+    """At t = −steps·dt on the prescribed motion: the analytic pose and joint velocities
+    there, the clock at that time and turning at 1 rad/s."""
+    m, d = rig.model, rig.data
+    mujoco.mj_resetData(m, d)
+    rig.set_timestep(dt)
+    clear_friction(rig)
+    t0 = -steps * dt
+    values, velocities, accelerations = motion.at(np.array([t0]))
+    pose = solve_pose(rig.linkage, values, velocities, accelerations)
+    qpos, qvel, _ = rig.joint_states(pose)
+    assert rig.clock is not None
+    qpos[0, rig.clock], qvel[0, rig.clock] = t0, 1.0
+    rig.set_state(qpos[0], qvel[0])
+
+
+def forward(rig: LinkageRig) -> None:
+    """A forward pass with the loads at the current positions."""
+    m, d = rig.model, rig.data
+    mujoco.mj_kinematics(m, d)
+    rig.apply_loads()
+    mujoco.mj_forward(m, d)
+
+
+def with_friction(rig: LinkageRig) -> dict[str, float]:
+    """Read the reactions and set the friction they give, with the senses of MuJoCo's own
+    joint velocities; returns the reading."""
+    values = rig.read()
+    apply_friction(rig, values, rig.joint_rates(rig.data.qvel))
+    return values
+
+
+def run_drive(rig: LinkageRig, motion: Motion, steps: int, dt: float,
+              friction: bool) -> dict[str, float]:
+    """Simulate to the instant and return the values there."""
+    m, d = rig.model, rig.data
+    start_run(rig, motion, steps, dt)
+    for _ in range(steps):
+        forward(rig)
+        if friction:
+            with_friction(rig)
+        mujoco.mj_Euler(m, d)
+    values: dict[str, float] = {}
+    for _ in range(FINAL_FRICTION_PASSES if friction else 1):
+        forward(rig)
+        values = with_friction(rig) if friction else rig.read()
+    return values
+
+
+def read_drive(rigs: LinkageRigs, motion: Motion, steps: int, dt: float,
+               friction: bool) -> dict[str, float]:
+    """One reading, free of fictitious inertia."""
+    values = run_drive(rigs.base, motion, steps, dt, friction)
+    if rigs.doubled is None:
+        return values
+    return massless_limit(values, run_drive(rigs.doubled, motion, steps, dt, friction),
+                          rigs.base.units)
+
+
+def lead_limit(case: Case, motion: Motion, instant: float) -> LeadLimit:
+    """Why a lead-in of ``steps`` of ``dt`` may not be run (see :mod:`.dynamics`)."""
+
+    def limit(steps: int, dt: float) -> str:
+        values, velocities, accelerations = motion.at(clock_times(steps, dt))
+        lead = solve_linkage(case.linkage, values, velocities, accelerations)
+        cond = np.where(lead.pose.assembled, lead.condition, np.inf)
+        worst = int(np.argmax(cond))
+        if cond[worst] <= LEAD_CONDITION_GROWTH * instant:
+            return ""
+        when = f"{-clock_times(steps, dt)[worst]:.3g} s before the instant"
+        if not lead.pose.assembled[worst]:
+            return f"a longer lead-in would start where the linkage does not assemble ({when})"
+        return (f"a longer lead-in would pass a pose with condition number {cond[worst]:.3g} "
+                f"against {instant:.3g} at the instant ({when})")
+
+    return limit
+
+
+def drive_linkage(case: Case, results: LinkageResults) -> Solution:
+    """The ``mujoco`` backend for a driven linkage, or a static one with Coulomb friction
+    (method ``driven``); ``results`` is the analytic pose analysis (verdicts, the instant's
+    condition number)."""
+    start = time.perf_counter()
+    motion = motion_of(case)
+    rigs = driven_rigs(case, motion)
+    friction = case.has_coulomb_friction
+    units = rigs.base.units
+
+    def read(steps: int, dt: float) -> dict[str, float]:
+        return read_drive(rigs, motion, steps, dt, friction)
+
+    limit = lead_limit(case, motion, float(results.condition[0]))
+    out = lengthen_lead(read, limit, rigs.base.settings.timestep, rigs.base.scale, rigs.runs,
+                        units)
+    if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
+        out = halve_timestep(read, out, rigs.base.scale, rigs.runs, units)
+    return driven_solution(case, rigs, out, time.perf_counter() - start)
+
+
+def driven_solution(case: Case, rigs: LinkageRigs, out: Convergence,
+                    elapsed: float) -> Solution:
+    rig = rigs.base
+    units = rig.units or {}
+    diagnostics: dict[str, float | str] = {
+        "method": "driven", "steps": out.total_steps, "wall_time_s": elapsed,
+        "residual_velocity": abs(float(rig.data.qvel[rig.clock]) - 1.0)
+        if rig.clock is not None else 0.0,
+        "loop_violation": rig.loop_violation(), "pose_drift": 0.0,
+        "lead_disagreement": out.lead_disagreement, "lead_steps": out.lead_steps,
+        "timestep": out.dt, "timestep_disagreement": out.timestep_disagreement,
+        "fictitious_runs": rigs.runs,
+    }
+    if not out.converged:
+        pose = {q: v for q, v in out.values.items() if quantity_kind(q, units.get(q)) == "pose"}
+        return Solution(case.name, "mujoco", pose, status="not_settled", message=out.verdict(),
+                        diagnostics=diagnostics, units=units)
+    return Solution(case.name, "mujoco", out.values, diagnostics=diagnostics, units=units)
