@@ -1,0 +1,281 @@
+"""The ``pymunk`` and ``pymunk_solve`` backends for any linkage (``mechanism = "linkage"``).
+
+- :func:`settle` (``pymunk``): statics by simulation. Drivers are held by their
+  locks (:mod:`mechcheck.sim_models.pymunk.linkage_model`), loads and weights are
+  applied every step, velocities are damped, and the space is stepped with a
+  constant dt until it is at rest and its forces stop changing — the stop rules
+  and the ``not_settled`` verdict of :mod:`mechcheck.sim_models.pymunk.settle`.
+  With every coordinate driven the run starts on the analytic pose (a seed);
+  free coordinates start from the drawn pose, never from the equilibrium, and
+  settle to it under the loads.
+- :func:`solve_at_pose` (``pymunk_solve``): the bodies are put back on the
+  analytic pose before every step, so pymunk's warm-started Gauss–Seidel solver
+  converges on that one constraint problem (:mod:`mechcheck.sim_models.pymunk.solve`).
+
+Every force is read from pymunk's own state: pivots', grooves' and gears'
+accumulated impulses (:mod:`mechcheck.sim_models.pymunk.forces`), springs' signed
+impulses, each / dt. The pose verdicts (``no_solution``, ``singular``,
+``indeterminate``) are the analytic backends' (:func:`mechcheck.analytic.linkage_backends.verdict`),
+decided on the pose alone, and withhold the simulation. Driven (dynamic) and
+friction cases are not modelled here yet: ``not_applicable`` with the reason.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import Joint
+from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
+from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
+from mechcheck.analytic.linkage_kinematics import (
+    Array,
+    LinkagePose,
+    positions,
+    residual_and_jacobian,
+)
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.pymunk.forces import force_on_b, torque_on_b
+from mechcheck.sim_models.pymunk.linkage_model import (
+    LinkageModel,
+    apply_loads,
+    build_linkage_model,
+    coordinates,
+    damp,
+    place,
+)
+from mechcheck.sim_models.pymunk.readout import Values
+from mechcheck.sim_models.pymunk.settings import SETTLE, SOLVE, SolverSettings
+from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
+from mechcheck.sim_models.pymunk.verdict import not_settled
+
+
+# -- reading the model ------------------------------------------------------------------
+
+def axis_now(model: LinkageModel, joint: Joint) -> tuple[float, float]:
+    """A prismatic joint's sliding direction at the current pose (fixed in links[0])."""
+    assert joint.axis is not None
+    phi = model.body(joint.links[0]).angle
+    c, s = math.cos(phi), math.sin(phi)
+    return c * joint.axis[0] - s * joint.axis[1], s * joint.axis[0] + c * joint.axis[1]
+
+
+def prismatic_reaction(model: LinkageModel, joint: Joint, dt: float) -> Values:
+    """F (the normal reaction at ``at``), M and, if driven, Q of a prismatic joint.
+
+    A held slide's pivot carries the whole force at ``at``: its component along the
+    axis is the driver's effort Q, the rest the reaction (LINKAGES.md: F excludes any
+    driver effort).
+    """
+    name = joint.name
+    out: Values = {}
+    if name in model.held:
+        fx, fy = force_on_b(model.held[name], dt)
+        ux, uy = axis_now(model, joint)
+        along = fx * ux + fy * uy
+        out[f"Q_{name}"] = along
+        fx, fy = fx - along * ux, fy - along * uy
+    else:
+        fx, fy = force_on_b(model.grooves[name], dt)
+    out[f"F_{name}_x"], out[f"F_{name}_y"] = fx, fy
+    out[f"M_{name}"] = torque_on_b(model.locks[name], dt)
+    return out
+
+
+def reactions(model: LinkageModel) -> Values:
+    """Every F_, M_, Q_ and S_ quantity of the linkage, from the last step's impulses."""
+    dt = model.settings.dt
+    out: Values = {}
+    for joint in model.linkage.joints:
+        if joint.kind == "revolute":
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = force_on_b(model.pins[joint.name], dt)
+        else:
+            out |= prismatic_reaction(model, joint, dt)
+    for name, gear in model.drives.items():
+        out[f"Q_{name}"] = torque_on_b(gear, dt)
+    for name, spring in model.springs.items():
+        # The signed impulse on body b along b − a (or CCW): −S for tension (or for the
+        # torsional spring's −S on links[1]).
+        out[f"S_{name}"] = -spring.impulse / dt
+    return out
+
+
+def driver_values(model: LinkageModel) -> Array:
+    return np.array([[d.value for d in model.linkage.drivers]])
+
+
+def pose_of(model: LinkageModel) -> LinkagePose:
+    """The simulated bodies' pose as a LinkagePose (at rest)."""
+    q = coordinates(model)[None, :]
+    zeros = np.zeros_like(q)
+    return LinkagePose(model.linkage, driver_values(model), q, zeros, zeros, np.array([np.nan]))
+
+
+def pose_values(model: LinkageModel) -> Values:
+    """x_, y_, phi_ and q_ of the simulated pose, as the analytic backends compute them."""
+    return {k: float(v[0]) for k, v in pose_quantities(pose_of(model)).items()}
+
+
+def residual_velocity(model: LinkageModel) -> float:
+    """Largest point speed of any body, m/s: |v| + |ω|·(its radius)."""
+    return max((abs(b.velocity) + abs(b.angular_velocity) * model.radius[k]
+                for k, b in model.bodies.items()), default=0.0)
+
+
+def joint_separation(model: LinkageModel) -> float:
+    """Largest violation of any joint (loop closure), m: pin gaps, distances off a slide,
+    and a slide's angle error × the linkage's size."""
+    linkage = model.linkage
+    phi, _ = residual_and_jacobian(linkage, coordinates(model)[None, :], driver_values(model),
+                                   drivers=False)
+    worst = 0.0
+    for k, joint in enumerate(linkage.joints):
+        gap = abs(phi[0, 2 * k]) * (linkage.scale if joint.kind == "prismatic" else 1.0)
+        worst = max(worst, gap, abs(phi[0, 2 * k + 1]))
+    return worst
+
+
+def pose_drift(model: LinkageModel, q: Array) -> float:
+    """Largest distance of a body's origin from the analytic pose q, plus angle × radius, m."""
+    got = coordinates(model)
+    worst = 0.0
+    for k, link in enumerate(model.bodies):
+        d = got[3 * k:3 * k + 3] - q[3 * k:3 * k + 3]
+        worst = max(worst, math.hypot(d[0], d[1]) + abs(d[2]) * model.radius[link])
+    return worst
+
+
+# -- the runs ---------------------------------------------------------------------------
+
+def is_torque(case: Case) -> Callable[[str], bool]:
+    """Which quantities are couples (N·m), for the force-change criterion."""
+    units = quantity_units(case.linkage)
+    return lambda quantity: units.get(quantity) == "N*m"
+
+
+def settle_run(model: LinkageModel) -> Run:
+    """Step the damped, loaded model until it is at rest and its forces stop changing."""
+    s = model.settings
+
+    def step() -> Reading:
+        damp(model)
+        apply_loads(model)
+        model.space.step(s.dt)
+        return reactions(model), residual_velocity(model)
+
+    return run_until_settled(step, s, model.linkage.scale, is_torque(model.case))
+
+
+def solve_run(model: LinkageModel, q: Array) -> Run:
+    """Re-pose at q and step until the impulses stop changing."""
+    s = model.settings
+
+    def step() -> Reading:
+        place(model, q)
+        apply_loads(model)
+        model.space.step(s.dt)
+        return reactions(model), 0.0
+
+    run = run_until_settled(step, s, model.linkage.scale, is_torque(model.case))
+    place(model, q)  # report the pose the forces belong to
+    return run
+
+
+def diagnostics(model: LinkageModel, run: Run, method: str, elapsed: float,
+                results: LinkageResults) -> dict[str, float | str]:
+    """The pymunk diagnostics (the four-bar's keys) and the linkage's dof and condition."""
+    linkage = model.linkage
+    diag: dict[str, float | str] = {
+        "method": method,
+        "steps": run.steps,
+        "wall_time_s": elapsed,
+        "residual_velocity": run.residual_velocity,
+        "force_change": run.force_change,
+        "joint_separation": joint_separation(model),
+        "pose_drift": pose_drift(model, np.nan_to_num(results.pose.q[0])),
+        "dt": model.settings.dt,
+        "iterations": model.settings.iterations,
+        "condition_number": float(results.condition[0]),
+        "dof": linkage.dof,
+        "gruebler": linkage.gruebler,
+    }
+    return diag
+
+
+def solution_of(model: LinkageModel, run: Run, backend: str, method: str, elapsed: float,
+                results: LinkageResults) -> Solution:
+    """The Solution of a finished run: forces only if it settled."""
+    diag = diagnostics(model, run, method, elapsed, results)
+    units = quantity_units(model.linkage)
+    if not run.settled:
+        return not_settled(model.case.name, backend, pose_values(model), diag, units)
+    return Solution(model.case.name, backend, pose_values(model) | run.values,
+                    diagnostics=diag, units=units)
+
+
+def refusal(case: Case, backend: str) -> Solution | None:
+    """``not_applicable`` for what the linkage model does not simulate yet, else None."""
+    if case.kind == "static":
+        return None
+    return Solution(case.name, backend, {}, status="not_applicable", units=quantity_units(case.linkage),
+                    message=f"a {case.kind} linkage case: the pymunk linkage model holds its "
+                            "drivers for statics only; driving a linkage through its motion "
+                            "(and joint friction) is not modelled in it yet")
+
+
+def gate(case: Case, backend: str) -> tuple[Solution | None, LinkageResults]:
+    """The analytic verdict of the case's pose (withholding the run), and the results it
+    came from (their pose is the held pose, and the reference for the pose drift)."""
+    results = analytic_results(case)
+    found = verdict(case, results, 0)
+    if found is None:
+        return None, results
+    return Solution(case.name, backend, {}, status=found[0], message=f"{found[1]}; not simulated",
+                    diagnostics={"condition_number": float(results.condition[0])},
+                    units=quantity_units(case.linkage)), results
+
+
+def free_start(case: Case) -> Array:
+    """Where free coordinates start: the drawn pose, the drivers brought to their values
+    with the free coordinates carried along (never the equilibrium)."""
+    linkage = case.linkage
+    q, _ = positions(linkage, np.array([[d.value for d in linkage.drivers]]))
+    return np.asarray(q[0], dtype=float)
+
+
+def settle(case: Case, settings: SolverSettings = SETTLE) -> Solution:
+    """The ``pymunk`` backend for a linkage: statics settled by simulation."""
+    backend = "pymunk"
+    start = time.perf_counter()
+    refused = refusal(case, backend)
+    if refused is not None:
+        return refused
+    withheld, results = gate(case, backend)
+    if withheld is not None:
+        return withheld
+    free = case.linkage.dof > len(case.linkage.drivers)
+    seed = free_start(case) if free else results.pose.q[0]
+    model = build_linkage_model(case, settings, seed)
+    run = settle_run(model)
+    return solution_of(model, run, backend, "settle", time.perf_counter() - start, results)
+
+
+def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
+    """The ``pymunk_solve`` backend for a linkage: constraint forces at the analytic pose."""
+    backend = "pymunk_solve"
+    start = time.perf_counter()
+    refused = refusal(case, backend)
+    if refused is not None:
+        return refused
+    withheld, results = gate(case, backend)
+    if withheld is not None:
+        return withheld
+    q = results.pose.q[0]
+    model = build_linkage_model(case, settings, q)
+    run = solve_run(model, q)
+    return solution_of(model, run, backend, "constraint_solve", time.perf_counter() - start,
+                       results)
