@@ -53,7 +53,6 @@ from mechcheck.sim_models.pymunk.settings import SETTLE, SOLVE, SolverSettings
 from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
 from mechcheck.sim_models.pymunk.verdict import not_settled
 
-
 # -- reading the model ------------------------------------------------------------------
 
 def axis_now(model: LinkageModel, joint: Joint) -> tuple[float, float]:
@@ -247,8 +246,28 @@ def free_start(case: Case) -> Array:
     return np.asarray(q[0], dtype=float)
 
 
-def settle(case: Case, settings: SolverSettings = SETTLE) -> Solution:
-    """The ``pymunk`` backend for a linkage: statics settled by simulation."""
+def has_free_coordinates(case: Case) -> bool:
+    return case.linkage.dof > len(case.linkage.drivers)
+
+
+def unstable(case: Case, backend: str, results: LinkageResults) -> Solution | None:
+    """``not_applicable`` where the free coordinates' equilibrium is unstable: a damped
+    simulation moves away from it, so settling cannot measure it."""
+    if results.stable is None or results.stable[0] != 0.0:
+        return None
+    return Solution(case.name, backend, {}, status="not_applicable",
+                    units=quantity_units(case.linkage),
+                    message="the equilibrium of the free coordinates reached from the drawn pose "
+                            "is unstable: a damped simulation settles elsewhere or not at all")
+
+
+def settle(case: Case, settings: SolverSettings = SETTLE, seed: Array | None = None) -> Solution:
+    """The ``pymunk`` backend for a linkage: statics settled by simulation.
+
+    The run starts at ``seed`` (coordinates (3n,)) if given — e.g. other starting poses
+    of free coordinates —, else on the analytic pose when every coordinate is driven,
+    else from the drawn pose (:func:`free_start`).
+    """
     backend = "pymunk"
     start = time.perf_counter()
     refused = refusal(case, backend)
@@ -257,8 +276,13 @@ def settle(case: Case, settings: SolverSettings = SETTLE) -> Solution:
     withheld, results = gate(case, backend)
     if withheld is not None:
         return withheld
-    free = case.linkage.dof > len(case.linkage.drivers)
-    seed = free_start(case) if free else results.pose.q[0]
+    if has_free_coordinates(case):
+        refused = unstable(case, backend, results)
+        if refused is not None:
+            return refused
+        seed = free_start(case) if seed is None else seed
+    elif seed is None:
+        seed = results.pose.q[0]
     model = build_linkage_model(case, settings, seed)
     run = settle_run(model)
     return solution_of(model, run, backend, "settle", time.perf_counter() - start, results)

@@ -44,7 +44,7 @@ import numpy as np
 import pymunk
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage
+from mechcheck.analytic.linkage import Joint, LinearSpring, Link, Linkage
 from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.pymunk.loads import apply_forces
@@ -109,7 +109,7 @@ def gyration_radius(linkage: Linkage, link: str) -> float:
     return max(far, MIN_RADIUS * linkage.scale)
 
 
-def _link(linkage: Linkage, name: str) -> object:
+def _link(linkage: Linkage, name: str) -> Link:
     return next(link for link in linkage.links if link.name == name)
 
 
