@@ -193,3 +193,22 @@ def test_random_static_linkages_by_the_constraint_solve(table: dict[str, Any]) -
     springs: pymunk's constraint solve at the analytic pose gives every quantity."""
     case = case_of(table)
     assert_solution_close(case, pm.solve_at_pose(case), complete=True)
+
+
+@SETTINGS
+@given(linkage_tables(friction=False, moving=False))
+def test_random_static_linkages_by_settling(table: dict[str, Any]) -> None:
+    """The same random linkages, held and settled by simulation."""
+    case = case_of(table)
+    assert_solution_close(case, pm.settle(case), complete=True)
+
+
+def test_an_unloaded_linkage_settles_to_zero_forces() -> None:
+    """No load: every reaction is zero; the run must still stop (rounding noise of the
+    error correction is below its force floor) rather than report not_settled."""
+    case = at_rest(builtin("watt-ii-demo"))
+    bare = case.with_(geometry=replace(case.linkage, loads=(), masses=()))
+    s = pm.settle(bare)
+    assert s.status == "ok", s.message
+    forces = [abs(v) for q, v in s.values.items() if q.startswith(("F_", "Q_"))]
+    assert forces and max(forces) <= 1e-9

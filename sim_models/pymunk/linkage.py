@@ -38,7 +38,7 @@ from mechcheck.analytic.linkage_kinematics import (
     positions,
     residual_and_jacobian,
 )
-from mechcheck.analytic.solution import Solution
+from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.pymunk.forces import force_on_b, torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -156,6 +156,19 @@ def is_torque(case: Case) -> Callable[[str], bool]:
     return lambda quantity: units.get(quantity) == "N*m"
 
 
+def rounding_floor(model: LinkageModel) -> float:
+    """The force scale below which a settling run's force changes are rounding noise (N).
+
+    Pymunk's error correction turns a position rounding of ε·L into a force of up to
+    about m·ε·L/dt² (fictitious mass m; measured 1.4e-12 N on an unloaded 0.2 m
+    four-bar, estimate 4.4e-12 N). Against a smaller scale that noise alone would exceed
+    ``settle_force_change`` and an unloaded linkage would never count as settled.
+    """
+    s = model.settings
+    noise = s.fictitious_mass * float(np.finfo(float).eps) * model.linkage.scale / s.dt**2
+    return max(FORCE_FLOOR_N, noise / s.settle_force_change)
+
+
 def settle_run(model: LinkageModel) -> Run:
     """Step the damped, loaded model until it is at rest and its forces stop changing."""
     s = model.settings
@@ -166,7 +179,21 @@ def settle_run(model: LinkageModel) -> Run:
         model.space.step(s.dt)
         return reactions(model), residual_velocity(model)
 
-    return run_until_settled(step, s, model.linkage.scale, is_torque(model.case))
+    return run_until_settled(step, s, model.linkage.scale, is_torque(model.case),
+                             rounding_floor(model))
+
+
+def hold_without_correction(model: LinkageModel) -> None:
+    """No joint-error correction in the constraint solve (``max_bias = 0``).
+
+    The bodies are put back on the analytic pose before every step, so there is no drift
+    to correct; but that pose closes the loops only to Newton's 1e-13·L, and correcting
+    such a gap takes a force of about m·gap·(1 − error_bias^dt)/dt² (up to 2e-8 of the
+    reactions measured on random slider-cranks). Without the bias, each step solves the
+    rigid velocity constraints of that pose: statics.
+    """
+    for constraint in model.constraints():
+        constraint.max_bias = 0.0
 
 
 def solve_run(model: LinkageModel, q: Array) -> Run:
@@ -300,6 +327,7 @@ def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
         return withheld
     q = results.pose.q[0]
     model = build_linkage_model(case, settings, q)
+    hold_without_correction(model)
     run = solve_run(model, q)
     return solution_of(model, run, backend, "constraint_solve", time.perf_counter() - start,
                        results)

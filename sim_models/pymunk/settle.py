@@ -49,16 +49,19 @@ def is_four_bar_torque(quantity: str) -> bool:
 
 
 def force_scale(values: Values, length: float,
-                torque: Callable[[str], bool] = is_four_bar_torque) -> float:
-    """The largest force, or torque / length, in a reading (N); the unit of 'change'."""
+                torque: Callable[[str], bool] = is_four_bar_torque,
+                floor: float = FORCE_FLOOR_N) -> float:
+    """The largest force, or torque / length, in a reading (N), at least ``floor``; the
+    unit of 'change'."""
     sizes = [abs(v) / length if torque(q) else abs(v) for q, v in values.items()]
-    return max(max(sizes, default=0.0), FORCE_FLOOR_N)  # an unloaded case settles too
+    return max(max(sizes, default=0.0), floor)  # an unloaded case settles too
 
 
 def relative_change(new: Values, old: Values, length: float,
-                    torque: Callable[[str], bool] = is_four_bar_torque) -> float:
+                    torque: Callable[[str], bool] = is_four_bar_torque,
+                    floor: float = FORCE_FLOOR_N) -> float:
     """Largest change between two readings as a fraction of the new reading's force scale."""
-    scale = force_scale(new, length, torque)
+    scale = force_scale(new, length, torque, floor)
     diffs = [abs(new[q] - old[q]) / (length if torque(q) else 1.0) for q in new]
     return max(diffs) / scale
 
@@ -68,13 +71,16 @@ Reading = tuple[Values, float]
 
 
 def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, length: float,
-                      torque: Callable[[str], bool] = is_four_bar_torque) -> Run:
+                      torque: Callable[[str], bool] = is_four_bar_torque,
+                      floor: float = FORCE_FLOOR_N) -> Run:
     """Call ``step`` until the model is at rest and its forces stop changing.
 
     Settled means: residual velocity below ``settle_speed`` × ``length`` *and*
     relative force change below ``settle_force_change`` for ``settle_patience``
     consecutive steps. Never a fixed step count; ``max_steps`` is only a budget.
     A step that re-poses the model (the constraint solve) reports velocity 0.
+    ``torque`` says which quantities are couples (compared as couple / ``length``),
+    ``floor`` is the smallest force scale a change is measured against (N).
     """
     s = settings
     previous: Values | None = None
@@ -83,7 +89,7 @@ def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, len
     velocity = change = float("inf")
     for n in range(1, s.max_steps + 1):
         values, velocity = step()
-        change = relative_change(values, previous, length, torque) if previous else float("inf")
+        change = relative_change(values, previous, length, torque, floor) if previous else float("inf")
         previous = values
         calm = calm + 1 if velocity <= s.settle_speed * length and change <= s.settle_force_change else 0
         if calm >= s.settle_patience:
