@@ -53,6 +53,11 @@ from mechcheck.sim_models.pymunk.settings import SETTLE, SOLVE, SolverSettings
 from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
 from mechcheck.sim_models.pymunk.verdict import not_settled
 
+#: A held linkage that comes to rest farther than this × its size from the pose it was
+#: held at has left that assembly (it settles within ~1e-12 of it otherwise).
+ASSEMBLY_DRIFT = 1.0e-6
+
+
 # -- reading the model ------------------------------------------------------------------
 
 def axis_now(model: LinkageModel, joint: Joint) -> tuple[float, float]:
@@ -152,8 +157,8 @@ def pose_drift(model: LinkageModel, q: Array) -> float:
 
 def is_torque(case: Case) -> Callable[[str], bool]:
     """Which quantities are couples (N·m), for the force-change criterion."""
-    units = quantity_units(case.linkage)
-    return lambda quantity: units.get(quantity) == "N*m"
+    couples = frozenset(q for q, unit in quantity_units(case.linkage).items() if unit == "N*m")
+    return couples.__contains__
 
 
 def rounding_floor(model: LinkageModel) -> float:
@@ -181,6 +186,23 @@ def settle_run(model: LinkageModel) -> Run:
 
     return run_until_settled(step, s, model.linkage.scale, is_torque(model.case),
                              rounding_floor(model))
+
+
+def primed_settle_run(model: LinkageModel, seed: Array) -> Run:
+    """Settle, after pymunk's own constraint solve at the seed has warmed its impulses.
+
+    From zero impulses the first steps' Gauss–Seidel leaves part of the load unresolved,
+    and the bodies move by about (unresolved force)·dt²/m before the solver catches up.
+    Next to a lock, where a second assembly of the held linkage lies millimetres away,
+    that start-up jolt carried the Watt six-bar onto the other assembly (held 0.06° before
+    its lock at 108.06°: 8 mm away, reactions reversed). The priming steps re-pose the
+    bodies on the seed, exactly like the sweep's continuation from a neighbouring pose;
+    the settling that follows is free to move them, and its stop rules decide.
+    """
+    priming = solve_run(model, seed)
+    run = settle_run(model)
+    return Run(run.values, priming.steps + run.steps, run.settled, run.residual_velocity,
+               run.force_change)
 
 
 def hold_without_correction(model: LinkageModel) -> None:
@@ -212,7 +234,7 @@ def solve_run(model: LinkageModel, q: Array) -> Run:
 
 
 def diagnostics(model: LinkageModel, run: Run, method: str, elapsed: float,
-                results: LinkageResults) -> dict[str, float | str]:
+                results: LinkageResults, index: int = 0) -> dict[str, float | str]:
     """The pymunk diagnostics (the four-bar's keys) and the linkage's dof and condition."""
     linkage = model.linkage
     diag: dict[str, float | str] = {
@@ -222,10 +244,10 @@ def diagnostics(model: LinkageModel, run: Run, method: str, elapsed: float,
         "residual_velocity": run.residual_velocity,
         "force_change": run.force_change,
         "joint_separation": joint_separation(model),
-        "pose_drift": pose_drift(model, np.nan_to_num(results.pose.q[0])),
+        "pose_drift": pose_drift(model, np.nan_to_num(results.pose.q[index])),
         "dt": model.settings.dt,
         "iterations": model.settings.iterations,
-        "condition_number": float(results.condition[0]),
+        "condition_number": float(results.condition[index]),
         "dof": linkage.dof,
         "gruebler": linkage.gruebler,
     }
@@ -233,12 +255,20 @@ def diagnostics(model: LinkageModel, run: Run, method: str, elapsed: float,
 
 
 def solution_of(model: LinkageModel, run: Run, backend: str, method: str, elapsed: float,
-                results: LinkageResults) -> Solution:
-    """The Solution of a finished run: forces only if it settled."""
-    diag = diagnostics(model, run, method, elapsed, results)
+                results: LinkageResults, index: int = 0) -> Solution:
+    """The Solution of a finished run (pose ``index`` of ``results``): forces only if it
+    settled."""
+    diag = diagnostics(model, run, method, elapsed, results, index)
     units = quantity_units(model.linkage)
     if not run.settled:
         return not_settled(model.case.name, backend, pose_values(model), diag, units)
+    drift = float(diag["pose_drift"])
+    if not has_free_coordinates(model.case) and drift > ASSEMBLY_DRIFT * model.linkage.scale:
+        return Solution(model.case.name, backend, pose_values(model), status="not_settled",
+                        message=f"came to rest {drift:.3g} m away from the held assembly (next to "
+                                "a lock another assembly is that close, and the load made the "
+                                "joints' soft correction give way to it); forces withheld",
+                        diagnostics=diag, units=units)
     return Solution(model.case.name, backend, pose_values(model) | run.values,
                     diagnostics=diag, units=units)
 
@@ -253,23 +283,29 @@ def refusal(case: Case, backend: str) -> Solution | None:
                             "(and joint friction) is not modelled in it yet")
 
 
+def withheld(case: Case, backend: str, results: LinkageResults, index: int = 0) -> Solution | None:
+    """The analytic verdict of pose ``index`` as a Solution without numbers, or None."""
+    found = verdict(case, results, index)
+    if found is None:
+        return None
+    return Solution(case.name, backend, {}, status=found[0], message=f"{found[1]}; not simulated",
+                    diagnostics={"condition_number": float(results.condition[index])},
+                    units=quantity_units(case.linkage))
+
+
 def gate(case: Case, backend: str) -> tuple[Solution | None, LinkageResults]:
     """The analytic verdict of the case's pose (withholding the run), and the results it
     came from (their pose is the held pose, and the reference for the pose drift)."""
     results = analytic_results(case)
-    found = verdict(case, results, 0)
-    if found is None:
-        return None, results
-    return Solution(case.name, backend, {}, status=found[0], message=f"{found[1]}; not simulated",
-                    diagnostics={"condition_number": float(results.condition[0])},
-                    units=quantity_units(case.linkage)), results
+    return withheld(case, backend, results), results
 
 
-def free_start(case: Case) -> Array:
+def free_start(case: Case, drivers: Array | None = None) -> Array:
     """Where free coordinates start: the drawn pose, the drivers brought to their values
-    with the free coordinates carried along (never the equilibrium)."""
+    (default: the case's) with the free coordinates carried along (never the equilibrium)."""
     linkage = case.linkage
-    q, _ = positions(linkage, np.array([[d.value for d in linkage.drivers]]))
+    values = np.array([[d.value for d in linkage.drivers]]) if drivers is None else drivers
+    q, _ = positions(linkage, np.atleast_2d(values))
     return np.asarray(q[0], dtype=float)
 
 
@@ -277,10 +313,10 @@ def has_free_coordinates(case: Case) -> bool:
     return case.linkage.dof > len(case.linkage.drivers)
 
 
-def unstable(case: Case, backend: str, results: LinkageResults) -> Solution | None:
+def unstable(case: Case, backend: str, results: LinkageResults, index: int = 0) -> Solution | None:
     """``not_applicable`` where the free coordinates' equilibrium is unstable: a damped
     simulation moves away from it, so settling cannot measure it."""
-    if results.stable is None or results.stable[0] != 0.0:
+    if results.stable is None or results.stable[index] != 0.0:
         return None
     return Solution(case.name, backend, {}, status="not_applicable",
                     units=quantity_units(case.linkage),
@@ -311,7 +347,7 @@ def settle(case: Case, settings: SolverSettings = SETTLE, seed: Array | None = N
     elif seed is None:
         seed = results.pose.q[0]
     model = build_linkage_model(case, settings, seed)
-    run = settle_run(model)
+    run = settle_run(model) if has_free_coordinates(case) else primed_settle_run(model, seed)
     return solution_of(model, run, backend, "settle", time.perf_counter() - start, results)
 
 
