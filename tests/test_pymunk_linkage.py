@@ -246,3 +246,17 @@ def test_next_to_a_lock_a_held_linkage_that_leaves_its_assembly_is_not_settled()
         assert_solution_close(near, solution, complete=True)
     else:
         assert solution.status == "not_settled" and "assembly" in solution.message
+
+
+def test_an_unstable_free_equilibrium_is_not_settled_for_but_solved_at() -> None:
+    """Exam Q1 drawn with the bar standing up: the equilibrium reached from there is an
+    inverted pendulum (the analytic backend says unstable). Settling cannot measure it;
+    the constraint solve at that pose can."""
+    case = builtin("exam-q1-slider-bar")
+    linkage = case.linkage
+    points = dict(linkage.points) | {"B": (0.0, 0.6), "G": (0.0, 0.3)}
+    up = case.with_(name="exam-q1-standing", geometry=replace(
+        linkage, points=points, masses=(replace(linkage.masses[0], com=(0.0, 0.3)),)))
+    settled = pm.settle(up)
+    assert settled.status == "not_applicable" and "unstable" in settled.message
+    assert_solution_close(up, pm.solve_at_pose(up), complete=True)

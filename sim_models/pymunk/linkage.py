@@ -243,8 +243,8 @@ def diagnostics(model: LinkageModel, run: Run, method: str, elapsed: float,
         "wall_time_s": elapsed,
         "residual_velocity": run.residual_velocity,
         "force_change": run.force_change,
-        "joint_separation": joint_separation(model),
-        "pose_drift": pose_drift(model, np.nan_to_num(results.pose.q[index])),
+        "joint_separation": float(joint_separation(model)),
+        "pose_drift": float(pose_drift(model, np.nan_to_num(results.pose.q[index]))),
         "dt": model.settings.dt,
         "iterations": model.settings.iterations,
         "condition_number": float(results.condition[index]),
@@ -300,6 +300,16 @@ def gate(case: Case, backend: str) -> tuple[Solution | None, LinkageResults]:
     return withheld(case, backend, results), results
 
 
+def screened(case: Case, backend: str) -> Solution | LinkageResults:
+    """The refusal or the pose verdict that withholds the run, else the analytic results
+    of the case's pose (its held pose, and the reference for the pose drift)."""
+    refused = refusal(case, backend)
+    if refused is not None:
+        return refused
+    found, results = gate(case, backend)
+    return results if found is None else found
+
+
 def free_start(case: Case, drivers: Array | None = None) -> Array:
     """Where free coordinates start: the drawn pose, the drivers brought to their values
     (default: the case's) with the free coordinates carried along (never the equilibrium)."""
@@ -333,12 +343,9 @@ def settle(case: Case, settings: SolverSettings = SETTLE, seed: Array | None = N
     """
     backend = "pymunk"
     start = time.perf_counter()
-    refused = refusal(case, backend)
-    if refused is not None:
-        return refused
-    withheld, results = gate(case, backend)
-    if withheld is not None:
-        return withheld
+    results = screened(case, backend)
+    if isinstance(results, Solution):
+        return results
     if has_free_coordinates(case):
         refused = unstable(case, backend, results)
         if refused is not None:
@@ -355,12 +362,9 @@ def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
     """The ``pymunk_solve`` backend for a linkage: constraint forces at the analytic pose."""
     backend = "pymunk_solve"
     start = time.perf_counter()
-    refused = refusal(case, backend)
-    if refused is not None:
-        return refused
-    withheld, results = gate(case, backend)
-    if withheld is not None:
-        return withheld
+    results = screened(case, backend)
+    if isinstance(results, Solution):
+        return results
     q = results.pose.q[0]
     model = build_linkage_model(case, settings, q)
     hold_without_correction(model)
