@@ -169,8 +169,8 @@ def test_exam_q1_equilibrium_is_found_by_settling_from_other_poses(x: float, phi
         assert s.values[quantity] == pytest.approx(expected, rel=tol), quantity
 
 
-def test_space_damping_is_not_used_with_springs_because_it_scales_them() -> None:
-    """With springs the model damps velocities itself; Space.damping stays 1."""
+def test_space_damping_is_not_used_because_it_scales_the_springs() -> None:
+    """The model damps velocities itself; Space.damping stays 1 (see linkage_model)."""
     case = builtin("bonnet-hold")
     model = pl.build_linkage_model(case, SETTLE, pl.gate(case, "pymunk")[1].pose.q[0])
     assert model.space.damping == 1.0
