@@ -25,11 +25,12 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage import Joint
+from mechcheck.analytic.linkage import Joint, Linkage
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
 from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
 from mechcheck.analytic.linkage_kinematics import (
@@ -108,20 +109,13 @@ def reactions(model: LinkageModel) -> Values:
     return out
 
 
-def driver_values(model: LinkageModel) -> Array:
-    return np.array([[d.value for d in model.linkage.drivers]])
-
-
-def pose_of(model: LinkageModel) -> LinkagePose:
-    """The simulated bodies' pose as a LinkagePose (at rest)."""
-    q = coordinates(model)[None, :]
+def pose_table(linkage: Linkage, q: Array) -> dict[str, Array]:
+    """x_, y_, phi_ and q_ of simulated poses q (M, 3n), as the analytic backends compute
+    them (:func:`mechcheck.analytic.linkage_forces.pose_quantities`)."""
     zeros = np.zeros_like(q)
-    return LinkagePose(model.linkage, driver_values(model), q, zeros, zeros, np.array([np.nan]))
-
-
-def pose_values(model: LinkageModel) -> Values:
-    """x_, y_, phi_ and q_ of the simulated pose, as the analytic backends compute them."""
-    return {k: float(v[0]) for k, v in pose_quantities(pose_of(model)).items()}
+    pose = LinkagePose(linkage, np.zeros((q.shape[0], len(linkage.drivers))), q, zeros, zeros,
+                       np.full(q.shape[0], np.nan))
+    return pose_quantities(pose)
 
 
 def residual_velocity(model: LinkageModel) -> float:
@@ -130,27 +124,24 @@ def residual_velocity(model: LinkageModel) -> float:
                 for k, b in model.bodies.items()), default=0.0)
 
 
-def joint_separation(model: LinkageModel) -> float:
-    """Largest violation of any joint (loop closure), m: pin gaps, distances off a slide,
-    and a slide's angle error × the linkage's size."""
-    linkage = model.linkage
-    phi, _ = residual_and_jacobian(linkage, coordinates(model)[None, :], driver_values(model),
+def joint_separations(linkage: Linkage, q: Array) -> Array:
+    """Largest violation of any joint (loop closure) per pose q (M, 3n), m: pin gaps,
+    distances off a slide, and a slide's angle error × the linkage's size."""
+    phi, _ = residual_and_jacobian(linkage, q, np.zeros((q.shape[0], len(linkage.drivers))),
                                    drivers=False)
-    worst = 0.0
+    weights = np.ones(phi.shape[1])
     for k, joint in enumerate(linkage.joints):
-        gap = abs(phi[0, 2 * k]) * (linkage.scale if joint.kind == "prismatic" else 1.0)
-        worst = max(worst, gap, abs(phi[0, 2 * k + 1]))
-    return worst
+        if joint.kind == "prismatic":
+            weights[2 * k] = linkage.scale
+    return np.asarray(np.abs(phi * weights).max(axis=1, initial=0.0), dtype=float)
 
 
-def pose_drift(model: LinkageModel, q: Array) -> float:
-    """Largest distance of a body's origin from the analytic pose q, plus angle × radius, m."""
-    got = coordinates(model)
-    worst = 0.0
-    for k, link in enumerate(model.bodies):
-        d = got[3 * k:3 * k + 3] - q[3 * k:3 * k + 3]
-        worst = max(worst, math.hypot(d[0], d[1]) + abs(d[2]) * model.radius[link])
-    return worst
+def pose_drifts(radius: Array, q: Array, reference: Array) -> Array:
+    """Per pose, the largest distance of a body's origin from the analytic pose, plus
+    angle × the body's radius (m); q, reference (M, 3n), radius (n,)."""
+    d = (q - np.nan_to_num(reference)).reshape(q.shape[0], -1, 3)
+    return np.asarray((np.hypot(d[..., 0], d[..., 1]) + np.abs(d[..., 2]) * radius)
+                      .max(axis=1, initial=0.0), dtype=float)
 
 
 # -- the runs ---------------------------------------------------------------------------
@@ -233,44 +224,62 @@ def solve_run(model: LinkageModel, q: Array) -> Run:
     return run
 
 
-def diagnostics(model: LinkageModel, run: Run, method: str, elapsed: float,
-                results: LinkageResults, index: int = 0) -> dict[str, float | str]:
-    """The pymunk diagnostics (the four-bar's keys) and the linkage's dof and condition."""
+@dataclass(frozen=True)
+class Outcome:
+    """What one run left behind: how it ended, the bodies' coordinates (3n,), its wall
+    time, and the pose of the analytic results it belongs to."""
+
+    run: Run
+    q: Array
+    elapsed: float
+    index: int = 0
+
+
+def outcome(model: LinkageModel, run: Run, start: float, index: int = 0) -> Outcome:
+    return Outcome(run, coordinates(model), time.perf_counter() - start, index)
+
+
+def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Outcome],
+              results: LinkageResults) -> list[Solution]:
+    """The Solutions of finished runs, with the pymunk diagnostics (the four-bar's keys)
+    and the linkage's dof and condition: forces only where the run settled, and (held
+    linkages) stayed on the assembly it was held at.
+
+    The pose quantities, loop closures and drifts of all runs are computed at once.
+    """
     linkage = model.linkage
-    diag: dict[str, float | str] = {
-        "method": method,
-        "steps": run.steps,
-        "wall_time_s": elapsed,
-        "residual_velocity": run.residual_velocity,
-        "force_change": run.force_change,
-        "joint_separation": float(joint_separation(model)),
-        "pose_drift": float(pose_drift(model, np.nan_to_num(results.pose.q[index]))),
-        "dt": model.settings.dt,
-        "iterations": model.settings.iterations,
-        "condition_number": float(results.condition[index]),
-        "dof": linkage.dof,
-        "gruebler": linkage.gruebler,
-    }
-    return diag
-
-
-def solution_of(model: LinkageModel, run: Run, backend: str, method: str, elapsed: float,
-                results: LinkageResults, index: int = 0) -> Solution:
-    """The Solution of a finished run (pose ``index`` of ``results``): forces only if it
-    settled."""
-    diag = diagnostics(model, run, method, elapsed, results, index)
-    units = quantity_units(model.linkage)
-    if not run.settled:
-        return not_settled(model.case.name, backend, pose_values(model), diag, units)
-    drift = float(diag["pose_drift"])
-    if not has_free_coordinates(model.case) and drift > ASSEMBLY_DRIFT * model.linkage.scale:
-        return Solution(model.case.name, backend, pose_values(model), status="not_settled",
-                        message=f"came to rest {drift:.3g} m away from the held assembly (next to "
-                                "a lock another assembly is that close, and the load made the "
-                                "joints' soft correction give way to it); forces withheld",
-                        diagnostics=diag, units=units)
-    return Solution(model.case.name, backend, pose_values(model) | run.values,
-                    diagnostics=diag, units=units)
+    units = quantity_units(linkage)
+    if not outcomes:
+        return []
+    q = np.array([o.q for o in outcomes])
+    at = [o.index for o in outcomes]
+    poses = pose_table(linkage, q)
+    gaps = joint_separations(linkage, q)
+    drifts = pose_drifts(np.array(list(model.radius.values())), q, results.pose.q[at])
+    held = not has_free_coordinates(model.case)
+    out = []
+    for m, o in enumerate(outcomes):
+        diag: dict[str, float | str] = {
+            "method": method, "steps": o.run.steps, "wall_time_s": o.elapsed,
+            "residual_velocity": o.run.residual_velocity, "force_change": o.run.force_change,
+            "joint_separation": float(gaps[m]), "pose_drift": float(drifts[m]),
+            "dt": model.settings.dt, "iterations": model.settings.iterations,
+            "condition_number": float(results.condition[o.index]),
+            "dof": linkage.dof, "gruebler": linkage.gruebler,
+        }
+        pose = {k: float(v[m]) for k, v in poses.items()}
+        if not o.run.settled:
+            out.append(not_settled(model.case.name, backend, pose, diag, units))
+        elif held and drifts[m] > ASSEMBLY_DRIFT * linkage.scale:
+            out.append(Solution(
+                model.case.name, backend, pose, status="not_settled", diagnostics=diag, units=units,
+                message=f"came to rest {drifts[m]:.3g} m away from the held assembly (next to a "
+                        "lock another assembly is that close, and the load made the joints' "
+                        "soft correction give way to it); forces withheld"))
+        else:
+            out.append(Solution(model.case.name, backend, pose | o.run.values, diagnostics=diag,
+                                units=units))
+    return out
 
 
 def refusal(case: Case, backend: str) -> Solution | None:
@@ -355,7 +364,7 @@ def settle(case: Case, settings: SolverSettings = SETTLE, seed: Array | None = N
         seed = results.pose.q[0]
     model = build_linkage_model(case, settings, seed)
     run = settle_run(model) if has_free_coordinates(case) else primed_settle_run(model, seed)
-    return solution_of(model, run, backend, "settle", time.perf_counter() - start, results)
+    return solutions(model, backend, "settle", [outcome(model, run, start)], results)[0]
 
 
 def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
@@ -369,5 +378,4 @@ def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
     model = build_linkage_model(case, settings, q)
     hold_without_correction(model)
     run = solve_run(model, q)
-    return solution_of(model, run, backend, "constraint_solve", time.perf_counter() - start,
-                       results)
+    return solutions(model, backend, "constraint_solve", [outcome(model, run, start)], results)[0]

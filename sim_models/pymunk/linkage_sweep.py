@@ -24,12 +24,14 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, driver_values
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.pymunk.linkage import (
+    Outcome,
     free_start,
     has_free_coordinates,
     hold_without_correction,
+    outcome,
     refusal,
     settle_run,
-    solution_of,
+    solutions,
     solve_run,
     unstable,
     withheld,
@@ -71,15 +73,17 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solutio
     drivers = driver_values(case, values)
     assert drivers is not None
     free = has_free_coordinates(case)
+    method = "settle" if backend == "pymunk" else "constraint_solve"
     model: LinkageModel | None = None
     previous = None
-    out = []
+    verdicts: dict[int, Solution] = {}
+    outcomes: list[Outcome] = []
     for k, value in enumerate(values):
         start = time.perf_counter()
-        verdict = withheld(case, backend, results, k) or (
+        found = withheld(case, backend, results, k) or (
             unstable(case, backend, results, k) if free and backend == "pymunk" else None)
-        if verdict is not None:
-            out.append(verdict)
+        if found is not None:
+            verdicts[k] = found
             continue
         q = results.pose.q[k]
         seed = q if not free or backend == "pymunk_solve" else (
@@ -91,10 +95,15 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solutio
         hold_first_driver(model, float(value))
         place(model, seed)
         run = settle_run(model) if backend == "pymunk" else solve_run(model, q)
-        sol = solution_of(model, run, backend, "settle" if backend == "pymunk" else
-                          "constraint_solve", time.perf_counter() - start, results, k)
-        if free and sol.status == "ok":
+        outcomes.append(outcome(model, run, start, k))
+        if free and run.settled:
             previous = coordinates(model)
+    simulated = dict(zip((o.index for o in outcomes),
+                         solutions(model, backend, method, outcomes, results) if model else [],
+                         strict=True))
+    out = []
+    for k, value in enumerate(values):
+        sol = verdicts.get(k) or simulated[k]
         out.append(Solution(sol.case, sol.backend, sol.values, sol.status, sol.message,
                             {**sol.diagnostics, "driver": float(value)}, units=sol.units))
     return out
