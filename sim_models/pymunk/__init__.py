@@ -17,21 +17,29 @@ Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.pymunk import linkage, settle as settling, solve as solving
-from mechcheck.sim_models.pymunk.settings import SETTLE, SOLVE, SolverSettings
+from mechcheck.sim_models.pymunk.settings import (
+    LINKAGE_SETTLE,
+    LINKAGE_SOLVE,
+    SETTLE,
+    SOLVE,
+    SolverSettings,
+)
 from mechcheck.sim_models.pymunk.sweep import sweep
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
 
 
-def settle(case: Case, settings: SolverSettings = SETTLE) -> Solution:
-    """The ``pymunk`` backend (:func:`mechcheck.sim_models.pymunk.settle.settle`)."""
+def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
+    """The ``pymunk`` backend (:func:`mechcheck.sim_models.pymunk.settle.settle`; linkages:
+    :func:`mechcheck.sim_models.pymunk.linkage.settle`), with its own settings by default."""
     if case.mechanism == "linkage":
-        return linkage.settle(case, settings)
-    return settling.settle(case, settings)
+        return linkage.settle(case, settings or LINKAGE_SETTLE)
+    return settling.settle(case, settings or SETTLE)
 
 
-def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
-    """The ``pymunk_solve`` backend (:func:`mechcheck.sim_models.pymunk.solve.solve_at_pose`)."""
+def solve_at_pose(case: Case, settings: SolverSettings | None = None) -> Solution:
+    """The ``pymunk_solve`` backend (:func:`mechcheck.sim_models.pymunk.solve.solve_at_pose`;
+    linkages: :func:`mechcheck.sim_models.pymunk.linkage.solve_at_pose`)."""
     if case.mechanism == "linkage":
-        return linkage.solve_at_pose(case, settings)
-    return solving.solve_at_pose(case, settings)
+        return linkage.solve_at_pose(case, settings or LINKAGE_SOLVE)
+    return solving.solve_at_pose(case, settings or SOLVE)

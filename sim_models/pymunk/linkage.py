@@ -50,7 +50,7 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     place,
 )
 from mechcheck.sim_models.pymunk.readout import Values
-from mechcheck.sim_models.pymunk.settings import SETTLE, SOLVE, SolverSettings
+from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
 from mechcheck.sim_models.pymunk.verdict import not_settled
 
@@ -343,7 +343,8 @@ def unstable(case: Case, backend: str, results: LinkageResults, index: int = 0) 
                             "is unstable: a damped simulation settles elsewhere or not at all")
 
 
-def settle(case: Case, settings: SolverSettings = SETTLE, seed: Array | None = None) -> Solution:
+def settle(case: Case, settings: SolverSettings = LINKAGE_SETTLE,
+           seed: Array | None = None) -> Solution:
     """The ``pymunk`` backend for a linkage: statics settled by simulation.
 
     The run starts at ``seed`` (coordinates (3n,)) if given — e.g. other starting poses
@@ -367,7 +368,7 @@ def settle(case: Case, settings: SolverSettings = SETTLE, seed: Array | None = N
     return solutions(model, backend, "settle", [outcome(model, run, start)], results)[0]
 
 
-def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
+def solve_at_pose(case: Case, settings: SolverSettings = LINKAGE_SOLVE) -> Solution:
     """The ``pymunk_solve`` backend for a linkage: constraint forces at the analytic pose."""
     backend = "pymunk_solve"
     start = time.perf_counter()

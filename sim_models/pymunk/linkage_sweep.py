@@ -43,7 +43,7 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     coordinates,
     place,
 )
-from mechcheck.sim_models.pymunk.settings import SETTLE, SOLVE
+from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE
 
 BACKENDS = ("pymunk", "pymunk_solve")
 
@@ -89,7 +89,8 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solutio
         seed = q if not free or backend == "pymunk_solve" else (
             previous if previous is not None else free_start(case, drivers[k]))
         if model is None:
-            model = build_linkage_model(case, SETTLE if backend == "pymunk" else SOLVE, seed)
+            model = build_linkage_model(case, LINKAGE_SETTLE if backend == "pymunk" else LINKAGE_SOLVE,
+                                        seed)
             if backend == "pymunk_solve":
                 hold_without_correction(model)
         hold_first_driver(model, float(value))
