@@ -1,23 +1,39 @@
-"""Benchmark: settled static equilibrium per pose over a 360-pose continuation sweep of E1.
+"""Benchmark: settled static equilibrium per pose over 360-pose continuation sweeps.
 
-Prints Markdown: ms per pose, steps per pose and the worst relative force
-error against the analytic backend, for ``pymunk`` (settle) and
-``pymunk_solve``. Target: ≤ 2 ms/pose for the settled sweep.
+1. Seed E1 (four-bar builder) over a full turn of θ12.
+2. The Watt II six-bar (linkage builder; the built-in case with its crank held still)
+   over 360 crank angles from 1° after its lower lock to 1° before its upper lock, against
+   a simple reference doing the same work without continuation: each pose its own case
+   through the backend (fresh Space, analytic gate, priming, settling), on every
+   ``--stride``-th pose. Also the share of the analytic gate (poses and verdicts of the
+   whole sweep in one vectorised call) in the sweep's time.
 
-Run: /work/venv/bin/python benchmarks/bench_pymunk.py
+Prints Markdown: ms per pose (median over ``--repeats`` with min and max), steps per
+pose and the worst relative force error against the analytic backend, for ``pymunk``
+(settle) and ``pymunk_solve``. Target: ≤ 2 ms/pose for the settled sweep.
+
+Run: /work/venv/bin/python benchmarks/bench_pymunk.py [--repeats 3] [--stride 10]
 """
 
 from __future__ import annotations
 
+import argparse
+import math
 import platform
+import statistics
 import time
+from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 import pymunk
 
+from mechcheck.analytic.case import Case
 from mechcheck.analytic.forces import solve_poses
+from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
+from mechcheck.sim_models import pymunk as backends
 from mechcheck.sim_models.pymunk import sweep
 
 
@@ -35,11 +51,11 @@ def worst_error(solutions: list[Solution], reference: dict[str, np.ndarray]) -> 
     return worst
 
 
-def main() -> None:
+def four_bar_sweep() -> None:
     case = next(c for c in load_cases(*builtin_case_files()) if c.name == "seed-E1-as-stated")
     theta = np.radians(np.arange(360.0))
     reference = solve_poses(case, theta).values
-    print(f"pymunk {pymunk.version}, Python {platform.python_version()}, {platform.machine()}\n")
+    print("Seed E1, four-bar builder, 360 poses\n")
     print("| backend | poses | ok | singular | ms/pose | steps/pose | worst rel. error |")
     print("|---|---:|---:|---:|---:|---:|---:|")
     for backend in ("pymunk", "pymunk_solve"):
@@ -52,6 +68,89 @@ def main() -> None:
         steps = np.mean([s.diagnostics.get("steps", 0) for s in sols if s.status == "ok"])
         print(f"| {backend} | {len(sols)} | {ok} | {singular} | {wall / len(sols) * 1e3:.2f} | "
               f"{steps:.1f} | {worst_error(sols, reference):.1e} |")
+
+
+def watt_at_rest() -> Case:
+    """The built-in Watt II six-bar with its crank held still (a static case)."""
+    case = next(c for c in load_cases(*builtin_case_files()) if c.name == "watt-ii-demo")
+    held = tuple(replace(d, velocity=0.0, acceleration=0.0) for d in case.linkage.drivers)
+    return case.with_(name="watt-ii-at-rest", geometry=replace(case.linkage, drivers=held))
+
+
+def lock_to_lock(case: Case, poses: int, margin_deg: float = 1.0) -> np.ndarray:
+    """``poses`` crank values (rad from the drawn pose) between the two locks, with margins."""
+    far = np.radians([-720.0, 720.0])
+    locked = analytic_results(case, far).pose.locked_at * far
+    return np.linspace(locked[0] + math.radians(margin_deg), locked[1] - math.radians(margin_deg),
+                       poses)
+
+
+def linkage_error(case: Case, sols: list[Solution], values: np.ndarray) -> float:
+    """Worst error of F_ (÷ the pose's largest reaction) and Q_ (÷ that × the size)."""
+    reference = analytic_results(case, values).values
+    worst = 0.0
+    for k, sol in enumerate(sols):
+        if sol.status != "ok":
+            continue
+        scale = max(abs(reference[q][k]) for q in sol.values if q.startswith("F_"))
+        for q, v in sol.values.items():
+            if q.startswith(("F_", "Q_")):
+                size = scale * (case.linkage.scale if q.startswith("Q_") else 1.0)
+                worst = max(worst, abs(v - reference[q][k]) / size)
+    return worst
+
+
+def per_pose(fn: Callable[[], object], poses: int, repeats: int) -> tuple[float, float, float]:
+    """(median, min, max) ms per pose over the repeats."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append((time.perf_counter() - start) / poses * 1e3)
+    return statistics.median(times), min(times), max(times)
+
+
+def one_by_one(case: Case, values: np.ndarray, backend: str) -> list[Solution]:
+    """The reference: every pose its own case through the backend, no continuation."""
+    run = backends.settle if backend == "pymunk" else backends.solve_at_pose
+    driver = case.linkage.drivers[0]
+    return [run(case.with_(geometry=replace(case.linkage, drivers=(replace(driver, value=float(v)),))))
+            for v in values]
+
+
+def watt_sweep(repeats: int, stride: int) -> None:
+    case = watt_at_rest()
+    values = lock_to_lock(case, 360)
+    sparse = values[::stride]
+    gate = per_pose(lambda: analytic_results(case, values), len(values), repeats)
+    print(f"\nWatt II six-bar held, linkage builder, 360 poses lock to lock "
+          f"({math.degrees(values[0]):.2f}° … {math.degrees(values[-1]):.2f}° from the drawn pose); "
+          f"analytic gate alone {gate[0]:.2f} ms/pose (min {gate[1]:.2f}, max {gate[2]:.2f})\n")
+    print("| backend | ok | other verdicts | sweep ms/pose (min, max) | one by one ms/pose "
+          "(min, max) | ratio | steps/pose | worst rel. error |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|")
+    for backend in ("pymunk", "pymunk_solve"):
+        sweep(case, values[:5], backend)  # warm-up
+        sols = sweep(case, values, backend)
+        fast = per_pose(lambda b=backend: sweep(case, values, b), len(values), repeats)  # type: ignore[misc]
+        slow = per_pose(lambda b=backend: one_by_one(case, sparse, b), len(sparse), repeats)  # type: ignore[misc]
+        ok = [s for s in sols if s.status == "ok"]
+        others = {s.status for s in sols} - {"ok"}
+        other = ", ".join(f"{sum(s.status == v for s in sols)} {v}" for v in sorted(others)) or "-"
+        steps = np.mean([s.diagnostics["steps"] for s in ok])
+        print(f"| {backend} | {len(ok)} | {other} | {fast[0]:.2f} ({fast[1]:.2f}, {fast[2]:.2f}) | "
+              f"{slow[0]:.2f} ({slow[1]:.2f}, {slow[2]:.2f}) | {slow[0] / fast[0]:.1f}× | "
+              f"{steps:.1f} | {linkage_error(case, sols, values):.1e} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--stride", type=int, default=10)
+    args = parser.parse_args()
+    print(f"pymunk {pymunk.version}, Python {platform.python_version()}, {platform.machine()}\n")
+    four_bar_sweep()
+    watt_sweep(args.repeats, args.stride)
 
 
 if __name__ == "__main__":

@@ -65,6 +65,10 @@ SIMULATOR_SWEEPS = {
     "pymunk": "mechcheck.sim_models.pymunk:sweep", "pymunk_solve": "mechcheck.sim_models.pymunk:sweep",
 }
 
+#: The simulator sweeps that take linkages (the first driver's values in rad or m); the
+#: others report ``not_applicable`` for a linkage.
+LINKAGE_SIMULATOR_SWEEPS = frozenset({"pymunk", "pymunk_solve"})
+
 RESULT_COLUMNS = ["case", "backend", "theta12", "quantity", "value", "unit"]
 STATUS_COLUMNS = ["case", "backend", "theta12", "status", "condition_number"]
 
@@ -246,14 +250,16 @@ def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
 
 def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     theta_deg = np.asarray(task.theta12_deg)
-    if task.case.mechanism == "linkage":  # the simulators' builders do not take linkages yet
+    linkage = task.case.mechanism == "linkage"
+    if linkage and task.backend not in LINKAGE_SIMULATOR_SWEEPS:
         status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
                                "theta12": theta_deg, "status": "not_applicable",
                                "condition_number": np.nan})
         return pd.DataFrame(columns=RESULT_COLUMNS), status
     sweep_fn = _resolve(SIMULATOR_SWEEPS[task.backend])
-    solutions: list[Solution] = sweep_fn(task.case, np.radians(theta_deg), task.backend)
-    values = {q: np.full(len(theta_deg), np.nan) for q in QUANTITY_UNITS}
+    grid = driver_grid_si(task.case, theta_deg) if linkage else np.radians(theta_deg)
+    solutions: list[Solution] = sweep_fn(task.case, grid, task.backend)
+    values = {q: np.full(len(theta_deg), np.nan) for q in units_of(task.case)}
     for i, s in enumerate(solutions):
         for q, v in s.values.items():
             values[q][i] = v

@@ -7,29 +7,66 @@ the body, the force keeps its global direction.
 
 from __future__ import annotations
 
+from collections.abc import Hashable, Iterable, Mapping
+from typing import Any, Protocol
+
 import pymunk
 
 from mechcheck.analytic.case import Case
 from mechcheck.sim_models.pymunk.model import Model
 
+Vec = tuple[float, float]
 
-def apply_load_set(case: Case, bodies: dict[int, pymunk.Body]) -> None:
-    """Add every external load and every real weight m·g to the body forces.
 
+class LoadLike(Protocol):
+    """A force (N, global direction) at a point of a link's frame, and a couple (N·m)."""
+
+    @property
+    def link(self) -> Hashable: ...
+    @property
+    def at(self) -> Vec: ...
+    @property
+    def force(self) -> Vec: ...
+    @property
+    def torque(self) -> float: ...
+
+
+class MassLike(Protocol):
+    """A real mass (kg) at a centre of mass in a link's frame."""
+
+    @property
+    def link(self) -> Hashable: ...
+    @property
+    def mass(self) -> float: ...
+    @property
+    def com(self) -> Vec: ...
+
+
+def apply_forces(loads: Iterable[LoadLike], masses: Iterable[MassLike], gravity: Vec,
+                 bodies: Mapping[Any, pymunk.Body]) -> None:
+    """Add every load and every real weight m·g to the body forces.
+
+    Load points and centres of mass are in the frame of the body their link is
+    (the four-bar's link frames, or a linkage's drawn-pose coordinates).
     Weights are applied explicitly at the real centre of mass (``Space.gravity``
     stays zero) so that fictitious masses carry no weight.
     """
-    for load in case.loads:
+    for load in loads:
         body = bodies[load.link]
         body.apply_force_at_world_point(load.force, body.local_to_world(load.at))
         if load.torque:
             body.torque += load.torque
-    gx, gy = case.gravity
+    gx, gy = gravity
     if gx or gy:
-        for m in case.masses:
+        for m in masses:
             body = bodies[m.link]
             body.apply_force_at_world_point((m.mass * gx, m.mass * gy),
                                             body.local_to_world(m.com))
+
+
+def apply_load_set(case: Case, bodies: dict[int, pymunk.Body]) -> None:
+    """Add a four-bar or slider-crank case's loads and real weights to the body forces."""
+    apply_forces(case.loads, case.masses, case.gravity, bodies)
 
 
 def apply_loads(model: Model) -> None:

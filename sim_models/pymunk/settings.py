@@ -98,3 +98,13 @@ SETTLE = SolverSettings()
 #: nothing moves.
 SOLVE = SolverSettings(settle_force_change=1.0e-14, settle_speed=float("inf"),
                        settle_patience=2, max_steps=2000)
+
+#: Settings of the linkage backends (:mod:`mechcheck.sim_models.pymunk.linkage`): the
+#: four-bar's, with a larger step budget. Pymunk's Gauss–Seidel solver converges more
+#: slowly the worse the constraint problem is conditioned, and a general linkage can be
+#: drawn anywhere below the near-singular line (condition 1e4): a random four-bar at
+#: condition 1.2e3 needed 22 261 re-posed steps to converge and 15 140 steps to settle,
+#: exam Q1's free coordinates 12 086 steps to settle. The budget only bounds a run;
+#: the stop rules end it.
+LINKAGE_SETTLE = SETTLE.with_(max_steps=50_000)
+LINKAGE_SOLVE = SOLVE.with_(max_steps=50_000)

@@ -10,6 +10,7 @@ The forces are then pymunk's accumulated impulses / dt.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from mechcheck.analytic.case import Case
@@ -42,43 +43,71 @@ class Run:
     force_change: float
 
 
-def force_scale(values: Values, length: float) -> float:
-    """The largest force, or torque / length, in a reading (N); the unit of 'change'."""
-    sizes = [abs(v) / length if q.startswith(("T", "M")) else abs(v) for q, v in values.items()]
-    return max(max(sizes, default=0.0), FORCE_FLOOR_N)  # an unloaded case settles too
+def is_four_bar_torque(quantity: str) -> bool:
+    """The four-bar's and slider-crank's couples: T12/T14 and M14 (N·m)."""
+    return quantity.startswith(("T", "M"))
 
 
-def relative_change(new: Values, old: Values, length: float) -> float:
+def force_scale(values: Values, length: float,
+                torque: Callable[[str], bool] = is_four_bar_torque,
+                floor: float = FORCE_FLOOR_N) -> float:
+    """The largest force, or torque / length, in a reading (N), at least ``floor``; the
+    unit of 'change'."""
+    sizes = [abs(v) / length if torque(q) else abs(v) for q, v in values.items()]
+    return max(max(sizes, default=0.0), floor)  # an unloaded case settles too
+
+
+def relative_change(new: Values, old: Values, length: float,
+                    torque: Callable[[str], bool] = is_four_bar_torque,
+                    floor: float = FORCE_FLOOR_N) -> float:
     """Largest change between two readings as a fraction of the new reading's force scale."""
-    scale = force_scale(new, length)
-    diffs = [abs(new[q] - old[q]) / (length if q.startswith(("T", "M")) else 1.0) for q in new]
+    scale = force_scale(new, length, torque, floor)
+    diffs = [abs(new[q] - old[q]) / (length if torque(q) else 1.0) for q in new]
     return max(diffs) / scale
 
 
-def step_until_settled(model: Model, settings: SolverSettings | None = None) -> Run:
-    """Step the loaded model until it is at rest and its forces stop changing.
+#: One step of a run: (the reactions it read, the residual velocity after it, m/s).
+Reading = tuple[Values, float]
 
-    Settled means: residual velocity below ``settle_velocity`` *and* relative
-    force change below ``settle_force_change`` for ``settle_patience``
+
+def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, length: float,
+                      torque: Callable[[str], bool] = is_four_bar_torque,
+                      floor: float = FORCE_FLOOR_N) -> Run:
+    """Call ``step`` until the model is at rest and its forces stop changing.
+
+    Settled means: residual velocity below ``settle_speed`` × ``length`` *and*
+    relative force change below ``settle_force_change`` for ``settle_patience``
     consecutive steps. Never a fixed step count; ``max_steps`` is only a budget.
+    A step that re-poses the model (the constraint solve) reports velocity 0.
+    ``torque`` says which quantities are couples (compared as couple / ``length``),
+    ``floor`` is the smallest force scale a change is measured against (N).
     """
-    s = settings or model.settings
-    length = model.case.geometry.scale
+    s = settings
     previous: Values | None = None
     calm = 0
     values: Values = {}
     velocity = change = float("inf")
-    for step in range(1, s.max_steps + 1):
-        apply_loads(model)
-        model.space.step(s.dt)
-        values = reactions(model)
-        velocity = residual_velocity(model)
-        change = relative_change(values, previous, length) if previous else float("inf")
+    for n in range(1, s.max_steps + 1):
+        values, velocity = step()
+        change = relative_change(values, previous, length, torque, floor) if previous else float("inf")
         previous = values
         calm = calm + 1 if velocity <= s.settle_speed * length and change <= s.settle_force_change else 0
         if calm >= s.settle_patience:
-            return Run(values, step, True, velocity, change)
+            return Run(values, n, True, velocity, change)
     return Run(values, s.max_steps, False, velocity, change)
+
+
+def step_until_settled(model: Model, settings: SolverSettings | None = None) -> Run:
+    """Step the loaded model until it is at rest and its forces stop changing
+    (:func:`run_until_settled`)."""
+    s = settings or model.settings
+
+    def step() -> Reading:
+        apply_loads(model)
+        model.space.step(s.dt)
+        return reactions(model), residual_velocity(model)
+
+    return run_until_settled(step, s, model.case.geometry.scale)
 
 
 def diagnostics(model: Model, run: Run, method: str, elapsed: float) -> dict[str, float | str]:

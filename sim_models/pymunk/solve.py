@@ -20,9 +20,9 @@ from mechcheck.analytic.kinematics import Pose
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.pymunk.loads import apply_loads
 from mechcheck.sim_models.pymunk.model import Model, analytic_pose, build_model, place
-from mechcheck.sim_models.pymunk.readout import Values, reactions
+from mechcheck.sim_models.pymunk.readout import reactions
 from mechcheck.sim_models.pymunk.settings import SOLVE, SolverSettings
-from mechcheck.sim_models.pymunk.settle import Run, relative_change, solution_of
+from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled, solution_of
 from mechcheck.sim_models.pymunk.verdict import singular_solution
 
 BACKEND = "pymunk_solve"
@@ -32,24 +32,16 @@ def iterate_at_pose(model: Model, pose: Pose, index: int = 0,
                     settings: SolverSettings | None = None) -> Run:
     """Re-pose and step until the impulses stop changing (``settle_force_change``)."""
     s = settings or model.settings
-    length = model.case.geometry.scale
-    previous: Values | None = None
-    calm = 0
-    values: Values = {}
-    change = float("inf")
-    for step in range(1, s.max_steps + 1):
+
+    def step() -> Reading:
         place(model, pose, index)
         apply_loads(model)
         model.space.step(s.dt)
-        values = reactions(model)
-        change = relative_change(values, previous, length) if previous else float("inf")
-        previous = values
-        calm = calm + 1 if change <= s.settle_force_change else 0
-        if calm >= s.settle_patience:
-            place(model, pose, index)  # report the pose the forces belong to
-            return Run(values, step, True, 0.0, change)
-    place(model, pose, index)
-    return Run(values, s.max_steps, False, 0.0, change)
+        return reactions(model), 0.0
+
+    run = run_until_settled(step, s, model.case.geometry.scale)
+    place(model, pose, index)  # report the pose the forces belong to
+    return run
 
 
 def not_applicable(case: Case) -> Solution:

@@ -32,7 +32,15 @@ BACKENDS = ("pymunk", "pymunk_solve")
 
 
 def sweep(case: Case, theta12: ArrayLike, backend: str = "pymunk") -> list[Solution]:
-    """One Solution per θ12 (rad), in order, for backend ``pymunk`` or ``pymunk_solve``."""
+    """One Solution per θ12 (rad), in order, for backend ``pymunk`` or ``pymunk_solve``.
+
+    A linkage sweeps its first driver instead (``theta12`` holds its values, rad or m
+    from the drawn pose): :func:`mechcheck.sim_models.pymunk.linkage_sweep.sweep`.
+    """
+    if case.mechanism == "linkage":
+        from mechcheck.sim_models.pymunk import linkage_sweep
+
+        return linkage_sweep.sweep(case, theta12, backend)
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     angles = np.atleast_1d(np.asarray(theta12, dtype=float))

@@ -31,8 +31,14 @@ def singular_solution(case: Case, backend: str) -> Solution | None:
 
 def unsettled_solution(model: Model, backend: str, diag: dict[str, float | str]) -> Solution:
     """``not_settled``: the budget ran out; the pose is reported, no forces."""
-    return Solution(model.case.name, backend, pose_values(model), status="not_settled",
+    return not_settled(model.case.name, backend, pose_values(model), diag)
+
+
+def not_settled(case: str, backend: str, pose: dict[str, float], diag: dict[str, float | str],
+                units: dict[str, str] | None = None) -> Solution:
+    """``not_settled`` for any model: the pose it reached, its diagnostics, no forces."""
+    return Solution(case, backend, pose, status="not_settled",
                     message=f"did not settle within {diag['steps']} steps "
                             f"(residual velocity {diag['residual_velocity']:.3g} m/s, "
                             f"force change {diag['force_change']:.3g})",
-                    diagnostics=diag)
+                    diagnostics=diag, units=units or {})

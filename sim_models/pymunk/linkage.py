@@ -1,0 +1,382 @@
+"""The ``pymunk`` and ``pymunk_solve`` backends for any linkage (``mechanism = "linkage"``).
+
+- :func:`settle` (``pymunk``): statics by simulation. Drivers are held by their
+  locks (:mod:`mechcheck.sim_models.pymunk.linkage_model`), loads and weights are
+  applied every step, velocities are damped, and the space is stepped with a
+  constant dt until it is at rest and its forces stop changing — the stop rules
+  and the ``not_settled`` verdict of :mod:`mechcheck.sim_models.pymunk.settle`.
+  With every coordinate driven the run starts on the analytic pose (a seed);
+  free coordinates start from the drawn pose, never from the equilibrium, and
+  settle to it under the loads.
+- :func:`solve_at_pose` (``pymunk_solve``): the bodies are put back on the
+  analytic pose before every step, so pymunk's warm-started Gauss–Seidel solver
+  converges on that one constraint problem (:mod:`mechcheck.sim_models.pymunk.solve`).
+
+Every force is read from pymunk's own state: pivots', grooves' and gears'
+accumulated impulses (:mod:`mechcheck.sim_models.pymunk.forces`), springs' signed
+impulses, each / dt. The pose verdicts (``no_solution``, ``singular``,
+``indeterminate``) are the analytic backends' (:func:`mechcheck.analytic.linkage_backends.verdict`),
+decided on the pose alone, and withhold the simulation. Driven (dynamic) and
+friction cases are not modelled here yet: ``not_applicable`` with the reason.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import Joint, Linkage
+from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
+from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
+from mechcheck.analytic.linkage_kinematics import (
+    Array,
+    LinkagePose,
+    positions,
+    residual_and_jacobian,
+)
+from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
+from mechcheck.sim_models.pymunk.forces import force_on_b, torque_on_b
+from mechcheck.sim_models.pymunk.linkage_model import (
+    LinkageModel,
+    apply_loads,
+    build_linkage_model,
+    coordinates,
+    damp,
+    place,
+)
+from mechcheck.sim_models.pymunk.readout import Values
+from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
+from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
+from mechcheck.sim_models.pymunk.verdict import not_settled
+
+#: A held linkage that comes to rest farther than this × its size from the pose it was
+#: held at has left that assembly (it settles within ~1e-12 of it otherwise).
+ASSEMBLY_DRIFT = 1.0e-6
+
+
+# -- reading the model ------------------------------------------------------------------
+
+def axis_now(model: LinkageModel, joint: Joint) -> tuple[float, float]:
+    """A prismatic joint's sliding direction at the current pose (fixed in links[0])."""
+    assert joint.axis is not None
+    phi = model.body(joint.links[0]).angle
+    c, s = math.cos(phi), math.sin(phi)
+    return c * joint.axis[0] - s * joint.axis[1], s * joint.axis[0] + c * joint.axis[1]
+
+
+def prismatic_reaction(model: LinkageModel, joint: Joint, dt: float) -> Values:
+    """F (the normal reaction at ``at``), M and, if driven, Q of a prismatic joint.
+
+    A held slide's pivot carries the whole force at ``at``: its component along the
+    axis is the driver's effort Q, the rest the reaction (LINKAGES.md: F excludes any
+    driver effort).
+    """
+    name = joint.name
+    out: Values = {}
+    if name in model.held:
+        fx, fy = force_on_b(model.held[name], dt)
+        ux, uy = axis_now(model, joint)
+        along = fx * ux + fy * uy
+        out[f"Q_{name}"] = along
+        fx, fy = fx - along * ux, fy - along * uy
+    else:
+        fx, fy = force_on_b(model.grooves[name], dt)
+    out[f"F_{name}_x"], out[f"F_{name}_y"] = fx, fy
+    out[f"M_{name}"] = torque_on_b(model.locks[name], dt)
+    return out
+
+
+def reactions(model: LinkageModel) -> Values:
+    """Every F_, M_, Q_ and S_ quantity of the linkage, from the last step's impulses."""
+    dt = model.settings.dt
+    out: Values = {}
+    for joint in model.linkage.joints:
+        if joint.kind == "revolute":
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = force_on_b(model.pins[joint.name], dt)
+        else:
+            out |= prismatic_reaction(model, joint, dt)
+    for name, gear in model.drives.items():
+        out[f"Q_{name}"] = torque_on_b(gear, dt)
+    for name, spring in model.springs.items():
+        # The signed impulse on body b along b − a (or CCW): −S for tension (or for the
+        # torsional spring's −S on links[1]).
+        out[f"S_{name}"] = -spring.impulse / dt
+    return out
+
+
+def pose_table(linkage: Linkage, q: Array) -> dict[str, Array]:
+    """x_, y_, phi_ and q_ of simulated poses q (M, 3n), as the analytic backends compute
+    them (:func:`mechcheck.analytic.linkage_forces.pose_quantities`)."""
+    zeros = np.zeros_like(q)
+    pose = LinkagePose(linkage, np.zeros((q.shape[0], len(linkage.drivers))), q, zeros, zeros,
+                       np.full(q.shape[0], np.nan))
+    return pose_quantities(pose)
+
+
+def residual_velocity(model: LinkageModel) -> float:
+    """Largest point speed of any body, m/s: |v| + |ω|·(its radius)."""
+    return max((abs(b.velocity) + abs(b.angular_velocity) * model.radius[k]
+                for k, b in model.bodies.items()), default=0.0)
+
+
+def joint_separations(linkage: Linkage, q: Array) -> Array:
+    """Largest violation of any joint (loop closure) per pose q (M, 3n), m: pin gaps,
+    distances off a slide, and a slide's angle error × the linkage's size."""
+    phi, _ = residual_and_jacobian(linkage, q, np.zeros((q.shape[0], len(linkage.drivers))),
+                                   drivers=False)
+    weights = np.ones(phi.shape[1])
+    for k, joint in enumerate(linkage.joints):
+        if joint.kind == "prismatic":
+            weights[2 * k] = linkage.scale
+    return np.asarray(np.abs(phi * weights).max(axis=1, initial=0.0), dtype=float)
+
+
+def pose_drifts(radius: Array, q: Array, reference: Array) -> Array:
+    """Per pose, the largest distance of a body's origin from the analytic pose, plus
+    angle × the body's radius (m); q, reference (M, 3n), radius (n,)."""
+    d = (q - np.nan_to_num(reference)).reshape(q.shape[0], -1, 3)
+    return np.asarray((np.hypot(d[..., 0], d[..., 1]) + np.abs(d[..., 2]) * radius)
+                      .max(axis=1, initial=0.0), dtype=float)
+
+
+# -- the runs ---------------------------------------------------------------------------
+
+def is_torque(case: Case) -> Callable[[str], bool]:
+    """Which quantities are couples (N·m), for the force-change criterion."""
+    couples = frozenset(q for q, unit in quantity_units(case.linkage).items() if unit == "N*m")
+    return couples.__contains__
+
+
+def rounding_floor(model: LinkageModel) -> float:
+    """The force scale below which a settling run's force changes are rounding noise (N).
+
+    Pymunk's error correction turns a position rounding of ε·L into a force of up to
+    about m·ε·L/dt² (fictitious mass m; measured 1.4e-12 N on an unloaded 0.2 m
+    four-bar, estimate 4.4e-12 N). Against a smaller scale that noise alone would exceed
+    ``settle_force_change`` and an unloaded linkage would never count as settled.
+    """
+    s = model.settings
+    noise = s.fictitious_mass * float(np.finfo(float).eps) * model.linkage.scale / s.dt**2
+    return max(FORCE_FLOOR_N, noise / s.settle_force_change)
+
+
+def settle_run(model: LinkageModel) -> Run:
+    """Step the damped, loaded model until it is at rest and its forces stop changing."""
+    s = model.settings
+
+    def step() -> Reading:
+        damp(model)
+        apply_loads(model)
+        model.space.step(s.dt)
+        return reactions(model), residual_velocity(model)
+
+    return run_until_settled(step, s, model.linkage.scale, is_torque(model.case),
+                             rounding_floor(model))
+
+
+def primed_settle_run(model: LinkageModel, seed: Array) -> Run:
+    """Settle, after pymunk's own constraint solve at the seed has warmed its impulses.
+
+    From zero impulses the first steps' Gauss–Seidel leaves part of the load unresolved,
+    and the bodies move by about (unresolved force)·dt²/m before the solver catches up.
+    Next to a lock, where a second assembly of the held linkage lies millimetres away,
+    that start-up jolt carried the Watt six-bar onto the other assembly (held 0.06° before
+    its lock at 108.06°: 8 mm away, reactions reversed). The priming steps re-pose the
+    bodies on the seed, exactly like the sweep's continuation from a neighbouring pose;
+    the settling that follows is free to move them, and its stop rules decide.
+    """
+    priming = solve_run(model, seed)
+    run = settle_run(model)
+    return Run(run.values, priming.steps + run.steps, run.settled, run.residual_velocity,
+               run.force_change)
+
+
+def hold_without_correction(model: LinkageModel) -> None:
+    """No joint-error correction in the constraint solve (``max_bias = 0``).
+
+    The bodies are put back on the analytic pose before every step, so there is no drift
+    to correct; but that pose closes the loops only to Newton's 1e-13·L, and correcting
+    such a gap takes a force of about m·gap·(1 − error_bias^dt)/dt² (up to 2e-8 of the
+    reactions measured on random slider-cranks). Without the bias, each step solves the
+    rigid velocity constraints of that pose: statics.
+    """
+    for constraint in model.constraints():
+        constraint.max_bias = 0.0
+
+
+def solve_run(model: LinkageModel, q: Array) -> Run:
+    """Re-pose at q and step until the impulses stop changing."""
+    s = model.settings
+
+    def step() -> Reading:
+        place(model, q)
+        apply_loads(model)
+        model.space.step(s.dt)
+        return reactions(model), 0.0
+
+    run = run_until_settled(step, s, model.linkage.scale, is_torque(model.case))
+    place(model, q)  # report the pose the forces belong to
+    return run
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What one run left behind: how it ended, the bodies' coordinates (3n,), its wall
+    time, and the pose of the analytic results it belongs to."""
+
+    run: Run
+    q: Array
+    elapsed: float
+    index: int = 0
+
+
+def outcome(model: LinkageModel, run: Run, start: float, index: int = 0) -> Outcome:
+    return Outcome(run, coordinates(model), time.perf_counter() - start, index)
+
+
+def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Outcome],
+              results: LinkageResults) -> list[Solution]:
+    """The Solutions of finished runs, with the pymunk diagnostics (the four-bar's keys)
+    and the linkage's dof and condition: forces only where the run settled, and (held
+    linkages) stayed on the assembly it was held at.
+
+    The pose quantities, loop closures and drifts of all runs are computed at once.
+    """
+    linkage = model.linkage
+    units = quantity_units(linkage)
+    if not outcomes:
+        return []
+    q = np.array([o.q for o in outcomes])
+    at = [o.index for o in outcomes]
+    poses = pose_table(linkage, q)
+    gaps = joint_separations(linkage, q)
+    drifts = pose_drifts(np.array(list(model.radius.values())), q, results.pose.q[at])
+    held = not has_free_coordinates(model.case)
+    out = []
+    for m, o in enumerate(outcomes):
+        diag: dict[str, float | str] = {
+            "method": method, "steps": o.run.steps, "wall_time_s": o.elapsed,
+            "residual_velocity": o.run.residual_velocity, "force_change": o.run.force_change,
+            "joint_separation": float(gaps[m]), "pose_drift": float(drifts[m]),
+            "dt": model.settings.dt, "iterations": model.settings.iterations,
+            "condition_number": float(results.condition[o.index]),
+            "dof": linkage.dof, "gruebler": linkage.gruebler,
+        }
+        pose = {k: float(v[m]) for k, v in poses.items()}
+        if not o.run.settled:
+            out.append(not_settled(model.case.name, backend, pose, diag, units))
+        elif held and drifts[m] > ASSEMBLY_DRIFT * linkage.scale:
+            out.append(Solution(
+                model.case.name, backend, pose, status="not_settled", diagnostics=diag, units=units,
+                message=f"came to rest {drifts[m]:.3g} m away from the held assembly (next to a "
+                        "lock another assembly is that close, and the load made the joints' "
+                        "soft correction give way to it); forces withheld"))
+        else:
+            out.append(Solution(model.case.name, backend, pose | o.run.values, diagnostics=diag,
+                                units=units))
+    return out
+
+
+def refusal(case: Case, backend: str) -> Solution | None:
+    """``not_applicable`` for what the linkage model does not simulate yet, else None."""
+    if case.kind == "static":
+        return None
+    return Solution(case.name, backend, {}, status="not_applicable", units=quantity_units(case.linkage),
+                    message=f"a {case.kind} linkage case: the pymunk linkage model holds its "
+                            "drivers for statics only; driving a linkage through its motion "
+                            "(and joint friction) is not modelled in it yet")
+
+
+def withheld(case: Case, backend: str, results: LinkageResults, index: int = 0) -> Solution | None:
+    """The analytic verdict of pose ``index`` as a Solution without numbers, or None."""
+    found = verdict(case, results, index)
+    if found is None:
+        return None
+    return Solution(case.name, backend, {}, status=found[0], message=f"{found[1]}; not simulated",
+                    diagnostics={"condition_number": float(results.condition[index])},
+                    units=quantity_units(case.linkage))
+
+
+def gate(case: Case, backend: str) -> tuple[Solution | None, LinkageResults]:
+    """The analytic verdict of the case's pose (withholding the run), and the results it
+    came from (their pose is the held pose, and the reference for the pose drift)."""
+    results = analytic_results(case)
+    return withheld(case, backend, results), results
+
+
+def screened(case: Case, backend: str) -> Solution | LinkageResults:
+    """The refusal or the pose verdict that withholds the run, else the analytic results
+    of the case's pose (its held pose, and the reference for the pose drift)."""
+    refused = refusal(case, backend)
+    if refused is not None:
+        return refused
+    found, results = gate(case, backend)
+    return results if found is None else found
+
+
+def free_start(case: Case, drivers: Array | None = None) -> Array:
+    """Where free coordinates start: the drawn pose, the drivers brought to their values
+    (default: the case's) with the free coordinates carried along (never the equilibrium)."""
+    linkage = case.linkage
+    values = np.array([[d.value for d in linkage.drivers]]) if drivers is None else drivers
+    q, _ = positions(linkage, np.atleast_2d(values))
+    return np.asarray(q[0], dtype=float)
+
+
+def has_free_coordinates(case: Case) -> bool:
+    return case.linkage.dof > len(case.linkage.drivers)
+
+
+def unstable(case: Case, backend: str, results: LinkageResults, index: int = 0) -> Solution | None:
+    """``not_applicable`` where the free coordinates' equilibrium is unstable: a damped
+    simulation moves away from it, so settling cannot measure it."""
+    if results.stable is None or results.stable[index] != 0.0:
+        return None
+    return Solution(case.name, backend, {}, status="not_applicable",
+                    units=quantity_units(case.linkage),
+                    message="the equilibrium of the free coordinates reached from the drawn pose "
+                            "is unstable: a damped simulation settles elsewhere or not at all")
+
+
+def settle(case: Case, settings: SolverSettings = LINKAGE_SETTLE,
+           seed: Array | None = None) -> Solution:
+    """The ``pymunk`` backend for a linkage: statics settled by simulation.
+
+    The run starts at ``seed`` (coordinates (3n,)) if given — e.g. other starting poses
+    of free coordinates —, else on the analytic pose when every coordinate is driven,
+    else from the drawn pose (:func:`free_start`).
+    """
+    backend = "pymunk"
+    start = time.perf_counter()
+    results = screened(case, backend)
+    if isinstance(results, Solution):
+        return results
+    if has_free_coordinates(case):
+        refused = unstable(case, backend, results)
+        if refused is not None:
+            return refused
+        seed = free_start(case) if seed is None else seed
+    elif seed is None:
+        seed = results.pose.q[0]
+    model = build_linkage_model(case, settings, seed)
+    run = settle_run(model) if has_free_coordinates(case) else primed_settle_run(model, seed)
+    return solutions(model, backend, "settle", [outcome(model, run, start)], results)[0]
+
+
+def solve_at_pose(case: Case, settings: SolverSettings = LINKAGE_SOLVE) -> Solution:
+    """The ``pymunk_solve`` backend for a linkage: constraint forces at the analytic pose."""
+    backend = "pymunk_solve"
+    start = time.perf_counter()
+    results = screened(case, backend)
+    if isinstance(results, Solution):
+        return results
+    q = results.pose.q[0]
+    model = build_linkage_model(case, settings, q)
+    hold_without_correction(model)
+    run = solve_run(model, q)
+    return solutions(model, backend, "constraint_solve", [outcome(model, run, start)], results)[0]

@@ -1,0 +1,240 @@
+"""Linkage → pymunk Space: one builder for any planar linkage (LINKAGES.md).
+
+Frames. Every moving link is one dynamic body whose local coordinates are the
+**drawn pose's** global coordinates: a point drawn at P0 on link k is at
+R(φ_k)·P0 + t_k, with the body's angle φ_k and position (origin) t_k — exactly
+the linkage's own coordinates (:mod:`mechcheck.analytic.linkage_kinematics`). So
+every anchor, load point, centre of mass and spring end of the Linkage is used
+unchanged, and the ground is the space's static body (its frame is the world).
+
+Joints are pymunk's own constraints, body a = ``links[0]``, body b = ``links[1]``,
+so the impulse a constraint accumulates on body b is the force *by* links[0]
+*on* links[1] (LINKAGES.md):
+
+- revolute: a :class:`pymunk.PivotJoint` at the joint's point;
+- prismatic: a :class:`pymunk.GrooveJoint` on links[0] along the axis through
+  ``at`` (its impulse is the normal reaction N·n at ``at``) plus a
+  :class:`pymunk.GearJoint` (ratio 1, phase 0) locking the relative rotation
+  (its torque is M);
+- a driver on a revolute joint: a GearJoint with phase = the driver's value,
+  a two-way lock whose torque is Q;
+- a driver on a prismatic joint: the groove is replaced by a PivotJoint between
+  ``at`` on links[1] and the point ``at`` + value·axis of links[0], which holds
+  the slide where the driver puts it; its impulse along the axis is Q, across
+  it the reaction N·n (the gear still gives M).
+
+Springs are pymunk's own: a :class:`pymunk.DampedSpring` between the two ends
+(rest length L0) and a :class:`pymunk.DampedRotarySpring` per torsional spring.
+Chipmunk's rotary spring measures the angle of body a relative to body b
+(torque on b = k·(φ_a − φ_b − rest)), the opposite of its documented sense, so
+its rest angle is −q0 here; both springs' signed ``impulse`` is the impulse they
+applied to body b along b − a (linear) or CCW (rotary), so S = −impulse / dt.
+
+Bodies get equal fictitious masses (statics: inertia is irrelevant at rest);
+real weights are applied as forces (:mod:`mechcheck.sim_models.pymunk.loads`).
+No collision shapes are added, so nothing collides.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import Joint, LinearSpring, Link, Linkage
+from mechcheck.analytic.linkage_kinematics import Array
+from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.pymunk.loads import apply_forces
+from mechcheck.sim_models.pymunk.settings import SolverSettings
+
+Vec = tuple[float, float]
+Spring = pymunk.DampedSpring | pymunk.DampedRotarySpring
+
+#: A groove reaches this many linkage sizes either side of its point, so its end stops
+#: never engage within any pose the linkage can reach.
+GROOVE_REACH = 100.0
+#: Smallest radius of gyration of a fictitious body, as a fraction of the linkage's
+#: size: a link carrying one point (a slider) still needs a finite moment of inertia.
+MIN_RADIUS = 0.25
+
+
+@dataclass
+class LinkageModel:
+    """A built pymunk linkage and a handle on every constraint that carries a force.
+
+    ``pins`` (revolute joints), ``grooves`` (free prismatic joints), ``held`` (driven
+    prismatic joints: a pivot), ``locks`` (the prismatic joints' angle locks),
+    ``drives`` (driven revolute joints), ``springs``; ``radius`` per body for speeds.
+    """
+
+    case: Case
+    settings: SolverSettings
+    space: pymunk.Space
+    bodies: dict[str, pymunk.Body]
+    pins: dict[str, pymunk.PivotJoint]
+    grooves: dict[str, pymunk.GrooveJoint]
+    held: dict[str, pymunk.PivotJoint]
+    locks: dict[str, pymunk.GearJoint]
+    drives: dict[str, pymunk.GearJoint]
+    springs: dict[str, Spring]
+    radius: dict[str, float]
+
+    @property
+    def linkage(self) -> Linkage:
+        return self.case.linkage
+
+    def body(self, link: str) -> pymunk.Body:
+        """The link's body; the ground is the space's static body."""
+        return self.space.static_body if link == GROUND else self.bodies[link]
+
+    def constraints(self) -> list[pymunk.Constraint]:
+        return [*self.pins.values(), *self.grooves.values(), *self.held.values(),
+                *self.locks.values(), *self.drives.values(), *self.springs.values()]
+
+
+def centroid(linkage: Linkage, link: str) -> Vec:
+    """The mean of the link's drawn points: where its fictitious mass sits."""
+    xy = np.array([linkage.points[p] for p in _link(linkage, link).points])
+    return float(xy[:, 0].mean()), float(xy[:, 1].mean())
+
+
+def gyration_radius(linkage: Linkage, link: str) -> float:
+    """The farthest of the link's points from its centroid, at least MIN_RADIUS × size."""
+    cx, cy = centroid(linkage, link)
+    far = max(math.hypot(linkage.points[p][0] - cx, linkage.points[p][1] - cy)
+              for p in _link(linkage, link).points)
+    return max(far, MIN_RADIUS * linkage.scale)
+
+
+def _link(linkage: Linkage, name: str) -> Link:
+    return next(link for link in linkage.links if link.name == name)
+
+
+def make_bodies(linkage: Linkage, settings: SolverSettings) -> dict[str, pymunk.Body]:
+    """One dynamic body per moving link: the fictitious mass at the link's centroid, with
+    the moment of a uniform bar of half-length ``gyration_radius`` (m·r²/3)."""
+    bodies = {}
+    for link in linkage.moving_links:
+        m = settings.fictitious_mass
+        body = pymunk.Body(m, m * gyration_radius(linkage, link) ** 2 / 3.0)
+        body.center_of_gravity = centroid(linkage, link)
+        bodies[link] = body
+    return bodies
+
+
+def along(joint: Joint, point: Vec, distance: float) -> Vec:
+    """The point ``distance`` along a prismatic joint's drawn axis from ``point``."""
+    assert joint.axis is not None
+    return point[0] + distance * joint.axis[0], point[1] + distance * joint.axis[1]
+
+
+def make_joints(model: LinkageModel) -> None:
+    """Every joint's constraints, and each driver's lock, added to the model's tables."""
+    linkage = model.linkage
+    driven = {d.joint: d.value for d in linkage.drivers}
+    reach = GROOVE_REACH * linkage.scale
+    for joint in linkage.joints:
+        a, b = (model.body(link) for link in joint.links)
+        at = linkage.points[joint.at]
+        if joint.kind == "revolute":
+            model.pins[joint.name] = pymunk.PivotJoint(a, b, at, at)
+            if joint.name in driven:
+                model.drives[joint.name] = pymunk.GearJoint(a, b, driven[joint.name], 1.0)
+            continue
+        model.locks[joint.name] = pymunk.GearJoint(a, b, 0.0, 1.0)
+        if joint.name in driven:
+            model.held[joint.name] = pymunk.PivotJoint(a, b, along(joint, at, driven[joint.name]), at)
+        else:
+            model.grooves[joint.name] = pymunk.GrooveJoint(
+                a, b, along(joint, at, -reach), along(joint, at, reach), at)
+
+
+def make_springs(model: LinkageModel) -> None:
+    """A DampedSpring per linear spring, a DampedRotarySpring (rest −q0) per torsional one."""
+    linkage = model.linkage
+    for spring in linkage.springs:
+        if isinstance(spring, LinearSpring):
+            (la, pa), (lb, pb) = spring.ends
+            model.springs[spring.name] = pymunk.DampedSpring(
+                model.body(la), model.body(lb), pa, pb, spring.free_length, spring.stiffness,
+                spring.damping)
+        else:
+            i, j = linkage.joint(spring.joint).links
+            model.springs[spring.name] = pymunk.DampedRotarySpring(
+                model.body(i), model.body(j), -spring.free_rotation, spring.stiffness,
+                spring.damping)
+
+
+def make_space(settings: SolverSettings) -> pymunk.Space:
+    """An empty space without gravity (weights are explicit forces) and without its own
+    damping; the run damps velocities itself (:func:`damp`).
+
+    Chipmunk adds a spring's impulse *before* it damps the velocities, so
+    ``Space.damping`` scales every spring force (measured: Q of the bonnet 9 % off). And
+    even without springs it kept an unloaded near-parallelogram four-bar (random test
+    case, condition 92) moving at 0.04 m/s for 20 000 steps, where damping before the
+    step settles it in 267.
+    """
+    space = pymunk.Space()
+    space.iterations = int(settings.iterations)
+    space.gravity = (0.0, 0.0)
+    space.damping = 1.0
+    return space
+
+
+def build_linkage_model(case: Case, settings: SolverSettings, q: Array) -> LinkageModel:
+    """The pymunk model of a linkage case, its bodies placed at coordinates q (3n,)."""
+    linkage = case.linkage
+    space = make_space(settings)
+    bodies = make_bodies(linkage, settings)
+    model = LinkageModel(case, settings, space, bodies, {}, {}, {}, {}, {}, {},
+                         {link: gyration_radius(linkage, link) for link in bodies})
+    make_joints(model)
+    make_springs(model)
+    space.add(*bodies.values())
+    for constraint in model.constraints():
+        constraint.error_bias = settings.error_bias
+        space.add(constraint)
+    place(model, q)
+    return model
+
+
+def place(model: LinkageModel, q: Array) -> None:
+    """Put every body at its coordinates (t_x, t_y, φ) in q (3n,), at rest.
+
+    This only seeds (or, in the constraint solve, re-poses) the configuration;
+    the forces are still pymunk's.
+    """
+    for k, body in enumerate(model.bodies.values()):
+        # Angle first: pymunk rotates a body about its centre of gravity, so setting
+        # the angle after the position would move the body's origin.
+        body.angle = float(q[3 * k + 2])
+        body.position = (float(q[3 * k]), float(q[3 * k + 1]))
+        body.velocity = (0.0, 0.0)
+        body.angular_velocity = 0.0
+
+
+def coordinates(model: LinkageModel) -> Array:
+    """The bodies' coordinates q (3n,) in the linkage's layout (moving links in order)."""
+    return np.array([v for body in model.bodies.values()
+                     for v in (body.position.x, body.position.y, body.angle)])
+
+
+def apply_loads(model: LinkageModel) -> None:
+    """The linkage's loads and real weights on the moving links, for the next step
+    (loads on the ground act on nothing that moves)."""
+    linkage = model.linkage
+    apply_forces([ld for ld in linkage.loads if ld.link != GROUND],
+                 [m for m in linkage.masses if m.link != GROUND], linkage.gravity, model.bodies)
+
+
+def damp(model: LinkageModel) -> None:
+    """Remove kinetic energy before a step: velocities × damping^dt (``Space.damping``'s
+    law, applied where it cannot scale the springs' impulses). At rest it does nothing."""
+    keep = model.settings.damping ** model.settings.dt
+    for body in model.bodies.values():
+        body.velocity = body.velocity * keep
+        body.angular_velocity = body.angular_velocity * keep

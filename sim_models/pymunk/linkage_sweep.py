@@ -1,0 +1,110 @@
+"""A linkage's sweep over its first driver in one pymunk Space, with continuation.
+
+The model is built once. At each value of the first driver (rad or m from the drawn
+pose; the other drivers stay at the case's values) its lock is moved — a gear's phase,
+or a held slide's anchor — and the run settles (``pymunk``) or iterates at the fixed
+analytic pose (``pymunk_solve``), starting from the previous pose's accumulated
+impulses: pymunk's warm start carries them over, which is what makes a neighbouring
+pose cheap. With every coordinate driven the bodies are re-posed on the analytic pose
+(a seed); free coordinates start from the pose the previous run settled to (the first
+from the drawn pose), never from their equilibrium.
+
+Poses get the analytic backends' verdicts (no_solution, singular, indeterminate) and are
+then not simulated.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_backends import analytic_results, driver_values
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.pymunk.linkage import (
+    Outcome,
+    free_start,
+    has_free_coordinates,
+    hold_without_correction,
+    outcome,
+    refusal,
+    settle_run,
+    solutions,
+    solve_run,
+    unstable,
+    withheld,
+)
+from mechcheck.sim_models.pymunk.linkage_model import (
+    LinkageModel,
+    along,
+    build_linkage_model,
+    coordinates,
+    place,
+)
+from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE
+
+BACKENDS = ("pymunk", "pymunk_solve")
+
+
+def hold_first_driver(model: LinkageModel, value: float) -> None:
+    """Move the first driver's lock to ``value`` (rad or m from the drawn pose)."""
+    linkage = model.linkage
+    joint = linkage.joint(linkage.drivers[0].joint)
+    if joint.kind == "revolute":
+        model.drives[joint.name].phase = value
+    else:
+        model.held[joint.name].anchor_a = along(joint, linkage.points[joint.at], value)
+
+
+def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solution]:
+    """One Solution per value of the first driver, in order (``pymunk`` or ``pymunk_solve``)."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if not case.linkage.drivers:
+        raise ValueError(f"case {case.name!r}: a linkage sweep moves the first driver, and this "
+                         "linkage has none")
+    values = np.atleast_1d(np.asarray(first, dtype=float))
+    refused = refusal(case, backend)
+    if refused is not None:
+        return [refused] * len(values)
+    results = analytic_results(case, values)
+    drivers = driver_values(case, values)
+    assert drivers is not None
+    free = has_free_coordinates(case)
+    method = "settle" if backend == "pymunk" else "constraint_solve"
+    model: LinkageModel | None = None
+    previous = None
+    verdicts: dict[int, Solution] = {}
+    outcomes: list[Outcome] = []
+    for k, value in enumerate(values):
+        start = time.perf_counter()
+        found = withheld(case, backend, results, k) or (
+            unstable(case, backend, results, k) if free and backend == "pymunk" else None)
+        if found is not None:
+            verdicts[k] = found
+            continue
+        q = results.pose.q[k]
+        seed = q if not free or backend == "pymunk_solve" else (
+            previous if previous is not None else free_start(case, drivers[k]))
+        if model is None:
+            model = build_linkage_model(case, LINKAGE_SETTLE if backend == "pymunk" else LINKAGE_SOLVE,
+                                        seed)
+            if backend == "pymunk_solve":
+                hold_without_correction(model)
+        hold_first_driver(model, float(value))
+        place(model, seed)
+        run = settle_run(model) if backend == "pymunk" else solve_run(model, q)
+        outcomes.append(outcome(model, run, start, k))
+        if free and run.settled:
+            previous = coordinates(model)
+    simulated = dict(zip((o.index for o in outcomes),
+                         solutions(model, backend, method, outcomes, results) if model else [],
+                         strict=True))
+    out = []
+    for k, value in enumerate(values):
+        sol = verdicts.get(k) or simulated[k]
+        out.append(Solution(sol.case, sol.backend, sol.values, sol.status, sol.message,
+                            {**sol.diagnostics, "driver": float(value)}, units=sol.units))
+    return out

@@ -1,0 +1,297 @@
+"""The pymunk backends on any linkage (issue 12): the generic builder
+(:mod:`mechcheck.sim_models.pymunk.linkage_model`) against the analytic linkage engine,
+by the tolerance policy; hand calculations for the springs' signs and exam Q1; the
+verdicts for what it does not simulate."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import assume, given
+from typer.testing import CliRunner
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_backends import solve
+from mechcheck.analytic.solution import Solution
+from mechcheck.casefile import linkage_case
+from mechcheck.cli import app
+from mechcheck.linkage_file import LinkageCaseSpec
+from mechcheck.sim_models import pymunk as pm
+from mechcheck.sim_models.pymunk import linkage as pl
+from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE
+from mechcheck.testing import assert_solution_close
+from mechcheck.tolerance import rule
+
+from .builtin import builtin, builtin_cases
+from .strategies import linkage_tables
+from .test_linkage_identities import SETTINGS, case_of
+from .test_linkage_sweep import LINKAGES
+
+LINKAGE_CASES = sorted(n for n, c in builtin_cases().items() if c.mechanism == "linkage")
+STATIC = [n for n in LINKAGE_CASES if builtin(n).kind == "static" and n != "locking-fourbar"]
+MOVING = [n for n in LINKAGE_CASES if builtin(n).kind != "static"]
+BACKENDS = {"pymunk": pm.settle, "pymunk_solve": pm.solve_at_pose}
+
+
+def at_rest(case: Case) -> Case:
+    """The case with its drivers held still and without friction: its statics, so that the
+    built-in six-bars, the shaper, the boom and the five-bar are checked held too."""
+    linkage = case.linkage
+    drivers = tuple(replace(d, velocity=0.0, acceleration=0.0, sense=0) for d in linkage.drivers)
+    return case.with_(name=f"{case.name}-at-rest",
+                      geometry=replace(linkage, drivers=drivers, friction=None))
+
+
+def table_case(table: dict[str, Any]) -> Case:
+    return linkage_case(LinkageCaseSpec.model_validate(table))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("name", STATIC)
+def test_static_builtin_linkages_agree_with_analytic(name: str, backend: str) -> None:
+    """Every static built-in linkage (springs, prismatic drivers, free coordinates included)
+    gives every analytic quantity within the policy's tolerance."""
+    case = builtin(name)
+    assert_solution_close(case, BACKENDS[backend](case), complete=True)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("name", MOVING)
+def test_moving_builtin_linkages_held_at_rest_agree_with_analytic(name: str, backend: str) -> None:
+    case = at_rest(builtin(name))
+    assert_solution_close(case, BACKENDS[backend](case), complete=True)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("name", MOVING)
+def test_driven_and_friction_linkages_are_refused_with_the_reason(name: str, backend: str) -> None:
+    case = builtin(name)
+    solution = BACKENDS[backend](case)
+    assert solution.status == "not_applicable"
+    assert case.kind in solution.message and "statics only" in solution.message
+    assert not solution.values
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_locking_linkage_gets_the_analytic_verdict_and_no_numbers(backend: str) -> None:
+    solution = BACKENDS[backend](builtin("locking-fourbar"))
+    assert solution.status == "no_solution"
+    assert "locks at rotation" in solution.message and "not simulated" in solution.message
+    assert not solution.values
+
+
+def test_a_redundant_linkage_gets_the_analytic_verdict_and_no_numbers() -> None:
+    """A parallelogram with a third parallel bar: Gruebler 0, mobility 1, one constraint
+    redundant, so the reactions are not unique (``indeterminate``), not simulated."""
+    names = ["O2", "A", "O4", "B", "O6", "C"]
+    xy = [[0.0, 0.0], [0.0, 1.0], [1.0, 0.0], [1.0, 1.0], [2.0, 0.0], [2.0, 1.0]]
+
+    def pin(name: str, a: str, b: str) -> dict[str, Any]:
+        return {"name": name, "kind": "revolute", "links": [a, b], "at": name}
+
+    case = table_case({
+        "name": "triple-parallelogram", "mechanism": "linkage",
+        "points": dict(zip(names, xy, strict=True)),
+        "links": [{"name": "ground", "points": ["O2", "O4", "O6"]},
+                  {"name": "crank", "points": ["O2", "A"]},
+                  {"name": "coupler", "points": ["A", "B", "C"]},
+                  {"name": "rocker", "points": ["O4", "B"]},
+                  {"name": "bar", "points": ["O6", "C"]}],
+        "joints": [pin("O2", "ground", "crank"), pin("A", "crank", "coupler"),
+                   pin("B", "coupler", "rocker"), pin("O4", "ground", "rocker"),
+                   pin("C", "coupler", "bar"), pin("O6", "ground", "bar")],
+        "drivers": [{"joint": "O2", "rotation": 20.0}],
+        "loads": [{"link": "coupler", "at": "B", "force": {"x": 0.0, "y": -100.0}}],
+    })
+    for backend in BACKENDS.values():
+        solution = backend(case)
+        assert solution.status == "indeterminate" and not solution.values, solution.message
+        assert "redundant" in solution.message
+
+
+def arm(springs: list[dict[str, Any]], rotation: float = 30.0) -> Case:
+    """A unit arm O→A on the ground, driven to ``rotation`` degrees, loaded only by springs."""
+    return table_case({
+        "name": "arm", "mechanism": "linkage",
+        "points": {"O": [0.0, 0.0], "A": [1.0, 0.0], "P": [1.0, 1.0]},
+        "links": [{"name": "ground", "points": ["O", "P"]}, {"name": "arm", "points": ["O", "A"]}],
+        "joints": [{"name": "O", "kind": "revolute", "links": ["ground", "arm"], "at": "O"}],
+        "drivers": [{"joint": "O", "rotation": rotation}],
+        "springs": springs,
+    })
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_torsion_spring_sign_by_hand(backend: str) -> None:
+    """k = 2 N·m/rad relaxed at −10°, arm turned +30°: S = 2·(40° in rad) = 1.3963 N·m,
+    acting −S on the arm, so the driver holds Q = +S; the pin carries nothing.
+    (pymunk's rotary spring measures a − b: its rest angle must be −q0.)"""
+    case = arm([{"name": "t", "joint": "O", "stiffness": 2.0, "free_rotation": -10.0}])
+    s = BACKENDS[backend](case)
+    expected = 2.0 * math.radians(40.0)
+    tol = rule(backend, "torque", "static").rtol
+    assert s.values["S_t"] == pytest.approx(expected, rel=tol)
+    assert s.values["Q_O"] == pytest.approx(expected, rel=tol)
+    assert math.hypot(s.values["F_O_x"], s.values["F_O_y"]) <= tol * expected
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_linear_spring_sign_by_hand(backend: str) -> None:
+    """Spring from P = (1, 1) on the ground to A = (1, 0) on the unturned arm: L = 1 m,
+    L0 = 0.5 m, k = 100 N/m, so S = 50 N pulls A up (+y). On the arm: the pin force is
+    (0, −50) N, and the driver holds Q = −(1 m × 50 N) = −50 N·m."""
+    case = arm([{"name": "s", "ends": [["ground", "P"], ["arm", "A"]], "stiffness": 100.0,
+                 "free_length": 0.5}], rotation=0.0)
+    s = BACKENDS[backend](case)
+    tol = rule(backend, "force", "static").rtol
+    assert s.values["S_s"] == pytest.approx(50.0, rel=tol)
+    assert s.values["Q_O"] == pytest.approx(-50.0, rel=tol)
+    assert s.values["F_O_y"] == pytest.approx(-50.0, rel=tol)
+    assert abs(s.values["F_O_x"]) <= tol * 50.0
+
+
+EXAM_Q1_HAND = {"q_slide": 10.0 / 500.0, "phi_bar": math.atan(2 * 10.0 / (3.0 * 9.81)),
+                "S_spring": 10.0}
+
+
+@pytest.mark.parametrize("x, phi_deg", [(0.0, 0.0), (-0.1, -60.0), (0.15, 80.0), (0.02, 150.0)])
+def test_exam_q1_equilibrium_is_found_by_settling_from_other_poses(x: float, phi_deg: float) -> None:
+    """Exam Q1 (seed 002): x = F/k, φ = atan(2F/(mg)), S = F, however it starts (the drawn
+    pose, either side, or upside-down); never from the answer."""
+    case = builtin("exam-q1-slider-bar")
+    phi = math.radians(phi_deg)
+    # slider: translated by x; bar: turned by φ about A = origin, then translated by x.
+    seed = np.array([x, 0.0, 0.0, x, 0.0, phi])
+    s = pl.settle(case, seed=seed)
+    assert_solution_close(case, s, complete=True)
+    for quantity, expected in EXAM_Q1_HAND.items():
+        tol = rule("pymunk", "pose" if quantity != "S_spring" else "force", "static").rtol
+        assert s.values[quantity] == pytest.approx(expected, rel=tol), quantity
+
+
+def test_space_damping_is_not_used_because_it_scales_the_springs() -> None:
+    """The model damps velocities itself; Space.damping stays 1 (see linkage_model)."""
+    case = builtin("bonnet-hold")
+    model = pl.build_linkage_model(case, LINKAGE_SETTLE, pl.gate(case, "pymunk")[1].pose.q[0])
+    assert model.space.damping == 1.0
+
+
+def test_diagnostics_say_how_the_numbers_were_got() -> None:
+    s: Solution = pm.settle(builtin("watt-ii-demo").with_(name="w"))  # dynamic: refused
+    assert s.status == "not_applicable"
+    s = pm.settle(at_rest(builtin("watt-ii-demo")))
+    d = s.diagnostics
+    assert d["method"] == "settle" and int(d["steps"]) > 0
+    assert float(d["joint_separation"]) < 1e-9 and float(d["pose_drift"]) < 1e-9
+    assert float(d["residual_velocity"]) <= 1e-9 * at_rest(builtin("watt-ii-demo")).linkage.scale
+
+
+def loaded_case(table: dict[str, Any]) -> Case:
+    """A random case whose joints carry some reaction.
+
+    Where every reaction is exactly zero (e.g. only a couple on the crank, which the
+    driver takes), the policy judges them against the 0.01 N force floor, i.e. to 1e-11 N
+    at 1e-9, below the rounding of pymunk's solve at a condition of 1e3 (3e-11 N seen);
+    such a case checks no reaction anyway.
+    """
+    case = case_of(table)
+    reactions = [abs(v) for q, v in solve(case).values.items() if q.startswith("F_")]
+    assume(max(reactions, default=0.0) > 0.0)
+    return case
+
+
+@SETTINGS
+@given(linkage_tables(friction=False, moving=False))
+def test_random_static_linkages_by_the_constraint_solve(table: dict[str, Any]) -> None:
+    """Random assemblable four-bars, slider-cranks and six-bars with loads, weights and
+    springs: pymunk's constraint solve at the analytic pose gives every quantity."""
+    case = loaded_case(table)
+    assert_solution_close(case, pm.solve_at_pose(case), complete=True)
+
+
+@SETTINGS
+@given(linkage_tables(friction=False, moving=False))
+def test_random_static_linkages_by_settling(table: dict[str, Any]) -> None:
+    """The same random linkages, held and settled by simulation."""
+    case = loaded_case(table)
+    assert_solution_close(case, pm.settle(case), complete=True)
+
+
+def test_an_unloaded_linkage_settles_to_zero_forces() -> None:
+    """No load: every reaction is zero; the run must still stop (rounding noise of the
+    error correction is below its force floor) rather than report not_settled."""
+    case = at_rest(builtin("watt-ii-demo"))
+    bare = case.with_(geometry=replace(case.linkage, loads=(), masses=()))
+    s = pm.settle(bare)
+    assert s.status == "ok", s.message
+    forces = [abs(v) for q, v in s.values.items() if q.startswith(("F_", "Q_"))]
+    assert forces and max(forces) <= 1e-9
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_linkage_sweep_with_continuation_agrees_pose_by_pose(backend: str) -> None:
+    """The Watt six-bar held at crank angles across its range, in one Space (warm-started
+    from pose to pose): each pose as its own case through the analytic backend."""
+    case = at_rest(builtin("watt-ii-demo"))
+    values = np.radians([-200.0, -150.0, -100.0, -50.0, 0.0, 50.0, 100.0])
+    solutions = pm.sweep(case, values, backend)
+    driver = case.linkage.drivers[0]
+    for value, solution in zip(values, solutions, strict=True):
+        at = case.with_(geometry=replace(case.linkage, drivers=(replace(driver, value=value),)))
+        assert solution.diagnostics["driver"] == value
+        assert_solution_close(at, solution, complete=True)
+
+
+def test_a_sweep_reports_the_analytic_verdict_where_the_linkage_locks() -> None:
+    case = at_rest(builtin("watt-ii-demo"))
+    solutions = pm.sweep(case, np.radians([0.0, 120.0]), "pymunk")
+    assert [s.status for s in solutions] == ["ok", "no_solution"]
+
+
+def test_next_to_a_lock_a_held_linkage_that_leaves_its_assembly_is_not_settled() -> None:
+    """0.5° before the Watt six-bar's lock (108.06°) its other assembly is 25 mm away and
+    the loaded soft joints give way to it: the run must not report that pose's forces."""
+    case = at_rest(builtin("watt-ii-demo"))
+    driver = case.linkage.drivers[0]
+    near = case.with_(geometry=replace(case.linkage,
+                                       drivers=(replace(driver, value=math.radians(107.5)),)))
+    solution = pm.settle(near)
+    if solution.status == "ok":  # it held: then its numbers must be right
+        assert_solution_close(near, solution, complete=True)
+    else:
+        assert solution.status == "not_settled" and "assembly" in solution.message
+
+
+def test_an_unstable_free_equilibrium_is_not_settled_for_but_solved_at() -> None:
+    """Exam Q1 drawn with the bar standing up: the equilibrium reached from there is an
+    inverted pendulum (the analytic backend says unstable). Settling cannot measure it;
+    the constraint solve at that pose can."""
+    case = builtin("exam-q1-slider-bar")
+    linkage = case.linkage
+    points = dict(linkage.points) | {"B": (0.0, 0.6), "G": (0.0, 0.3)}
+    up = case.with_(name="exam-q1-standing", geometry=replace(
+        linkage, points=points, masses=(replace(linkage.masses[0], com=(0.0, 0.3)),)))
+    settled = pm.settle(up)
+    assert settled.status == "not_applicable" and "unstable" in settled.message
+    assert_solution_close(up, pm.solve_at_pose(up), complete=True)
+
+
+def test_the_sweep_command_runs_linkages_through_pymunk(tmp_path: Path) -> None:
+    """`mechcheck sweep` on the seed-E1 linkage: pymunk and pymunk_solve give rows that
+    pass against the analytic sweep, pose by pose."""
+    out = tmp_path / "sweep"
+    result = CliRunner().invoke(app, [
+        "sweep", str(LINKAGES / "seed_e1_fourbar.toml"), "-q", "--workers", "0", "--out",
+        str(out), "--driver", "-60:60:30", "-b", "pymunk", "-b", "pymunk_solve"])
+    assert result.exit_code == 0, result.output
+    status = pd.read_parquet(out / "status")
+    assert set(status["status"]) == {"ok"}
+    comparison = pd.read_parquet(out / "comparison.parquet")
+    assert {"pymunk", "pymunk_solve"} <= set(comparison["backend"].astype(str))
+    assert comparison["passed"].all()
