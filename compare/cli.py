@@ -35,7 +35,7 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
 
 
 #: The mechanisms `mechcheck new` has a commented example of (compare/examples/).
-EXAMPLES = ("four_bar", "slider_crank")
+EXAMPLES = ("four_bar", "slider_crank", "linkage")
 
 
 def example_path(mechanism: str) -> Path:

@@ -428,7 +428,7 @@ def test_a_run_with_nothing_to_compare_says_so(tmp_path: Path) -> None:
 
 # -- 17. the format reference and a starting file -----------------------------------------
 
-@pytest.mark.parametrize("mechanism", ["four_bar", "slider_crank"])
+@pytest.mark.parametrize("mechanism", ["four_bar", "slider_crank", "linkage"])
 def test_mechcheck_new_writes_a_commented_example_that_runs(tmp_path: Path, mechanism: str) -> None:
     """`mechcheck new KIND > my.toml` gives a file that runs as it is, and whose commented-out
     optional keys are valid too once uncommented."""
@@ -441,7 +441,7 @@ def test_mechcheck_new_writes_a_commented_example_that_runs(tmp_path: Path, mech
     full = case_file(tmp_path, uncommented, "full.toml")
     code, _, err = run_cli(["run", str(full), "-q", "-b", "analytic", "--out", str(tmp_path / "b")])
     assert code == 0, err
-    assert_refused(["new", "six_bar"], "four_bar, slider_crank")
+    assert_refused(["new", "six_bar"], "four_bar, slider_crank, linkage")
 
 
 def test_readme_holds_the_case_file_reference() -> None:
