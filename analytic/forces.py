@@ -177,12 +177,6 @@ def verdict_at(case: Case, results: PoseResults, index: int) -> PoseVerdict | No
     return None
 
 
-def pose_verdicts(case: Case, theta12_rad: ArrayLike | None = None) -> list[PoseVerdict | None]:
-    """:func:`verdict_at` for every θ12 (rad); simulators use it to skip such poses."""
-    results = solve_poses(case, theta12_rad)
-    return [verdict_at(case, results, i) for i in range(results.theta12.shape[0])]
-
-
 def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0, *,
                   method: str, elapsed: float) -> Solution:
     """A :class:`Solution` for one pose of vectorised results, with its verdict."""
@@ -200,14 +194,6 @@ def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0
                         message=verdict.message, diagnostics=diagnostics)
     values = {q: float(v[index]) for q, v in results.values.items()}
     return Solution(case.name, backend, values, diagnostics=diagnostics)
-
-
-def withheld_solution(case: Case, backend: str, verdict: PoseVerdict) -> Solution:
-    """What a simulator reports at a pose whose verdict withholds forces: no numbers
-    (a simulator's numbers must be its own, and there are none to measure)."""
-    return Solution(case.name, backend, {}, status=verdict.status,
-                    message=f"{verdict.message}; not simulated",
-                    diagnostics={"condition_number": verdict.condition})
 
 
 def unassemblable_solution(case: Case, backend: str, theta12: float) -> Solution:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:
@@ -106,7 +107,8 @@ class Solution:
 
     ``values`` are SI with angles in **radians** (N, N·m, m, rad), as every
     backend computes them; :meth:`in_table_units` gives them as the tables show
-    them (degrees).
+    them (degrees). A Solution is immutable: ``values``, ``diagnostics`` and ``units``
+    are read-only copies of what it was made with (``dataclasses.replace`` makes another).
     """
 
     case: str
@@ -126,7 +128,14 @@ class Solution:
         """``values`` as the tables show them: N, N·m, m, and degrees wrapped to [−180°, 180°)."""
         return {q: table_value(q, v, self.unit(q)) for q, v in self.values.items()}
 
+    def __reduce__(self) -> tuple[type[Solution], tuple[object, ...]]:
+        # A read-only mapping does not pickle: a Solution crosses a process as plain dicts.
+        return (Solution, (self.case, self.backend, dict(self.values), self.status, self.message,
+                           dict(self.diagnostics), dict(self.units)))
+
     def __post_init__(self) -> None:
+        for name in ("values", "diagnostics", "units"):
+            object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
         unknown = {q for q in self.values
                    if q not in QUANTITY_UNITS and not (LINKAGE_QUANTITY.fullmatch(q)
                                                        and q in self.units)}

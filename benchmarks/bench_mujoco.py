@@ -32,7 +32,7 @@ import numpy as np
 
 from mechcheck.analytic.forces import solve
 from mechcheck.casefile import builtin_case_files, load_cases
-from mechcheck.sim_models.mujoco import settle, sweep
+from mechcheck.sim_models.mujoco.backend import settle, sweep
 from mechcheck.tables import comparison_rows
 
 CASE = "seed-E1-as-stated"

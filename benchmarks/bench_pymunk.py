@@ -33,8 +33,8 @@ from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
-from mechcheck.sim_models import pymunk as backends
-from mechcheck.sim_models.pymunk import sweep
+from mechcheck.sim_models.pymunk import backend as backends
+from mechcheck.sim_models.pymunk.backend import sweep
 
 
 def worst_error(solutions: list[Solution], reference: dict[str, np.ndarray]) -> float:

@@ -49,10 +49,12 @@ def load_cases(*paths: str | Path) -> list[Case]:
 
 
 def solve(case: Case, backend: str = "analytic") -> Solution:
-    """``case`` through one backend (see :func:`available_backends`); SI values, angles in radians."""
-    from mechcheck.backends import load
+    """``case`` through one backend (see :func:`available_backends`); SI values, angles in
+    radians. Behind the pose gate, as in ``mechcheck run``: where the analytic pose analysis
+    finds no unique forces, the backend is not called and reports that verdict."""
+    from mechcheck.run import solve_gated
 
-    return load(backend)(case)
+    return solve_gated(backend, case)
 
 
 def check(cases: Sequence[Case], backends: Sequence[str] | None = None, *,

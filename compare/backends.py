@@ -1,66 +1,87 @@
-"""Backend registry: name → function ``Case -> Solution``.
+"""The backend registry: every :class:`~mechcheck.analytic.contract.Backend` there is.
 
-Backends are imported lazily so that a missing or broken simulator affects
-only the runs that ask for it, with a clear message. Adding a simulator means
-adding one line here and one module under ``sim_models/``.
+Nothing here names a backend. The analytic ones are declared in
+:mod:`mechcheck.analytic.backends`; every package under ``mechcheck.sim_models`` declares its
+own as ``BACKENDS``, and is found by walking that package's path, so a new simulator is a
+new package there and needs no edit here. Declarations are light: listing the backends
+imports no simulator (availability is decided by whether the simulator's package is
+installed, without importing it).
 """
 
 from __future__ import annotations
 
 import importlib
-import importlib.util
-from collections.abc import Callable
+import pkgutil
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
+
+from mechcheck.analytic import backends as analytic_backends
+from mechcheck.analytic.contract import Backend, BackendUnavailable, Family
 
 if TYPE_CHECKING:
     from mechcheck.analytic.case import Case
     from mechcheck.analytic.solution import Solution
 
-Backend = Callable[["Case"], "Solution"]
+__all__ = ["REFERENCE", "REGISTRY", "Backend", "BackendUnavailable", "available", "family",
+           "get", "load", "missing_requirement", "names_of_family"]
 
-#: name → "module:function"; ``analytic`` is the reference every other is compared with.
-REGISTRY: dict[str, str] = {
-    "analytic": "mechcheck.analytic.forces:solve",
-    "superposition": "mechcheck.analytic.superposition:solve",
-    "virtual_work": "mechcheck.analytic.virtual_work:solve",
-    "mujoco": "mechcheck.sim_models.mujoco:settle",
-    "mujoco_solve": "mechcheck.sim_models.mujoco:solve_at_pose",
-    "pymunk": "mechcheck.sim_models.pymunk:settle",
-    "pymunk_solve": "mechcheck.sim_models.pymunk:solve_at_pose",
-}
-REFERENCE = "analytic"
+SolveFunction = Callable[["Case"], "Solution"]
 
-#: name → the simulator package it needs. Availability is decided by whether that
-#: package is installed, without importing it: listing backends stays fast.
-REQUIRES: dict[str, str] = {
-    "mujoco": "mujoco", "mujoco_solve": "mujoco", "pymunk": "pymunk", "pymunk_solve": "pymunk",
-}
+#: The backend every other is compared with.
+REFERENCE = analytic_backends.REFERENCE
 
 
-class BackendUnavailable(LookupError):
-    """An unknown backend, or one whose module is not there (yet)."""
+def discovered() -> dict[str, Backend]:
+    """The analytic backends, then each simulator package's, by name."""
+    import mechcheck.sim_models as simulators
+
+    found = {b.name: b for b in analytic_backends.BACKENDS}
+    for module in sorted(pkgutil.iter_modules(simulators.__path__), key=lambda m: m.name):
+        if not module.ispkg:
+            continue
+        package = importlib.import_module(f"{simulators.__name__}.{module.name}")
+        for backend in getattr(package, "BACKENDS", ()):
+            if backend.name in found:
+                raise RuntimeError(f"backend {backend.name!r} is declared twice "
+                                   f"(again in {package.__name__})")
+            found[backend.name] = backend
+    return found
 
 
-def load(name: str) -> Backend:
-    """The backend function called ``name``."""
-    if name not in REGISTRY:
-        raise BackendUnavailable(
-            f"unknown backend {name!r}; known backends: {', '.join(REGISTRY)}")
-    module_name, function = REGISTRY[name].split(":")
+#: name → Backend, in the order ``mechcheck backends`` lists them.
+REGISTRY: dict[str, Backend] = discovered()
+
+
+def get(name: str) -> Backend:
+    """The backend called ``name``."""
     try:
-        module = importlib.import_module(module_name)
-        backend: Backend = getattr(module, function)
-        return backend
-    except (ImportError, AttributeError) as error:
-        raise BackendUnavailable(f"backend {name!r} is not available: {error}") from None
+        return REGISTRY[name]
+    except KeyError:
+        raise BackendUnavailable(
+            f"unknown backend {name!r}; known backends: {', '.join(REGISTRY)}") from None
+
+
+def load(name: str) -> SolveFunction:
+    """The single-case solve of backend ``name``, imported now."""
+    solve: SolveFunction = get(name).solver()
+    return solve
 
 
 def missing_requirement(name: str) -> str | None:
     """The package backend ``name`` needs and this installation lacks, if any."""
-    package = REQUIRES.get(name)
-    return package if package and importlib.util.find_spec(package) is None else None
+    return get(name).missing_requirement()
 
 
 def available() -> list[str]:
     """The registered backends whose simulator is installed here."""
-    return [name for name in REGISTRY if missing_requirement(name) is None]
+    return [name for name, b in REGISTRY.items() if b.missing_requirement() is None]
+
+
+def family(name: str) -> Family:
+    """The tolerance family backend ``name`` is judged by."""
+    return get(name).family
+
+
+def names_of_family(kind: Family, registry: Mapping[str, Backend] | None = None) -> list[str]:
+    """The backends of one family (``settled``: the simulations the studies run)."""
+    return [n for n, b in (registry or REGISTRY).items() if b.family == kind]

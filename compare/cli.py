@@ -249,11 +249,12 @@ def new_command(
 
 @app.command("backends")
 def backends_command() -> None:
-    """List the backends and whether each is available here."""
-    for name in registry.REGISTRY:
-        missing = registry.missing_requirement(name)
+    """List the backends: name, whether it is available here, the tolerance family it is
+    judged by and what it is."""
+    for name, backend in registry.REGISTRY.items():
+        missing = backend.missing_requirement()
         state = "available" if missing is None else f"unavailable ({missing} is not installed)"
-        typer.echo(f"{name:15s} {state}")
+        typer.echo(f"{name:15s} {state:12s} {backend.family:12s} {backend.summary}".rstrip())
 
 
 def _add_theory() -> None:

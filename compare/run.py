@@ -70,7 +70,34 @@ class RunResult:
                 f"tolerance, {verdicts} ({word})")
 
 
-def call_backend(backend: registry.Backend, name: str, case: Case) -> Solution:
+#: The reference's verdicts that are properties of the pose: there no backend has forces to
+#: give (SIMULATORS.md: a simulator there returns finite but meaningless numbers).
+POSE_VERDICTS = ("singular", "indeterminate", "no_solution")
+
+
+def gated(reference: Solution, name: str) -> Solution | None:
+    """The pose gate, run once per case before any other backend: where the reference's pose
+    analysis found no unique forces, backend ``name`` is not called and reports the same
+    verdict; else None."""
+    if reference.status not in POSE_VERDICTS:
+        return None
+    diagnostics = {k: v for k, v in reference.diagnostics.items() if k == "condition_number"}
+    return Solution(reference.case, name, {}, status=reference.status,
+                    message=f"{reference.message}; not run (the pose verdict of {reference.backend})",
+                    diagnostics=diagnostics, units=reference.units)
+
+
+def solve_gated(name: str, case: Case, reference: Solution | None = None) -> Solution:
+    """Backend ``name`` on ``case`` behind the pose gate (:func:`gated`); the reference is
+    computed here unless given."""
+    if reference is None:
+        reference = call_backend(registry.load(registry.REFERENCE), registry.REFERENCE, case)
+    if name == registry.REFERENCE:
+        return reference
+    return gated(reference, name) or call_backend(registry.load(name), name, case)
+
+
+def call_backend(backend: registry.SolveFunction, name: str, case: Case) -> Solution:
     """Run one backend; a crash becomes an ``error`` verdict, not a lost run, and a number
     that is not finite never passes (:func:`finite_only`)."""
     try:
@@ -108,8 +135,11 @@ def run(cases: Sequence[Case], backend_names: Sequence[str], *,
     solutions: list[Solution] = []
     total, done = len(cases) * len(names), 0
     for case in cases:
+        reference = call_backend(functions[registry.REFERENCE], registry.REFERENCE, case)
         for name in names:
-            solutions.append(call_backend(functions[name], name, case))
+            solution = reference if name == registry.REFERENCE else (
+                gated(reference, name) or call_backend(functions[name], name, case))
+            solutions.append(solution)
             done += 1
             if progress:
                 progress(done, total, f"{case.name} · {name}")

@@ -7,16 +7,16 @@ its file name carries a digest of the case, the backend and the θ12 values,
 so a re-run skips every task whose part exists and recomputes only the rest
 (and a changed case never reuses stale parts).
 
-Vector backends (``analytic``, ``superposition``, ``virtual_work``) solve a
-chunk in one vectorised call; simulator backends run their own ``sweep``
-(warm starts, continuation) over the chunk.
+Vectorised backends (the analytic ones) solve a chunk in one call; simulator backends run
+their own ``sweep`` (warm starts, continuation) over the chunk's poses that pass the pose
+gate (:func:`gated_poses`). Which is which, and each backend's sweep functions, come from
+the backend's declaration (:mod:`mechcheck.analytic.contract`).
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
-import importlib
 import io
 import math
 from collections.abc import Callable, Sequence
@@ -29,10 +29,11 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
+from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution, table_values
 from mechcheck.analytic.values import MAX_ANGLE_DEG
-from mechcheck.backends import REFERENCE, REGISTRY, BackendUnavailable
+from mechcheck.backends import REFERENCE, BackendUnavailable
 from mechcheck.output import file_stem, write_all
 
 #: The most poses a sweep takes per case: ten times the 10⁶-pose analytic sweep the
@@ -46,28 +47,6 @@ PART_FORMAT = 1
 #: a chunk is one continuation run; 60 poses of 1° let two workers share a turn.
 VECTOR_CHUNK = 200_000
 SIMULATOR_CHUNK = 60
-
-#: Vectorised solvers, name → "module:function" taking (case, theta12_rad) → PoseResults.
-VECTOR_BACKENDS = {
-    "analytic": "mechcheck.analytic.forces:solve_poses",
-    "superposition": "mechcheck.analytic.superposition:solve_poses",
-    "virtual_work": "mechcheck.analytic.virtual_work:solve_poses",
-}
-#: The same for a linkage: (case, first driver's values in rad or m) → LinkageResults.
-LINKAGE_VECTOR_BACKENDS = {
-    "analytic": "mechcheck.analytic.linkage_backends:analytic_results",
-    "superposition": "mechcheck.analytic.linkage_backends:superposition_results",
-    "virtual_work": "mechcheck.analytic.linkage_backends:virtual_work_results",
-}
-#: Simulator sweeps, name → "module:function" taking (case, theta12_rad, backend) → [Solution].
-SIMULATOR_SWEEPS = {
-    "mujoco": "mechcheck.sim_models.mujoco:sweep", "mujoco_solve": "mechcheck.sim_models.mujoco:sweep",
-    "pymunk": "mechcheck.sim_models.pymunk:sweep", "pymunk_solve": "mechcheck.sim_models.pymunk:sweep",
-}
-
-#: The simulator sweeps that take linkages (the first driver's values in rad or m); the
-#: others report ``not_applicable`` for a linkage.
-LINKAGE_SIMULATOR_SWEEPS = frozenset({"pymunk", "pymunk_solve"})
 
 RESULT_COLUMNS = ["case", "backend", "theta12", "quantity", "value", "unit"]
 STATUS_COLUMNS = ["case", "backend", "theta12", "status", "condition_number"]
@@ -141,15 +120,6 @@ def parse_range(text: str, option: str = "--theta12") -> np.ndarray:
     return start + step * np.arange(count, dtype=float)
 
 
-def _resolve(target: str) -> Callable[..., Any]:
-    module, function = target.split(":")
-    try:
-        found: Callable[..., Any] = getattr(importlib.import_module(module), function)
-        return found
-    except (ImportError, AttributeError) as error:
-        raise BackendUnavailable(f"backend sweep {target!r} is not available: {error}") from None
-
-
 def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray,
          driver_grid: np.ndarray | None = None) -> list[SweepTask]:
     """The tasks of a sweep; the reference backend is always included.
@@ -160,15 +130,14 @@ def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray
     """
     names = list(dict.fromkeys([REFERENCE, *backends]))
     for name in names:
-        if name not in REGISTRY:
-            raise BackendUnavailable(f"unknown backend {name!r}; known backends: {', '.join(REGISTRY)}")
-        if name not in VECTOR_BACKENDS and name not in SIMULATOR_SWEEPS:
+        declared = registry.get(name)
+        if declared.sweep is None and declared.linkage_sweep is None:
             raise BackendUnavailable(f"backend {name!r} has no sweep")
     tasks = []
     for case in cases:
         grid = theta12_deg if case.mechanism != "linkage" or driver_grid is None else driver_grid
         for name in names:
-            size = VECTOR_CHUNK if name in VECTOR_BACKENDS else SIMULATOR_CHUNK
+            size = VECTOR_CHUNK if registry.get(name).vectorised else SIMULATOR_CHUNK
             for chunk, start in enumerate(range(0, len(grid), size)):
                 part = np.array(grid[start:start + size], dtype=float)
                 tasks.append(SweepTask(case, name, part, chunk, task_digest(case, name, part)))
@@ -231,44 +200,71 @@ def driver_grid_si(case: Case, grid: np.ndarray) -> np.ndarray:
 def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     theta_deg = np.asarray(task.theta12_deg)
     linkage = task.case.mechanism == "linkage"
-    solver = _resolve((LINKAGE_VECTOR_BACKENDS if linkage else VECTOR_BACKENDS)[task.backend])
+    solver = registry.get(task.backend).sweeper(linkage)
+    if solver is None:
+        return _not_applicable(task)
     grid = driver_grid_si(task.case, theta_deg) if linkage else np.radians(theta_deg)
     try:
         results = solver(task.case, grid)
     except ValueError:  # the method refuses this case (Coulomb friction)
-        status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
-                               "theta12": theta_deg, "status": "not_applicable",
-                               "condition_number": np.nan})
-        return pd.DataFrame(columns=RESULT_COLUMNS), status
-    status_values = np.select(
-        [~results.assembled, results.singular, results.indeterminate, ~results.converged],
-        ["no_solution", "singular", "indeterminate", "no_solution"], default="ok")
+        return _not_applicable(task)
+    verdicts = pose_statuses(results)
+    status_values = np.where(verdicts == "", "ok", verdicts)
     status = pd.DataFrame({"case": task.case.name, "backend": task.backend, "theta12": theta_deg,
                            "status": status_values, "condition_number": results.condition})
     return _long_frame(task.case, task.backend, theta_deg, results.values), status
 
 
+def _not_applicable(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """No rows, and ``not_applicable`` at every pose: the backend has no sweep of this kind
+    of case, or its method refuses the case."""
+    status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
+                           "theta12": np.asarray(task.theta12_deg), "status": "not_applicable",
+                           "condition_number": np.nan})
+    return pd.DataFrame(columns=RESULT_COLUMNS), status
+
+
+def gated_poses(case: Case, grid: np.ndarray) -> tuple[list[str], np.ndarray]:
+    """The pose gate over a sweep's grid (rad, or a linkage's first driver in rad or m): the
+    reference's verdict at each pose (``""`` where it has forces) and its condition number.
+    Simulators are run only where the verdict is empty, so every backend of a sweep shows
+    one verdict at a pose whose forces do not exist or are not unique."""
+    reference = registry.get(REFERENCE).sweeper(case.mechanism == "linkage")
+    assert reference is not None
+    results = reference(case, grid)
+    return [str(v) for v in pose_statuses(results)], np.asarray(results.condition, dtype=float)
+
+
+def pose_statuses(results: Any) -> np.ndarray:
+    """Each pose's verdict in vectorised results (PoseResults or LinkageResults), ``""``
+    where it has forces."""
+    return np.select(
+        [~results.assembled, results.singular, results.indeterminate, ~results.converged],
+        ["no_solution", "singular", "indeterminate", "no_solution"], default="")
+
+
 def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     theta_deg = np.asarray(task.theta12_deg)
     linkage = task.case.mechanism == "linkage"
-    if linkage and task.backend not in LINKAGE_SIMULATOR_SWEEPS:
-        status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
-                               "theta12": theta_deg, "status": "not_applicable",
-                               "condition_number": np.nan})
-        return pd.DataFrame(columns=RESULT_COLUMNS), status
-    sweep_fn = _resolve(SIMULATOR_SWEEPS[task.backend])
+    sweep_fn = registry.get(task.backend).sweeper(linkage)
+    if sweep_fn is None:
+        return _not_applicable(task)
     grid = driver_grid_si(task.case, theta_deg) if linkage else np.radians(theta_deg)
-    solutions: list[Solution] = sweep_fn(task.case, grid, task.backend)
+    verdicts, condition = gated_poses(task.case, grid)
+    passing = np.flatnonzero([v == "" for v in verdicts])
+    solutions: list[Solution] = sweep_fn(task.case, grid[passing], task.backend) if len(passing) else []
+    statuses = list(verdicts)
+    conditions = condition.copy()
     values = {q: np.full(len(theta_deg), np.nan) for q in units_of(task.case)}
-    for i, s in enumerate(solutions):
+    for i, s in zip(passing, solutions, strict=True):
+        statuses[i] = s.status
+        conditions[i] = float(s.diagnostics.get("condition_number", condition[i]))
         for q, v in s.values.items():
             values[q][i] = v
     present = {q: v for q, v in values.items() if np.isfinite(v).any()}
     status = pd.DataFrame({
         "case": task.case.name, "backend": task.backend, "theta12": theta_deg,
-        "status": [s.status for s in solutions],
-        "condition_number": [float(s.diagnostics.get("condition_number", np.nan))
-                             for s in solutions],
+        "status": statuses, "condition_number": conditions,
     })
     return _long_frame(task.case, task.backend, theta_deg, present), status
 
@@ -279,7 +275,7 @@ def run_task(task: SweepTask) -> tuple[bytes, bytes]:
     Bytes rather than frames keep what crosses a process or Dask boundary small
     and make the worker, not the client, pay for encoding.
     """
-    runner = _run_vector if task.backend in VECTOR_BACKENDS else _run_simulator
+    runner = _run_vector if registry.get(task.backend).vectorised else _run_simulator
     results, status = runner(task)
     return _parquet(results), _parquet(status)
 

@@ -77,8 +77,9 @@ def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask],
     failed = int((~comparison["passed"].astype(bool)).sum()) if len(comparison) else 0
     failing = int(statuses["status"].isin(fail_on).sum()) if len(statuses) else 0
     status = 1 if failed or failing else 0
-    print(f"{len(cases)} case{'s' * (len(cases) != 1)} x {n_poses} poses, {len(comparison)} comparisons, {failed} outside "
-          f"tolerance, {failing} poses with a failing verdict; {outcome.executed} tasks run, "
+    print(f"{len(cases)} case{'s' * (len(cases) != 1)} x {n_poses} poses, {len(comparison)} "
+          f"comparisons, {failed} outside tolerance, {failing} poses with a failing verdict; "
+          f"{outcome.executed} tasks run, "
           f"{outcome.reused} reused, {wall:.1f} s -> {out}/report.md "
           f"({'PASS' if status == 0 else 'FAIL'})")
     return status

@@ -47,10 +47,13 @@ def results_frame(solutions: Sequence[Solution]) -> pd.DataFrame:
 def kind_scales(case: Case, reference: Solution) -> dict[str, float]:
     """Scale of each quantity kind in a case.
 
-    Forces: the largest reference reaction. Torques: the largest reference
-    torque, or the largest reaction times the longest link if that is larger
-    (a drive torque that happens to vanish at a dead centre is still made of
-    forces with lever arms of that size). Angles: 1 rad. s14: the longest link.
+    Forces: the largest reference reaction, or the largest reference torque over the
+    longest link if that is larger (a torque the drive takes straight from a load leaves
+    every reaction zero, yet a simulator bears it through joints with lever arms of that
+    size). Torques: the largest reference torque, or the largest reaction times the
+    longest link if that is larger (a drive torque that happens to vanish at a dead
+    centre is still made of forces with lever arms of that size). Angles: 1 rad. s14:
+    the longest link.
     """
     scales = {"force": SCALE_FLOOR, "torque": SCALE_FLOOR, "angle": 1.0,
               "length": case.geometry.scale}
@@ -58,7 +61,8 @@ def kind_scales(case: Case, reference: Solution) -> dict[str, float]:
         kind = kind_of_unit(reference.unit(q))
         if kind in ("force", "torque"):
             scales[kind] = max(scales[kind], abs(v))
-    scales["torque"] = max(scales["torque"], scales["force"] * case.geometry.scale)
+    forces, torques, length = scales["force"], scales["torque"], case.geometry.scale
+    scales["force"], scales["torque"] = max(forces, torques / length), max(torques, forces * length)
     return scales
 
 
@@ -145,12 +149,18 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     # Scale of each force/torque kind at each pose: the largest reference magnitude.
     ref_kind = ref.assign(kind=ref["unit"].map(kind_of_unit), mag=ref["reference"].abs())
     scale_table = ref_kind.groupby(["theta12", "kind"], observed=True)["mag"].max()
+    kinds = set(scale_table.index.get_level_values("kind"))
     scale = pd.Series(list(zip(merged["theta12"], kind, strict=True))).map(scale_table).to_numpy()
     scale = np.maximum(np.nan_to_num(scale, nan=SCALE_FLOOR), SCALE_FLOOR)
-    # Torques: at least the largest reaction times the longest link (see kind_scales).
-    force_at = merged["theta12"].map(scale_table.xs("force", level="kind")).to_numpy()
-    force_at = np.nan_to_num(force_at, nan=SCALE_FLOOR) * case.geometry.scale
-    scale = np.where(kind == "torque", np.maximum(scale, force_at), scale)
+    # Forces at least the largest torque over the longest link, torques at least the
+    # largest reaction times it (see kind_scales).
+    length = case.geometry.scale
+    force_at, torque_at = (np.nan_to_num(merged["theta12"].map(scale_table.xs(k, level="kind"))
+                                         .to_numpy(dtype=float) if k in kinds else
+                                         np.full(len(merged), np.nan), nan=SCALE_FLOOR)
+                           for k in ("force", "torque"))
+    scale = np.where(kind == "torque", np.maximum(scale, force_at * length), scale)
+    scale = np.where(kind == "force", np.maximum(scale, torque_at / length), scale)
     is_angle = (unit == "deg").to_numpy()
     scale = np.where(kind == "pose", np.where(is_angle, factor, case.geometry.scale), scale)
     diff = merged["value"].to_numpy() - merged["reference"].to_numpy()

@@ -1,6 +1,7 @@
 """The one tolerance policy: every comparison's tolerance comes from here.
 
-A tolerance is looked up by (backend, quantity kind, case kind). Quantity
+A tolerance is looked up by (backend family, quantity kind, case kind): each backend
+declares the family it is judged by (:mod:`mechcheck.analytic.contract`). Quantity
 kinds are ``force``, ``torque`` and ``pose`` (:func:`mechcheck.analytic.solution.quantity_kind`);
 case kinds are ``static``, ``dynamic``, ``friction`` and ``near_singular``
 (:func:`case_kind`). Each entry carries the reason for its size.
@@ -20,8 +21,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fnmatch import fnmatch
+from typing import Literal
 
+from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.contract import Family
 from mechcheck.analytic.solution import quantity_kind
 
 #: Cases whose analytic condition number exceeds this are ``near_singular``:
@@ -38,12 +42,13 @@ class Tolerance:
     overridden: bool = False
 
 
-ANALYTIC_FAMILY = ("superposition", "virtual_work")
-EXACT_SOLVES = ("mujoco_solve", "pymunk_solve")
-SETTLED = ("mujoco", "pymunk")
+ANALYTIC_FAMILY: Family = "analytic"
+EXACT_SOLVES: Family = "exact_solve"
+SETTLED: Family = "settled"
 
-_RULES: list[tuple[tuple[str, ...], str, str, Tolerance]] = [
-    # (backends, quantity kind, case kind, tolerance); "*" matches anything; first match wins.
+_RULES: list[tuple[Family | Literal["*"], str, str, Tolerance]] = [
+    # (backend family, quantity kind, case kind, tolerance); "*" matches anything; first
+    # match wins.
     (ANALYTIC_FAMILY, "*", "near_singular", Tolerance(
         1e-6, 0.0, "same equations by other algebra, but rounding is amplified by the "
         "condition number (up to 1e8 × 2.2e-16 ≈ 2e-8 before a pose is called singular)")),
@@ -67,7 +72,7 @@ _RULES: list[tuple[tuple[str, ...], str, str, Tolerance]] = [
     (SETTLED, "*", "near_singular", Tolerance(
         1e-2, 0.0, "near a toggle the soft constraints bend by an amount the 1/δ force "
         "growth magnifies; numbers are indicative only")),
-    (("*",), "*", "*", Tolerance(
+    ("*", "*", "*", Tolerance(
         1e-6, 0.0, "default for a backend the policy does not name yet")),
 ]
 
@@ -95,9 +100,9 @@ def override(case: Case, backend: str, quantity: str, kind: str) -> tuple[float,
 
 def rule(backend: str, quantity_kind: str, case_kind: str) -> Tolerance:
     """The policy's tolerance for a backend, quantity kind and case kind (first match wins)."""
-    for backends, qk, ck, tol in _RULES:
-        if any(_matches(b, backend) for b in backends) and _matches(qk, quantity_kind) \
-                and _matches(ck, case_kind):
+    kind = registry.REGISTRY[backend].family if backend in registry.REGISTRY else None
+    for fam, qk, ck, tol in _RULES:
+        if (fam == "*" or fam == kind) and _matches(qk, quantity_kind) and _matches(ck, case_kind):
             return tol
     raise LookupError(backend)  # unreachable: the last rule matches everything
 
@@ -115,5 +120,8 @@ def tolerance_for(case: Case, backend: str, quantity: str, kind: str,
 
 def policy_table() -> list[dict[str, str | float]]:
     """The rules as rows, for the README and the report."""
-    return [{"backends": ", ".join(b), "quantity kind": q, "case kind": c,
-             "rtol": t.rtol, "atol": t.atol, "reason": t.reason} for b, q, c, t in _RULES]
+    def members(fam: Family | Literal["*"]) -> str:
+        return "any other" if fam == "*" else ", ".join(registry.names_of_family(fam))
+
+    return [{"backends": members(f), "quantity kind": q, "case kind": c,
+             "rtol": t.rtol, "atol": t.atol, "reason": t.reason} for f, q, c, t in _RULES]

@@ -1,16 +1,7 @@
-"""The simulator backends: one package per simulator (``mujoco``, ``pymunk``)."""
+"""The simulators: one package per simulator (``mujoco``, ``pymunk``).
 
-from __future__ import annotations
-
-from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import Solution
-
-
-def unmodelled_linkage(case: Case, backend: str) -> Solution | None:
-    """``not_applicable`` for a ``mechanism = "linkage"`` case, which the simulators' model
-    builders do not take yet (they build the four-bar and the slider-crank); else None."""
-    if case.mechanism != "linkage":
-        return None
-    return Solution(case.name, backend, {}, status="not_applicable",
-                    message=f"the {backend} model builder takes the four-bar and the "
-                            "slider-crank; general linkages are not modelled in it yet")
+Each package declares its backends as ``BACKENDS`` in its ``__init__``
+(:class:`~mechcheck.analytic.contract.Backend`), without importing its simulator, and
+:mod:`mechcheck.backends` finds every package here: adding a simulator is adding a package,
+with no edit anywhere else (``tests/test_backend_contract.py`` adds a fake one).
+"""

@@ -17,6 +17,7 @@ from typer.testing import CliRunner
 
 from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.contract import Backend
 from mechcheck.analytic.solution import Solution
 from mechcheck.cli import app
 from mechcheck.output import write_all
@@ -288,7 +289,8 @@ def test_a_non_finite_number_never_passes(tmp_path: Path, monkeypatch: pytest.Mo
                                           value: float) -> None:
     """A backend that produces NaN or ±inf gets the verdict `error`, naming the quantity;
     the run fails and no table holds a non-finite number."""
-    monkeypatch.setitem(registry.REGISTRY, "broken", f"{__name__}:non_finite_backend")
+    monkeypatch.setitem(registry.REGISTRY, "broken",
+                        Backend("broken", f"{__name__}:non_finite_backend", "settled"))
     monkeypatch.setitem(FAKE, "value", value)
     path = case_file(tmp_path)
     out = tmp_path / "o"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+import mechcheck
 import mechcheck.analytic
 
 ANALYTIC = Path(mechcheck.analytic.__file__).parent
@@ -55,3 +56,19 @@ def test_analytic_modules_import_each_other_without_a_cycle() -> None:
     for module in sorted(deps):
         if module not in state:
             visit(module, [])
+
+
+def test_the_harness_reaches_simulators_only_through_sim_models() -> None:
+    """No module of the harness (``compare/``, the studies included) imports a simulator:
+    it reaches MuJoCo and pymunk through ``mechcheck.sim_models`` (issue 12), so a simulator
+    is one package there."""
+    harness = Path(mechcheck.__file__).parent
+    for path in harness.rglob("*.py"):
+        if path.relative_to(harness).parts[0] == "sim_models":  # installed: a subfolder
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            for name in names:
+                assert name.split(".")[0] not in ("mujoco", "pymunk"), (path.name, name)

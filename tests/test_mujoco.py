@@ -11,17 +11,20 @@ built-in case files' (compare/cases/seeds.toml), loaded by name.
 from __future__ import annotations
 
 import importlib
+import io
 import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
+import mechcheck
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
 from mechcheck.analytic.equilibrium import condition
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.mujoco import settle, solve_at_pose, sweep
+from mechcheck.sim_models.mujoco.backend import settle, solve_at_pose, sweep
 from mechcheck.sim_models.mujoco.dynamics import DYNAMIC, LEAD_CONDITION_GROWTH, Drive, lead_in_condition
 from mechcheck.sim_models.mujoco.model import model_xml
 from mechcheck.sim_models.mujoco.settle import (
@@ -33,6 +36,7 @@ from mechcheck.sim_models.mujoco.settle import (
     refinement_left,
     remaining_change,
 )
+from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin
@@ -274,8 +278,12 @@ def test_whole_cycle_sweep_is_within_tolerance() -> None:
 
 
 def test_change_point_case_is_singular() -> None:
-    """At the change point itself the backend withholds forces, as the analytic backend does."""
-    assert settle(builtin("fourbar-change-point")).status == "singular"
+    """At the change point itself the pose gate keeps the case from MuJoCo (``mechcheck.solve``,
+    as ``mechcheck run``): the analytic verdict, no forces."""
+    for backend in ("mujoco", "mujoco_solve"):
+        solution = mechcheck.solve(builtin("fourbar-change-point"), backend)
+        assert solution.status == "singular" and "not run" in solution.message
+        assert not solution.values
 
 
 def test_seed_e1_drive_torque() -> None:
@@ -289,14 +297,17 @@ def test_seed_e2_drive_torque() -> None:
 
 
 def test_sweep_marks_change_point_singular() -> None:
-    """A sweep through E1's change point (θ12 = 180°) withholds forces there and matches elsewhere."""
+    """Through the harness's sweep, the pose gate withholds E1's change point (θ12 = 180°)
+    from MuJoCo, and MuJoCo's sweep of the other poses matches everywhere."""
     case = fourbar_e1()
-    theta = np.radians([30.0, 120.0, 180.0, 250.0])
+    theta_deg = np.array([30.0, 120.0, 180.0, 250.0])
     for backend in ("mujoco", "mujoco_solve"):
-        sols = sweep(case, theta, backend)
-        assert [s.status for s in sols] == ["ok", "ok", "singular", "ok"]
-        for i in (0, 1, 3):
-            assert_solution_close(case.with_(theta12=float(theta[i])), sols[i], complete=True)
+        task = SweepTask(case, backend, theta_deg, 0, "")
+        status = pd.read_parquet(io.BytesIO(run_task(task)[1]))
+        assert list(status["status"]) == ["ok", "ok", "singular", "ok"]
+        regular = np.radians(np.delete(theta_deg, 2))
+        for t, solution in zip(regular, sweep(case, regular, backend), strict=True):
+            assert_solution_close(case.with_(theta12=float(t)), solution, complete=True)
 
 
 def test_unsettled_run_reports_no_forces(monkeypatch: pytest.MonkeyPatch) -> None:

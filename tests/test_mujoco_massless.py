@@ -16,7 +16,7 @@ import numpy as np
 from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Motion, SliderCrankGeometry
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
-from mechcheck.sim_models.mujoco import settle, sweep
+from mechcheck.sim_models.mujoco.backend import settle, sweep
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 

@@ -13,6 +13,7 @@ import mechcheck.run
 import mechcheck.testing  # noqa: F401
 from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.contract import Backend
 from mechcheck.analytic.solution import Solution
 from mechcheck.cli import app
 
@@ -103,7 +104,7 @@ def test_verdicts_fail_or_skip_with_their_reason(pytester: pytest.Pytester,
                                                  monkeypatch: pytest.MonkeyPatch,
                                                  status: str, outcome: str) -> None:
     """not_settled and error fail; the verdicts that leave nothing to compare skip, saying why."""
-    monkeypatch.setitem(registry.REGISTRY, "fake", f"{__name__}:fake_backend")
+    monkeypatch.setitem(registry.REGISTRY, "fake", Backend("fake", f"{__name__}:fake_backend", "settled"))
     monkeypatch.setitem(FAKE_STATUS, "status", status)
     pytester.makefile(".mechcheck.toml", arm=GOOD)
     result = pytester.runpytest("-rs", "--mechcheck-backend", "fake")
@@ -114,7 +115,8 @@ def test_verdicts_fail_or_skip_with_their_reason(pytester: pytest.Pytester,
 def test_a_crashing_backend_is_an_error_verdict(pytester: pytest.Pytester,
                                                 monkeypatch: pytest.MonkeyPatch) -> None:
     """A backend that raises fails its item with the exception, as `mechcheck run`'s error verdict."""
-    monkeypatch.setitem(registry.REGISTRY, "boom", "math:sqrt")  # sqrt(case) raises TypeError
+    # sqrt(case) raises TypeError
+    monkeypatch.setitem(registry.REGISTRY, "boom", Backend("boom", "math:sqrt", "settled"))
     pytester.makefile(".mechcheck.toml", arm=GOOD)
     result = pytester.runpytest("--mechcheck-backend", "boom")
     result.assert_outcomes(passed=1, failed=1)

@@ -7,18 +7,22 @@ Expected values always come from ``mechcheck.analytic.forces``, never from pymun
 
 from __future__ import annotations
 
+import io
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
+import mechcheck
 from mechcheck.analytic.case import Case, Friction, Load, Mass, Motion, SliderCrankGeometry
 from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
-from mechcheck.sim_models.pymunk import settle, solve_at_pose, sweep
+from mechcheck.sim_models.pymunk.backend import settle, solve_at_pose, sweep
 from mechcheck.sim_models.pymunk.dynamics import DRIVEN, SMOOTHNESS, STEP_AGREEMENT, Drive, lead_window
+from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin
@@ -201,16 +205,16 @@ def test_e2_friction_raises_torque_from_frictionless() -> None:
     assert settle(e2().with_(friction=None)).values["T12"] == pytest.approx(-18.783, rel=1e-4)
 
 
-def test_sweep_marks_change_point_singular_and_agrees_elsewhere() -> None:
-    """A continuation sweep withholds the E1 change point (θ12 = 180°) and matches everywhere else."""
-    theta = np.radians(np.arange(0.0, 360.0, 10.0))
-    sols = sweep(e1(), theta)
-    assert [s.status for s in sols].count("singular") == 1
-    assert sols[18].status == "singular"
-    for k, sol in enumerate(sols):
-        if k == 18:
-            continue
-        assert_agrees(sol, e1().with_(theta12=float(theta[k])))
+def test_sweep_keeps_the_change_point_from_pymunk_and_agrees_elsewhere() -> None:
+    """Through the harness's sweep, the pose gate withholds the E1 change point (θ12 = 180°)
+    from pymunk, and the continuation sweep of the other poses matches everywhere."""
+    theta_deg = np.arange(0.0, 360.0, 10.0)
+    status = pd.read_parquet(io.BytesIO(run_task(SweepTask(e1(), "pymunk", theta_deg, 0, ""))[1]))
+    assert list(status.loc[status["status"] != "ok", "theta12"]) == [180.0]
+    assert status.set_index("theta12").loc[180.0, "status"] == "singular"
+    sols = sweep(e1(), np.radians(np.delete(theta_deg, 18)))
+    for theta, sol in zip(np.delete(theta_deg, 18), sols, strict=True):
+        assert_agrees(sol, e1().with_(theta12=math.radians(theta)))
 
 
 def test_sweep_with_constraint_solve_backend() -> None:
@@ -231,8 +235,8 @@ def test_budget_exhausted_reports_not_settled_without_forces() -> None:
 
 def test_singular_pose_is_withheld() -> None:
     """At the E1 change point statics is singular, so no force is reported."""
-    sol = settle(e1().with_(theta12=math.pi))
-    assert sol.status == "singular" and not sol.values
+    sol = mechcheck.solve(e1().with_(theta12=math.pi), "pymunk")
+    assert sol.status == "singular" and not sol.values and "not run" in sol.message
 
 
 def test_constraint_solve_declines_motion() -> None:
@@ -244,9 +248,7 @@ def test_constraint_solve_declines_motion() -> None:
 def test_full_cycle_sweep_of_e1() -> None:
     """Over a 360-pose continuation sweep every regular pose settles within the static target."""
     theta = np.radians(np.arange(360.0))
-    ref = solve_poses(e1(), theta)
-    for k, sol in enumerate(sweep(e1(), theta)):
-        if ref.singular[k]:
-            assert sol.status == "singular"
-            continue
-        assert_agrees(sol, e1().with_(theta12=float(theta[k])))
+    regular = theta[~solve_poses(e1(), theta).singular]  # the harness sweeps only these
+    assert len(regular) >= 355
+    for t, sol in zip(regular, sweep(e1(), regular), strict=True):
+        assert_agrees(sol, e1().with_(theta12=float(t)))

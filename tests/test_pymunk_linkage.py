@@ -5,6 +5,7 @@ verdicts for what it does not simulate."""
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -16,15 +17,16 @@ import pytest
 from hypothesis import assume, given
 from typer.testing import CliRunner
 
+import mechcheck
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage_backends import solve
+from mechcheck.analytic.linkage_backends import analytic_results, solve
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import linkage_case
 from mechcheck.cli import app
 from mechcheck.linkage_file import LinkageCaseSpec
-from mechcheck.sim_models import pymunk as pm
-from mechcheck.sim_models.pymunk import linkage as pl
+from mechcheck.sim_models.pymunk import backend as pm, linkage as pl
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE
+from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
@@ -80,9 +82,10 @@ def test_driven_and_friction_linkages_are_refused_with_the_reason(name: str, bac
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_a_locking_linkage_gets_the_analytic_verdict_and_no_numbers(backend: str) -> None:
-    solution = BACKENDS[backend](builtin("locking-fourbar"))
+    """Behind the pose gate (``mechcheck.solve``, as ``mechcheck run``): not run."""
+    solution = mechcheck.solve(builtin("locking-fourbar"), backend)
     assert solution.status == "no_solution"
-    assert "locks at rotation" in solution.message and "not simulated" in solution.message
+    assert "locks at rotation" in solution.message and "not run" in solution.message
     assert not solution.values
 
 
@@ -109,8 +112,8 @@ def test_a_redundant_linkage_gets_the_analytic_verdict_and_no_numbers() -> None:
         "drivers": [{"joint": "O2", "rotation": 20.0}],
         "loads": [{"link": "coupler", "at": "B", "force": {"x": 0.0, "y": -100.0}}],
     })
-    for backend in BACKENDS.values():
-        solution = backend(case)
+    for backend in BACKENDS:
+        solution = mechcheck.solve(case, backend)
         assert solution.status == "indeterminate" and not solution.values, solution.message
         assert "redundant" in solution.message
 
@@ -178,7 +181,7 @@ def test_exam_q1_equilibrium_is_found_by_settling_from_other_poses(x: float, phi
 def test_space_damping_is_not_used_because_it_scales_the_springs() -> None:
     """The model damps velocities itself; Space.damping stays 1 (see linkage_model)."""
     case = builtin("bonnet-hold")
-    model = pl.build_linkage_model(case, LINKAGE_SETTLE, pl.gate(case, "pymunk")[1].pose.q[0])
+    model = pl.build_linkage_model(case, LINKAGE_SETTLE, analytic_results(case).pose.q[0])
     assert model.space.damping == 1.0
 
 
@@ -188,7 +191,7 @@ def test_diagnostics_say_how_the_numbers_were_got() -> None:
     s = pm.settle(at_rest(builtin("watt-ii-demo")))
     d = s.diagnostics
     assert d["method"] == "settle" and int(d["steps"]) > 0
-    assert float(d["joint_separation"]) < 1e-9 and float(d["pose_drift"]) < 1e-9
+    assert float(d["loop_violation"]) < 1e-9 and float(d["pose_drift"]) < 1e-9
     assert float(d["residual_velocity"]) <= 1e-9 * at_rest(builtin("watt-ii-demo")).linkage.scale
 
 
@@ -249,9 +252,11 @@ def test_a_linkage_sweep_with_continuation_agrees_pose_by_pose(backend: str) -> 
 
 
 def test_a_sweep_reports_the_analytic_verdict_where_the_linkage_locks() -> None:
+    """Through the harness's sweep: the pose gate keeps the locked pose from pymunk."""
     case = at_rest(builtin("watt-ii-demo"))
-    solutions = pm.sweep(case, np.radians([0.0, 120.0]), "pymunk")
-    assert [s.status for s in solutions] == ["ok", "no_solution"]
+    task = SweepTask(case, "pymunk", np.array([0.0, 120.0]), 0, "")
+    status = pd.read_parquet(io.BytesIO(run_task(task)[1]))
+    assert list(status["status"]) == ["ok", "no_solution"]
 
 
 def test_next_to_a_lock_a_held_linkage_that_leaves_its_assembly_is_not_settled() -> None:

@@ -23,8 +23,8 @@ from mechcheck.analytic.case import Case, Mass
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
 
-#: The simulators every study measures with (their settled or driven backends).
-SIMULATORS = ("mujoco", "pymunk")
+#: The simulators every study measures with: their settled or driven backends.
+SIMULATORS = tuple(backends.names_of_family("settled"))
 
 
 @dataclass(frozen=True)
@@ -41,10 +41,11 @@ class StudyResult:
 
 
 def simulate(backend: str, case: Case) -> Solution:
-    """Run one simulator backend on a case (a crash becomes an ``error`` verdict)."""
-    from mechcheck.run import call_backend
+    """Run one simulator backend on a case behind the pose gate, as ``mechcheck run`` does (a
+    crash becomes an ``error`` verdict)."""
+    from mechcheck.run import solve_gated
 
-    return call_backend(backends.load(backend), backend, case)
+    return solve_gated(backend, case)
 
 
 def builtin(name: str) -> Case:

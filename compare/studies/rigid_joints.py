@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 from typing import cast
 
-import mujoco
 import numpy as np
 import pandas as pd
 
@@ -42,27 +41,15 @@ def worst_error(case: Case, values: dict[str, float]) -> float:
 
 
 def mujoco_rows(case: Case, quick: bool) -> list[dict[str, object]]:
-    from mechcheck.sim_models.mujoco.model import STATIC, Settings
-    from mechcheck.sim_models.mujoco.rig import Rig
-    from mechcheck.sim_models.mujoco.settle import run_until_settled, seed_at
+    from mechcheck.sim_models.mujoco.softness import forces_at_softness
 
     rows: list[dict[str, object]] = []
     grid = MUJOCO_SOLIMP[::3] if quick else MUJOCO_SOLIMP
     for timeconst, label in ((MUJOCO_DEFAULT_TIMECONST, "solref 0.02 (default)"),
                              (None, "solref 2·dt (stiffest)")):
         for d0 in grid:
-            solimp = (d0, max(d0, 0.95), *STATIC.solimp[2:])
-            settings = Settings(solref_timeconst=timeconst, solimp=solimp)
-            rig = Rig(case, settings)
-            seed_at(rig, case.theta12)
-            mujoco.mj_forward(rig.model, rig.data)
-            rig.apply_loads()
-            mujoco.mj_forward(rig.model, rig.data)
-            first = rig.read()
-            rig = Rig(case, settings)
-            seed_at(rig, case.theta12)
-            settled = run_until_settled(rig)
-            for reading, values in (("one forward pass", first), ("settled", settled.values)):
+            first, settled = forces_at_softness(case, timeconst, d0)
+            for reading, values in (("one forward pass", first), ("settled", settled)):
                 rows.append({"simulator": "mujoco", "setting": label, "parameter": "solimp[0]",
                              "value": d0, "reading": reading,
                              "error": worst_error(case, values)})

@@ -1,63 +1,26 @@
-"""MuJoCo backends (issue 3): the mechanism held or driven in MuJoCo, forces
-read from MuJoCo's own constraint state.
+"""MuJoCo backends: the mechanism held or driven in MuJoCo, forces read from MuJoCo's own
+constraint state (:mod:`.backend`).
 
-- :func:`settle` — backend ``mujoco``: statics by settling with the crank
-  locked; moving and friction cases by driving the input (``driven``).
-- :func:`solve_at_pose` — backend ``mujoco_solve``: exact constraint forces at
-  the analytic pose from MuJoCo's constraint Jacobian.
-- :func:`sweep` — either backend over an array of θ12.
+- ``mujoco``: statics by settling with the drivers held; moving and friction cases driven
+  through their prescribed motion;
+- ``mujoco_solve``: exact constraint forces at the analytic pose from MuJoCo's constraint
+  Jacobian.
 
-A ``mechanism = "linkage"`` case goes to :mod:`.linkage` (any planar linkage, issue 12).
+Nothing here imports MuJoCo, so that listing the backends stays light: the functions
+(``settle``, ``solve_at_pose``, ``sweep``) are in :mod:`.backend`.
 """
 
 from __future__ import annotations
 
-from mechcheck.analytic.case import Case
-from mechcheck.analytic.forces import pose_verdicts, withheld_solution
-from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.coulomb import at_rest_reason
-from mechcheck.sim_models.mujoco import solve as exact
-from mechcheck.sim_models.mujoco.dynamics import driven
-from mechcheck.sim_models.mujoco.linkage import settle_linkage, solve_linkage_at_pose
-from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
-from mechcheck.sim_models.mujoco.settle import settle_static
-from mechcheck.sim_models.mujoco.sweep import sweep
+from mechcheck.analytic.contract import Backend
 
-__all__ = ["settle", "solve_at_pose", "sweep"]
+_HERE = "mechcheck.sim_models.mujoco.backend"
 
-
-def settle(case: Case) -> Solution:
-    """The ``mujoco`` backend: settled statics, or a driven run for motion/friction.
-
-    A pose whose forces do not exist or are not unique (a change point beyond
-    the analytic backend's singular line, a friction reversal) is not
-    simulated: a soft model would settle to whatever its bending allows. Nor
-    is a moving case whose Coulomb friction is at rest at the reading
-    (ω = 0, α ≠ 0: :func:`~mechcheck.sim_models.coulomb.at_rest_reason`);
-    measured: the run read the sense of its lead-in, 1.1e-2 off where the
-    case's direction is the other one.
-    """
-    if case.mechanism == "linkage":
-        return noting_warnings(lambda: settle_linkage(case))
-    verdict = pose_verdicts(case)[0]
-    if verdict is not None:
-        return withheld_solution(case, "mujoco", verdict)
-    if case.kind == "static":
-        return noting_warnings(lambda: settle_static(case))
-    at_rest = "" if case.motion.is_static else at_rest_reason(case, case.motion.omega,
-                                                              case.motion.alpha)
-    if at_rest:
-        return Solution(case.name, "mujoco", {}, status="indeterminate", message=at_rest,
-                        diagnostics={"method": "driven"})
-    return noting_warnings(lambda: driven(case))
-
-
-def solve_at_pose(case: Case) -> Solution:
-    """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose
-    (not at a pose whose forces do not exist or are not unique, as :func:`settle`)."""
-    if case.mechanism == "linkage":
-        return noting_warnings(lambda: solve_linkage_at_pose(case))
-    verdict = pose_verdicts(case)[0]
-    if verdict is not None:
-        return withheld_solution(case, "mujoco_solve", verdict)
-    return noting_warnings(lambda: exact.solve_at_pose(case))
+BACKENDS = (
+    Backend("mujoco", f"{_HERE}:settle", "settled",
+            "MuJoCo, held until settled (statics) or driven (dynamics, friction)",
+            sweep=f"{_HERE}:sweep", linkage_sweep=f"{_HERE}:sweep", requires="mujoco"),
+    Backend("mujoco_solve", f"{_HERE}:solve_at_pose", "exact_solve",
+            "MuJoCo's constraint forces at the exact analytic pose",
+            sweep=f"{_HERE}:sweep", linkage_sweep=f"{_HERE}:sweep", requires="mujoco"),
+)

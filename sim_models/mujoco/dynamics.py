@@ -50,11 +50,10 @@ fictitious inertia k: F(k) = F₀ + k·G. Every reading of such a model is
 therefore the same drive run on the model as built and on one with twice the
 fictitious inertia (:func:`driven_rigs`), reported as F₀ = 2·F(k) − F(2k)
 (:func:`massless_limit`), and the convergence checks below judge that
-extrapolated reading. With friction the pin moments μ·r·|F| are not linear in
-k, but the fictitious part is a small fraction of the real reactions, so the
-curvature is second order in it; with no load at all everything scales with
-k and the extrapolation is exact again (measured: an unloaded quasi-static
-slider-crank with pin and slide friction reads 1.1e-8 of the force floor). The
+extrapolated reading. The pin moments μ·r·|F| are not linear in k, so the two
+models run in step and both take their friction from the extrapolated
+reactions (:func:`read_drive`): friction is then the same load on both and the
+extrapolation stays exact. The
 driven hinge's armature is no fictitious inertia: it is subtracted exactly
 (:meth:`.rig.Rig.read`).
 """
@@ -72,6 +71,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.equilibrium import condition
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import Solution, quantity_kind
+from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.mujoco.friction import friction_loads, relative_speeds
 from mechcheck.sim_models.mujoco.model import Settings, has_fictitious_inertia
 from mechcheck.sim_models.mujoco.rig import Rig, disagreement
@@ -212,18 +212,22 @@ def forward(rig: Rig, coupling: np.ndarray) -> None:
     mujoco.mj_forward(m, d)
 
 
-def apply_friction(rig: Rig, values: dict[str, float]) -> None:
-    """Friction couples from the current reactions and the simulator's own velocities.
+def apply_friction(rigs: DrivenRigs, values: dict[str, float]) -> None:
+    """Friction couples from the reactions ``values`` and the simulator's own velocities,
+    set on every model of the drive alike.
 
     In a quasi-static run Coulomb senses come from the actual (slow) velocities;
     viscous terms use them too, which is right for a real motion and negligible
     (c·1e-3) for a quasi-static one, whose analytic value has ω = 0.
     """
+    rig = rigs.base
     qvel = rig.data.qvel[rig.joint_addresses()]
     speeds = relative_speeds(rig, qvel)
     viscous_speeds = speeds if rig.case.motion.omega or rig.case.motion.alpha else {
         k: 0.0 for k in speeds}
-    rig.set_extra(*friction_loads(rig, values, speeds, viscous_speeds))
+    loads = friction_loads(rig, values, speeds, viscous_speeds)
+    for member in rigs.members:
+        member.set_extra(*loads)
 
 
 @dataclass(frozen=True)
@@ -235,9 +239,13 @@ class DrivenRigs:
     doubled: Rig | None = None
 
     @property
+    def members(self) -> tuple[Rig, ...]:
+        return (self.base,) if self.doubled is None else (self.base, self.doubled)
+
+    @property
     def runs(self) -> int:
         """Simulator runs per reading."""
-        return 1 if self.doubled is None else 2
+        return len(self.members)
 
 
 def driven_rigs(case: Case) -> DrivenRigs:
@@ -258,31 +266,38 @@ def massless_limit(base: dict[str, float], doubled: dict[str, float],
             for q, v in base.items()}
 
 
+def massless_reading(rigs: DrivenRigs) -> dict[str, float]:
+    """The current values of the models, free of fictitious inertia (see the module doc)."""
+    values = rigs.base.read()
+    return values if rigs.doubled is None else massless_limit(values, rigs.doubled.read())
+
+
 def read_drive(rigs: DrivenRigs, drive: Drive, friction: bool) -> dict[str, float]:
-    """The reading of one drive, free of fictitious inertia (see the module doc)."""
-    values = run_drive(rigs.base, drive, friction)
-    if rigs.doubled is None:
-        return values
-    return massless_limit(values, run_drive(rigs.doubled, drive, friction))
+    """Simulate to the instant and return the values there, free of fictitious inertia.
 
-
-def run_drive(rig: Rig, drive: Drive, friction: bool) -> dict[str, float]:
-    """Simulate to the instant and return the values there."""
-    m, d = rig.model, rig.data
-    coupling = coupling_table(rig.case, drive)
-    start_run(rig, drive)
-    values: dict[str, float] = {}
+    The models run in step and friction on both comes from the massless-limit
+    reactions: the two then differ by their inertia alone, so F₀ = 2·F(k) − F(2k)
+    holds however large the fictitious part is. (Friction from each model's own
+    reactions made it nonlinear in k: a massless slider-crank whose rod carries
+    7.8 N of real load and 50 N of fictitious inertia read T12 5 % off.)
+    """
+    coupling = coupling_table(rigs.base.case, drive)
+    for rig in rigs.members:
+        start_run(rig, drive)
     for k in range(drive.steps):
-        forward(rig, coupling[k])
+        for rig in rigs.members:
+            forward(rig, coupling[k])
         if friction:
-            values = rig.read()
-            apply_friction(rig, values)
-        mujoco.mj_Euler(m, d)
+            apply_friction(rigs, massless_reading(rigs))
+        for rig in rigs.members:
+            mujoco.mj_Euler(rig.model, rig.data)
+    values: dict[str, float] = {}
     for _ in range(FINAL_FRICTION_PASSES if friction else 1):
-        forward(rig, coupling[-1])
-        values = rig.read()
+        for rig in rigs.members:
+            forward(rig, coupling[-1])
+        values = massless_reading(rigs)
         if friction:
-            apply_friction(rig, values)
+            apply_friction(rigs, values)
     return values
 
 
@@ -434,15 +449,13 @@ def driven(case: Case, rigs: DrivenRigs | None = None) -> Solution:
     if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
         out = refine_timestep(rigs, case, omega, alpha, out)
     values = out.values
-    diagnostics: dict[str, float | str] = {
-        "method": "driven", "steps": out.total_steps,
-        "wall_time_s": time.perf_counter() - start,
-        "residual_velocity": abs(float(rig.data.qvel[rig.layout.qpos["clock"]]) - omega),
-        "loop_violation": rig.loop_violation(), "pose_drift": rig.pose_drift(case.theta12),
-        "lead_disagreement": out.lead_disagreement, "lead_steps": out.lead_steps,
-        "timestep": out.dt, "timestep_disagreement": out.timestep_disagreement,
-        "fictitious_inertia_correction": fictitious_correction(rigs, values),
-    }
+    diagnostics = RunDiagnostics(
+        "driven", out.total_steps, time.perf_counter() - start,
+        abs(float(rig.data.qvel[rig.layout.qpos["clock"]]) - omega), rig.loop_violation(),
+        rig.pose_drift(case.theta12),
+    ).as_dict(lead_disagreement=out.lead_disagreement, lead_steps=out.lead_steps,
+              timestep=out.dt, timestep_disagreement=out.timestep_disagreement,
+              fictitious_inertia_correction=fictitious_correction(rigs, values))
     if not out.converged:
         pose = {q: v for q, v in values.items() if quantity_kind(q) == "pose"}
         return Solution(case.name, "mujoco", pose, status="not_settled",

@@ -76,6 +76,7 @@ from mechcheck.analytic.exam import (
     reading_steps,
     unsteady_message,
 )
+from mechcheck.sim_models.mujoco import mjwarnings  # noqa: F401  (MuJoCo warnings into Python before any model)
 
 BACKEND = "mujoco"
 

@@ -11,9 +11,8 @@
   the analytic motion exact, from MuJoCo's own constraint Jacobian (as :mod:`.solve`),
   Coulomb friction iterated from the solved reactions.
 
-Both give the pose verdict the analytic backend gives (a pose that does not assemble, a
-singular or indeterminate one: no forces), and refuse, with the reason, what the builder
-cannot model (a loop without a revolute joint).
+Both are called only at poses that pass the pose gate (:func:`mechcheck.run.gated`), and
+refuse, with the reason, what the builder cannot model (a loop without a revolute joint).
 """
 
 from __future__ import annotations
@@ -24,9 +23,10 @@ import mujoco
 import numpy as np
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
+from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_friction import (
@@ -59,23 +59,12 @@ def refused(case: Case, backend: str, why: str) -> Solution:
                     units=quantity_units(case.linkage))
 
 
-def withheld_at(case: Case, backend: str, results: LinkageResults,
-                index: int = 0) -> Solution | None:
-    """The analytic backend's verdict on pose ``index`` (no forces there), or None."""
-    found = verdict(case, results, index)
-    if found is None:
-        return None
-    return Solution(case.name, backend, {}, status=found[0], message=found[1],
-                    units=quantity_units(case.linkage))
-
-
 def driver_values(case: Case) -> np.ndarray:
     return np.array([d.value for d in case.linkage.drivers])
 
 
 def unbuildable(case: Case) -> str | None:
-    """Why the builder has no model of the linkage (checked before any pose verdict: no
-    pose of it is modelled), or None."""
+    """Why the builder has no model of the linkage, or None."""
     try:
         spanning_tree(case.linkage)
     except Unbuildable as error:
@@ -111,9 +100,6 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
     if why is not None:
         return refused(case, "mujoco", why)
     results = results if results is not None else analytic_results(case)
-    gated = withheld_at(case, "mujoco", results)
-    if gated is not None:
-        return gated
     if is_driven(case):
         return drive_linkage(case, results)
     if has_free_coordinates(case):
@@ -166,9 +152,6 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
         return refused(case, "mujoco_solve", why)
     rig = rig or exact_linkage_rig(case)
     results = results if results is not None else analytic_results(case)
-    gated = withheld_at(case, "mujoco_solve", results, index)
-    if gated is not None:
-        return gated
     states = rig.joint_states(results.pose)
     return exact_solution(case, rig, tuple(a[index] for a in states),
                           results.pose.drivers[index], start, senses_at(results, index))
@@ -216,12 +199,8 @@ def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
             change, values = friction_change(new, values), new
             if change <= FRICTION_RTOL:
                 break
-    diagnostics: dict[str, float | str] = {
-        "method": "constraint_solve", "steps": passes,
-        "wall_time_s": time.perf_counter() - start,
-        "residual_velocity": 0.0, "loop_violation": rig.loop_violation(), "pose_drift": 0.0,
-        "equation_residual": residual,
-    }
+    diagnostics = RunDiagnostics("constraint_solve", passes, time.perf_counter() - start,
+                                 0.0, rig.loop_violation(), 0.0).as_dict(equation_residual=residual)
     return Solution(case.name, "mujoco_solve", values, diagnostics=diagnostics,
                     units=quantity_units(case.linkage))
 
@@ -266,10 +245,7 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     out = []
     for i in range(len(first)):
         start = time.perf_counter()
-        gated = withheld_at(case, backend, results, i)
-        if gated is not None:
-            out.append(gated)
-        elif backend == "mujoco":
+        if backend == "mujoco":
             qpos = seed(rig, states[0][i], targets[i])
             if continuation and history:
                 rig.carried = predicted(history, float(first[i]))

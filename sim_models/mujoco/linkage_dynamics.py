@@ -20,11 +20,12 @@ A massless link gets a fictitious mass and every reading is the massless limit
 (:func:`.dynamics.massless_limit`).
 
 Coulomb friction (:mod:`.linkage_friction`) is applied every step from the current
-reactions, with the senses of the simulator's own joint velocities; viscous friction is
-MuJoCo's joint damping. A static case with Coulomb friction is a quasi-static motion: the
-heavy settling masses driven at :data:`.dynamics.QUASI_STATIC_SPEED` (rad/s or m/s) in
-each driver's ``sense``, without dampers (the analytic motion has no speed), extrapolated
-to no fictitious inertia like any other.
+massless-limit reactions, on both models alike (:func:`read_drive`), with the senses of
+the simulator's own joint velocities; viscous friction is MuJoCo's joint damping.
+A static case with Coulomb friction is a quasi-static motion: the heavy settling
+masses driven at :data:`.dynamics.QUASI_STATIC_SPEED` (rad/s or m/s) in each driver's
+``sense``, without dampers (the analytic motion has no speed), extrapolated to no
+fictitious inertia like any other.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from mechcheck.analytic.linkage_forces import LinkageResults, solve_linkage
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.solution import Solution, quantity_kind
 from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.mujoco.dynamics import (
     DYNAMIC,
     FINAL_FRICTION_PASSES,
@@ -128,8 +130,12 @@ class LinkageRigs:
     doubled: LinkageRig | None = None
 
     @property
+    def members(self) -> tuple[LinkageRig, ...]:
+        return (self.base,) if self.doubled is None else (self.base, self.doubled)
+
+    @property
     def runs(self) -> int:
-        return 1 if self.doubled is None else 2
+        return len(self.members)
 
 
 def driven_rigs(case: Case, motion: Motion) -> LinkageRigs:
@@ -176,39 +182,44 @@ def forward(rig: LinkageRig) -> None:
     mujoco.mj_forward(m, d)
 
 
-def with_friction(rig: LinkageRig) -> dict[str, float]:
-    """Read the reactions and set the friction they give, with the senses of MuJoCo's own
-    joint velocities; returns the reading."""
-    values = rig.read()
-    apply_friction(rig, values, rig.joint_rates(rig.data.qvel))
-    return values
+def massless_reading(rigs: LinkageRigs) -> dict[str, float]:
+    """The current values of the models, free of fictitious inertia."""
+    values = rigs.base.read()
+    if rigs.doubled is None:
+        return values
+    return massless_limit(values, rigs.doubled.read(), rigs.base.units)
 
 
-def run_drive(rig: LinkageRig, motion: Motion, steps: int, dt: float,
-              friction: bool) -> dict[str, float]:
-    """Simulate to the instant and return the values there."""
-    m, d = rig.model, rig.data
-    start_run(rig, motion, steps, dt)
-    for _ in range(steps):
-        forward(rig)
-        if friction:
-            with_friction(rig)
-        mujoco.mj_Euler(m, d)
-    values: dict[str, float] = {}
-    for _ in range(FINAL_FRICTION_PASSES if friction else 1):
-        forward(rig)
-        values = with_friction(rig) if friction else rig.read()
+def with_friction(rigs: LinkageRigs) -> dict[str, float]:
+    """Read the massless-limit reactions and set the friction they give on every model,
+    with the senses of MuJoCo's own joint velocities; returns the reading."""
+    values = massless_reading(rigs)
+    rates = rigs.base.joint_rates(rigs.base.data.qvel)
+    for rig in rigs.members:
+        apply_friction(rig, values, rates)
     return values
 
 
 def read_drive(rigs: LinkageRigs, motion: Motion, steps: int, dt: float,
                friction: bool) -> dict[str, float]:
-    """One reading, free of fictitious inertia."""
-    values = run_drive(rigs.base, motion, steps, dt, friction)
-    if rigs.doubled is None:
-        return values
-    return massless_limit(values, run_drive(rigs.doubled, motion, steps, dt, friction),
-                          rigs.base.units)
+    """Simulate to the instant and return the values there, free of fictitious inertia:
+    the models run in step and share the friction of the extrapolated reactions, so they
+    differ by their inertia alone (:func:`.dynamics.read_drive`)."""
+    for rig in rigs.members:
+        start_run(rig, motion, steps, dt)
+    for _ in range(steps):
+        for rig in rigs.members:
+            forward(rig)
+        if friction:
+            with_friction(rigs)
+        for rig in rigs.members:
+            mujoco.mj_Euler(rig.model, rig.data)
+    values: dict[str, float] = {}
+    for _ in range(FINAL_FRICTION_PASSES if friction else 1):
+        for rig in rigs.members:
+            forward(rig)
+        values = with_friction(rigs) if friction else massless_reading(rigs)
+    return values
 
 
 def lead_limit(case: Case, motion: Motion, instant: float) -> LeadLimit:
@@ -255,15 +266,13 @@ def driven_solution(case: Case, rigs: LinkageRigs, out: Convergence,
                     elapsed: float) -> Solution:
     rig = rigs.base
     units = rig.units or {}
-    diagnostics: dict[str, float | str] = {
-        "method": "driven", "steps": out.total_steps, "wall_time_s": elapsed,
-        "residual_velocity": abs(float(rig.data.qvel[rig.clock]) - 1.0)
-        if rig.clock is not None else 0.0,
-        "loop_violation": rig.loop_violation(), "pose_drift": 0.0,
-        "lead_disagreement": out.lead_disagreement, "lead_steps": out.lead_steps,
-        "timestep": out.dt, "timestep_disagreement": out.timestep_disagreement,
-        "fictitious_runs": rigs.runs,
-    }
+    diagnostics = RunDiagnostics(
+        "driven", out.total_steps, elapsed,
+        abs(float(rig.data.qvel[rig.clock]) - 1.0) if rig.clock is not None else 0.0,
+        rig.loop_violation(), 0.0,
+    ).as_dict(lead_disagreement=out.lead_disagreement, lead_steps=out.lead_steps,
+              timestep=out.dt, timestep_disagreement=out.timestep_disagreement,
+              fictitious_runs=rigs.runs)
     if not out.converged:
         pose = {q: v for q, v in out.values.items() if quantity_kind(q, units.get(q)) == "pose"}
         return Solution(case.name, "mujoco", pose, status="not_settled", message=out.verdict(),

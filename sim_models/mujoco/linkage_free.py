@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import mujoco
 import numpy as np
@@ -143,8 +144,7 @@ def settle_free(case: Case, results: LinkageResults, start: dict[str, float] | N
 
     result = settle_refined(rig, qpos, restart=restart, max_steps=FREE_MAX_STEPS)
     out = settled_solution(rig, qpos, result, time.perf_counter() - tic)
-    diagnostics = dict(out.diagnostics)
-    diagnostics["method"] = "settle_free"
-    diagnostics["timestep"] = float(rig.model.opt.timestep)
-    return Solution(out.case, out.backend, dict(out.values), status=out.status,
-                    message=out.message, diagnostics=diagnostics, units=out.units)
+    # Settled as any static case (method "settle"); the free coordinates found their own rest.
+    diagnostics = {**out.diagnostics, "free_coordinates": "settled from the drawn pose",
+                   "timestep": float(rig.model.opt.timestep)}
+    return replace(out, diagnostics=diagnostics)

@@ -32,6 +32,7 @@ import numpy as np
 
 from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, LinkMass, TorsionSpring
 from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.mujoco import mjwarnings  # noqa: F401  (MuJoCo warnings into Python before any model)
 from mechcheck.sim_models.mujoco.model import (
     CLOCK_ARMATURE,
     DRIVE_ARMATURE_INERTIA,

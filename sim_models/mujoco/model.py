@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import mujoco
 
 from mechcheck.analytic.case import Case, FourBarGeometry, SliderCrankGeometry, preset_geometry
+from mechcheck.sim_models.mujoco import mjwarnings  # noqa: F401  (MuJoCo warnings into Python before any model)
 
 #: Fictitious mass of every link while settling statics, kg. Static forces do
 #: not depend on masses as long as weights are applied only to the real

@@ -38,6 +38,7 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
+from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.mujoco.rig import Rig, disagreement
 
 #: Settled when the forces' remaining change, estimated from their observed
@@ -308,14 +309,10 @@ def refinement_left(differences: list[float]) -> float:
 def settled_solution(rig: SettlingRig, qpos: np.ndarray, result: Settled, elapsed: float) -> Solution:
     """A Solution from a settling run: forces only if it settled."""
     case = rig.case
-    diagnostics: dict[str, float | str] = {
-        "method": "settle", "steps": result.steps, "wall_time_s": elapsed,
-        "passes": result.passes, "pass_disagreement": result.refinement,
-        "stop_rule": result.rule,
-        "residual_velocity": result.residual_velocity,
-        "loop_violation": result.loop_violation,
-        "pose_drift": rig.pose_drift(qpos=qpos),
-    }
+    diagnostics = RunDiagnostics(
+        "settle", result.steps, elapsed, result.residual_velocity, result.loop_violation,
+        rig.pose_drift(qpos=qpos),
+    ).as_dict(passes=result.passes, pass_disagreement=result.refinement, stop_rule=result.rule)
     if not result.settled:
         units = rig.units or {}
         pose = {q: v for q, v in result.values.items()

@@ -25,6 +25,7 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.mujoco.friction import friction_loads, relative_speeds
 from mechcheck.sim_models.mujoco.model import EXACT, zero_fictitious_masses
 from mechcheck.sim_models.mujoco.rig import Rig
@@ -124,9 +125,7 @@ def solve_state(case: Case, rig: Rig, qpos: np.ndarray, qvel: np.ndarray, qacc: 
         values, passes = solve_with_friction(rig, case, qvel, qacc)
     else:
         values = constraint_solve(rig, qacc)
-    diagnostics: dict[str, float | str] = {
-        "method": "constraint_solve", "steps": passes,
-        "wall_time_s": time.perf_counter() - start,
-        "residual_velocity": 0.0, "loop_violation": rig.loop_violation(), "pose_drift": 0.0,
-    }
+    # At the analytic pose and velocities by construction: nothing left to move or drift.
+    diagnostics = RunDiagnostics("constraint_solve", passes, time.perf_counter() - start,
+                                 0.0, rig.loop_violation(), 0.0).as_dict()
     return Solution(case.name, "mujoco_solve", values, diagnostics=diagnostics)

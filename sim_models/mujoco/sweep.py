@@ -1,10 +1,8 @@
 """Full-cycle sweeps over θ12 with either MuJoCo backend.
 
-One model is compiled per sweep and reused for every pose (only θ12 changes).
-Poses whose force analysis is singular — at or next to a change/toggle point —
-are not simulated: they are marked ``singular`` with the condition number of
-the pose (a property of the geometry, from the analytic pose analysis), since a
-simulator there returns finite but meaningless numbers (SIMULATORS.md).
+One model is compiled per sweep and reused for every pose (only θ12 changes). The
+harness passes only poses that pass the pose gate (:func:`mechcheck.sweep.gated_poses`):
+at a singular pose a simulator returns finite but meaningless numbers (SIMULATORS.md).
 """
 
 from __future__ import annotations
@@ -16,12 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.forces import (
-    PoseVerdict,
-    pose_verdicts,
-    unassemblable_solution,
-    withheld_solution,
-)
+from mechcheck.analytic.forces import unassemblable_solution
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.mujoco.dynamics import DrivenRigs, driven, driven_rigs
 from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
@@ -43,32 +36,20 @@ def sweep(case: Case, theta12: ArrayLike, backend: str = "mujoco") -> list[Solut
     if backend not in BACKENDS:
         raise ValueError(f"unknown MuJoCo backend {backend!r}; use one of {BACKENDS}")
     angles = np.atleast_1d(np.asarray(theta12, dtype=float))
-    verdicts = pose_verdicts(case, angles)
     rig = sweep_rig(case, backend)
     if backend == "mujoco_solve" and not case.has_friction:
-        return exact_sweep(case, angles, verdicts, rig)
-    out = []
-    for t, verdict in zip(angles, verdicts, strict=True):
-        # Unassembled poses and change points have their verdict too (pose_verdicts).
-        if verdict is not None:
-            out.append(withheld_solution(case, backend, verdict))
-        else:
-            out.append(solve_one(case.with_(theta12=float(t)), backend, rig))
-    return out
+        return exact_sweep(case, angles, rig)
+    return [solve_one(case.with_(theta12=float(t)), backend, rig) for t in angles]
 
 
-def exact_sweep(case: Case, angles: np.ndarray, verdicts: list[PoseVerdict | None],
-                rig: Rig | DrivenRigs) -> list[Solution]:
+def exact_sweep(case: Case, angles: np.ndarray, rig: Rig | DrivenRigs) -> list[Solution]:
     """``mujoco_solve`` over many poses with the analytic states computed at once."""
     assert isinstance(rig, Rig)
     qpos, qvel, qacc = rig.states(angles)
     out = []
-    for i, verdict in enumerate(verdicts):
-        if not np.all(np.isfinite(qpos[i])):
+    for i in range(len(angles)):
+        if not np.all(np.isfinite(qpos[i])):  # no state to give MuJoCo
             out.append(unassemblable_solution(case, "mujoco_solve", float(angles[i])))
-            continue
-        if verdict is not None:
-            out.append(withheld_solution(case, "mujoco_solve", verdict))
             continue
         out.append(noting_warnings(
             partial(solve_state, case, rig, qpos[i], qvel[i], qacc[i], time.perf_counter())))

@@ -1,45 +1,24 @@
-"""The pymunk (Munk2D / Chipmunk 7) backends.
+"""pymunk (Munk2D / Chipmunk 7) backends (:mod:`.backend`).
 
-- :func:`settle` — backend ``pymunk``: static equilibrium held by simulation
-  until settled; dynamic and friction cases are driven through θ12.
-- :func:`solve_at_pose` — backend ``pymunk_solve``: pymunk's constraint
-  solver at the fixed analytic pose (statics).
-- :func:`sweep` — a θ12 sweep with continuation in one Space.
+- ``pymunk``: static equilibrium held by simulation until settled; dynamic and friction
+  cases driven through their prescribed motion;
+- ``pymunk_solve``: pymunk's constraint solver at the fixed analytic pose (statics).
 
-Linkage cases (``mechanism = "linkage"``) go to :mod:`~mechcheck.sim_models.pymunk.linkage`
-(model: :mod:`~mechcheck.sim_models.pymunk.linkage_model`).
-
-Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
-``loads``, ``readout``, ``settle``, ``solve``, ``dynamics``, ``friction``,
-``sweep``, ``study`` (solver-setting study), ``settings``.
+Nothing here imports pymunk, so that listing the backends stays light: the functions
+(``settle``, ``solve_at_pose``, ``sweep``) are in :mod:`.backend`.
 """
 
-from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.pymunk import linkage, settle as settling, solve as solving
-from mechcheck.sim_models.pymunk.settings import (
-    LINKAGE_SETTLE,
-    LINKAGE_SOLVE,
-    SETTLE,
-    SOLVE,
-    SolverSettings,
+from __future__ import annotations
+
+from mechcheck.analytic.contract import Backend
+
+_HERE = "mechcheck.sim_models.pymunk.backend"
+
+BACKENDS = (
+    Backend("pymunk", f"{_HERE}:settle", "settled",
+            "pymunk, held until settled (statics) or driven (dynamics, friction)",
+            sweep=f"{_HERE}:sweep", linkage_sweep=f"{_HERE}:sweep", requires="pymunk"),
+    Backend("pymunk_solve", f"{_HERE}:solve_at_pose", "exact_solve",
+            "pymunk's constraint solver at the fixed analytic pose",
+            sweep=f"{_HERE}:sweep", linkage_sweep=f"{_HERE}:sweep", requires="pymunk"),
 )
-from mechcheck.sim_models.pymunk.sweep import sweep
-
-__all__ = ["settle", "solve_at_pose", "sweep"]
-
-
-def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
-    """The ``pymunk`` backend (:func:`mechcheck.sim_models.pymunk.settle.settle`; linkages:
-    :func:`mechcheck.sim_models.pymunk.linkage.settle`), with its own settings by default."""
-    if case.mechanism == "linkage":
-        return linkage.settle(case, settings or LINKAGE_SETTLE)
-    return settling.settle(case, settings or SETTLE)
-
-
-def solve_at_pose(case: Case, settings: SolverSettings | None = None) -> Solution:
-    """The ``pymunk_solve`` backend (:func:`mechcheck.sim_models.pymunk.solve.solve_at_pose`;
-    linkages: :func:`mechcheck.sim_models.pymunk.linkage.solve_at_pose`)."""
-    if case.mechanism == "linkage":
-        return linkage.solve_at_pose(case, settings or LINKAGE_SOLVE)
-    return solving.solve_at_pose(case, settings or SOLVE)

@@ -70,14 +70,14 @@ from mechcheck.sim_models.pymunk.model import Model, build_model, has_fictitious
 from mechcheck.sim_models.pymunk.readout import (
     Values,
     crank_angle,
-    joint_separation,
+    loop_violation,
     pose_drift,
     pose_values,
     reactions,
     residual_velocity,
 )
 from mechcheck.sim_models.pymunk.settings import SolverSettings
-from mechcheck.sim_models.pymunk.verdict import singular_mask, singular_solution
+from mechcheck.sim_models.pymunk.verdict import singular_mask
 
 BACKEND = "pymunk"
 
@@ -586,7 +586,7 @@ def lead_ladder(case: Case, settings: SolverSettings, first: Rung | None = None)
     if readings:
         diag |= {
             "residual_velocity": residual_velocity(model),
-            "joint_separation": joint_separation(model),
+            "loop_violation": loop_violation(model),
             "pose_drift": pose_drift(model, crank_angle(model)),
             "curvature": curvature(readings, length),
             "fictitious_inertia_correction": readings[rung.lead - 1].correction,
@@ -721,9 +721,6 @@ def drive(case: Case, settings: SolverSettings = DRIVEN) -> Solution:
     extrapolating two independent runs was 39 % off there. In a quasi-static
     friction run the fictitious inertia force, m·ω²·L ≈ 1e-5 N, is left as is.
     """
-    singular = singular_solution(case, BACKEND)
-    if singular is not None:
-        return singular
     why = coulomb_reversal(case, settings)
     if why:
         return Solution(case.name, BACKEND, {}, status="indeterminate", message=why,

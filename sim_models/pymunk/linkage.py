@@ -31,7 +31,7 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Joint, Linkage
-from mechcheck.analytic.linkage_backends import analytic_results, quantity_units, verdict
+from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
 from mechcheck.analytic.linkage_kinematics import (
     Array,
@@ -40,6 +40,7 @@ from mechcheck.analytic.linkage_kinematics import (
     residual_and_jacobian,
 )
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
+from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.pymunk.forces import force_on_b, torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -124,7 +125,7 @@ def residual_velocity(model: LinkageModel) -> float:
                 for k, b in model.bodies.items()), default=0.0)
 
 
-def joint_separations(linkage: Linkage, q: Array) -> Array:
+def loop_violations(linkage: Linkage, q: Array) -> Array:
     """Largest violation of any joint (loop closure) per pose q (M, 3n), m: pin gaps,
     distances off a slide, and a slide's angle error × the linkage's size."""
     phi, _ = residual_and_jacobian(linkage, q, np.zeros((q.shape[0], len(linkage.drivers))),
@@ -254,19 +255,18 @@ def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Out
     q = np.array([o.q for o in outcomes])
     at = [o.index for o in outcomes]
     poses = pose_table(linkage, q)
-    gaps = joint_separations(linkage, q)
+    gaps = loop_violations(linkage, q)
     drifts = pose_drifts(np.array(list(model.radius.values())), q, results.pose.q[at])
     held = not has_free_coordinates(model.case)
     out = []
     for m, o in enumerate(outcomes):
-        diag: dict[str, float | str] = {
-            "method": method, "steps": o.run.steps, "wall_time_s": o.elapsed,
-            "residual_velocity": o.run.residual_velocity, "force_change": o.run.force_change,
-            "joint_separation": float(gaps[m]), "pose_drift": float(drifts[m]),
-            "dt": model.settings.dt, "iterations": model.settings.iterations,
-            "condition_number": float(results.condition[o.index]),
-            "dof": linkage.dof, "gruebler": linkage.gruebler,
-        }
+        diag = RunDiagnostics(
+            method, o.run.steps, o.elapsed, o.run.residual_velocity, float(gaps[m]),
+            float(drifts[m]),
+        ).as_dict(force_change=o.run.force_change, dt=model.settings.dt,
+                  iterations=model.settings.iterations,
+                  condition_number=float(results.condition[o.index]), dof=linkage.dof,
+                  gruebler=linkage.gruebler)
         pose = {k: float(v[m]) for k, v in poses.items()}
         if not o.run.settled:
             out.append(not_settled(model.case.name, backend, pose, diag, units))
@@ -292,31 +292,11 @@ def refusal(case: Case, backend: str) -> Solution | None:
                             "(and joint friction) is not modelled in it yet")
 
 
-def withheld(case: Case, backend: str, results: LinkageResults, index: int = 0) -> Solution | None:
-    """The analytic verdict of pose ``index`` as a Solution without numbers, or None."""
-    found = verdict(case, results, index)
-    if found is None:
-        return None
-    return Solution(case.name, backend, {}, status=found[0], message=f"{found[1]}; not simulated",
-                    diagnostics={"condition_number": float(results.condition[index])},
-                    units=quantity_units(case.linkage))
-
-
-def gate(case: Case, backend: str) -> tuple[Solution | None, LinkageResults]:
-    """The analytic verdict of the case's pose (withholding the run), and the results it
-    came from (their pose is the held pose, and the reference for the pose drift)."""
-    results = analytic_results(case)
-    return withheld(case, backend, results), results
-
-
 def screened(case: Case, backend: str) -> Solution | LinkageResults:
-    """The refusal or the pose verdict that withholds the run, else the analytic results
-    of the case's pose (its held pose, and the reference for the pose drift)."""
+    """The refusal, else the analytic results of the case's pose (its held pose, and the
+    reference for the pose drift)."""
     refused = refusal(case, backend)
-    if refused is not None:
-        return refused
-    found, results = gate(case, backend)
-    return results if found is None else found
+    return refused if refused is not None else analytic_results(case)
 
 
 def free_start(case: Case, drivers: Array | None = None) -> Array:

@@ -34,7 +34,6 @@ from mechcheck.sim_models.pymunk.linkage import (
     solutions,
     solve_run,
     unstable,
-    withheld,
 )
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -80,8 +79,7 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solutio
     outcomes: list[Outcome] = []
     for k, value in enumerate(values):
         start = time.perf_counter()
-        found = withheld(case, backend, results, k) or (
-            unstable(case, backend, results, k) if free and backend == "pymunk" else None)
+        found = unstable(case, backend, results, k) if free and backend == "pymunk" else None
         if found is not None:
             verdicts[k] = found
             continue

@@ -64,7 +64,7 @@ def residual_velocity(model: Model) -> float:
                for k, b in model.bodies.items())
 
 
-def joint_separation(model: Model) -> float:
+def loop_violation(model: Model) -> float:
     """Largest distance between the two anchors of any pin or groove (loop violation), m."""
     worst = 0.0
     for pin in model.pins.values():

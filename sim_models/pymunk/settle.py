@@ -15,19 +15,20 @@ from dataclasses import dataclass
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
+from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.pymunk.loads import apply_loads
 from mechcheck.sim_models.pymunk.model import Model, build_model
 from mechcheck.sim_models.pymunk.readout import (
     Values,
     crank_angle,
-    joint_separation,
+    loop_violation,
     pose_drift,
     pose_values,
     reactions,
     residual_velocity,
 )
 from mechcheck.sim_models.pymunk.settings import SETTLE, SolverSettings
-from mechcheck.sim_models.pymunk.verdict import singular_solution, unsettled_solution
+from mechcheck.sim_models.pymunk.verdict import unsettled_solution
 
 BACKEND = "pymunk"
 
@@ -112,17 +113,11 @@ def step_until_settled(model: Model, settings: SolverSettings | None = None) -> 
 
 def diagnostics(model: Model, run: Run, method: str, elapsed: float) -> dict[str, float | str]:
     """The simulator diagnostics every pymunk Solution carries."""
-    return {
-        "method": method,
-        "steps": run.steps,
-        "wall_time_s": elapsed,
-        "residual_velocity": run.residual_velocity,
-        "force_change": run.force_change,
-        "joint_separation": joint_separation(model),
-        "pose_drift": pose_drift(model, crank_angle(model)),
-        "dt": model.settings.dt,
-        "iterations": model.settings.iterations,
-    }
+    return RunDiagnostics(
+        method, run.steps, elapsed, run.residual_velocity, loop_violation(model),
+        pose_drift(model, crank_angle(model)),
+    ).as_dict(force_change=run.force_change, dt=model.settings.dt,
+              iterations=model.settings.iterations)
 
 
 def solution_of(model: Model, run: Run, backend: str, method: str, elapsed: float) -> Solution:
@@ -143,9 +138,6 @@ def settle(case: Case, settings: SolverSettings = SETTLE) -> Solution:
 
         return drive(case)
     start = time.perf_counter()
-    singular = singular_solution(case, BACKEND)
-    if singular is not None:
-        return singular
     model = build_model(case, settings)
     run = step_until_settled(model)
     return solution_of(model, run, BACKEND, "settle", time.perf_counter() - start)

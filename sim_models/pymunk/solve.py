@@ -23,7 +23,6 @@ from mechcheck.sim_models.pymunk.model import Model, analytic_pose, build_model,
 from mechcheck.sim_models.pymunk.readout import reactions
 from mechcheck.sim_models.pymunk.settings import SOLVE, SolverSettings
 from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled, solution_of
-from mechcheck.sim_models.pymunk.verdict import singular_solution
 
 BACKEND = "pymunk_solve"
 
@@ -56,9 +55,6 @@ def solve_at_pose(case: Case, settings: SolverSettings = SOLVE) -> Solution:
     if case.kind != "static":
         return not_applicable(case)
     start = time.perf_counter()
-    singular = singular_solution(case, BACKEND)
-    if singular is not None:
-        return singular
     model = build_model(case, settings)
     run = iterate_at_pose(model, analytic_pose(case, case.theta12))
     return solution_of(model, run, BACKEND, "constraint_solve", time.perf_counter() - start)

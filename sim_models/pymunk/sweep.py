@@ -7,9 +7,8 @@ starting from the previous pose's accumulated impulses — pymunk's warm start
 carries them over, which is what makes a neighbouring pose cheap.
 Driven (dynamic or friction) cases are run pose by pose.
 
-Poses at or next to a toggle are marked ``singular`` (the condition number of
-the equilibrium matrix is a property of the pose, not of any force) and not
-simulated; poses that cannot be assembled are ``no_solution``.
+The harness passes only poses that pass the pose gate (:func:`mechcheck.sweep.gated_poses`);
+a pose that cannot be assembled is still ``no_solution`` here, as there is nothing to place.
 """
 
 from __future__ import annotations
@@ -20,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.forces import pose_verdicts, unassemblable_solution, withheld_solution
+from mechcheck.analytic.forces import unassemblable_solution
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.pymunk.model import build_model, place
@@ -47,17 +46,12 @@ def sweep(case: Case, theta12: ArrayLike, backend: str = "pymunk") -> list[Solut
     if case.kind != "static":
         return _driven_sweep(case, angles, backend)
     poses = pose_of(case, angles, omega=0.0, alpha=0.0)
-    verdicts = pose_verdicts(case, angles)
     settings = SETTLE if backend == "pymunk" else SOLVE
     model = None
     out = []
     for k, theta in enumerate(angles):
         if not (np.isfinite(poses.theta13[k]) and np.isfinite(poses.theta14[k])):
             out.append(unassemblable_solution(case, backend, float(theta)))
-            continue
-        verdict = verdicts[k]
-        if verdict is not None:
-            out.append(withheld_solution(case, backend, verdict))
             continue
         start = time.perf_counter()
         at = case.with_(theta12=float(theta))

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 from mechcheck.analytic.case import Case, SliderCrankGeometry
 from mechcheck.sim_models.pymunk.forces import torque_on_b
 from mechcheck.sim_models.pymunk.model import Model, build_model, slide_axes
-from mechcheck.sim_models.pymunk.readout import joint_separation
+from mechcheck.sim_models.pymunk.readout import loop_violation
 from mechcheck.sim_models.pymunk.settings import SolverSettings
 from mechcheck.sim_models.turning import (
     JOINT_DAMPING,
@@ -131,7 +131,7 @@ class PymunkTurner:
         else:
             output = b[4].angle
         return Sample(float(b[2].angle), float(b[3].angle), float(output),
-                      torque_on_b(motor, self.timestep), joint_separation(model))
+                      torque_on_b(motor, self.timestep), loop_violation(model))
 
 
 def turn_crank(case: Case, turns: float = 1.0, sense: int = 1) -> TurnResult:

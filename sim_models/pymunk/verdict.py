@@ -1,11 +1,12 @@
-"""Verdicts that withhold forces: singular poses and runs that did not settle."""
+"""Verdicts that withhold forces: singular poses on a driven run's lead-in, and runs that did
+not settle."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.forces import pose_verdicts, solve_poses, withheld_solution
+from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.pymunk.model import Model
 from mechcheck.sim_models.pymunk.readout import pose_values
@@ -20,13 +21,6 @@ def singular_mask(case: Case, theta12: np.ndarray) -> tuple[np.ndarray, np.ndarr
     results = solve_poses(case.with_(friction=None, loads=(), masses=(),
                                      motion=type(case.motion)()), theta12)
     return results.singular, results.condition
-
-
-def singular_solution(case: Case, backend: str) -> Solution | None:
-    """A Solution without forces if the case's pose has none to measure (at or next to a
-    toggle, or where friction reverses: :func:`mechcheck.analytic.forces.pose_verdicts`), else None."""
-    verdict = pose_verdicts(case)[0]
-    return None if verdict is None else withheld_solution(case, backend, verdict)
 
 
 def unsettled_solution(model: Model, backend: str, diag: dict[str, float | str]) -> Solution:
