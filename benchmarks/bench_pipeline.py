@@ -1,8 +1,13 @@
 """End-to-end wall times of the command line, as a user runs it.
 
-Usage:  python benchmarks/bench_pipeline.py
+Usage:  python benchmarks/bench_pipeline.py [--repeats 3]
 
-1. ``mechcheck run`` — the built-in suite through every backend, with the report.
+Each is a fresh process, timed ``--repeats`` times: median, min and max.
+
+1. ``mechcheck run`` — the built-in suite through every backend, with the report;
+   its reference, the same solves and comparisons in one process through the Python
+   API (``mechcheck.check``), with no report written: the ratio is what the command
+   line and the report cost on top.
 2. ``mechcheck sweep --fresh`` — the built-in whole-cycle sweeps (seed four-bar,
    seed slider-crank with and without friction, 360 poses each) through every
    backend, with figures and the report.
@@ -11,8 +16,10 @@ Usage:  python benchmarks/bench_pipeline.py
 
 from __future__ import annotations
 
+import argparse
 import os
 import platform
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -41,29 +48,52 @@ force = { magnitude = 100.0, angle = 20.0 }
 """
 
 
-def timed(args: list[str]) -> tuple[float, str]:
+#: The reference for the suite: the same work through the Python API, nothing written.
+API_SUITE = ("import mechcheck; from mechcheck.casefile import builtin_case_files; "
+             "r = mechcheck.check(mechcheck.load_cases(*builtin_case_files())); "
+             "print(len(r.comparison), 'comparisons, exit', r.exit_status)")
+
+
+def timed(command: list[str]) -> tuple[float, str]:
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "mechcheck.cli", *args], capture_output=True,
-                          text=True, check=False)
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
     return time.perf_counter() - start, done.stdout.strip().splitlines()[-1]
 
 
+def repeated(command: list[str], repeats: int) -> tuple[list[float], str]:
+    runs = [timed(command) for _ in range(repeats)]
+    return [t for t, _ in runs], runs[-1][1]
+
+
+def spread(times: list[float]) -> str:
+    return f"{statistics.median(times):.2f} s (min {min(times):.2f}, max {max(times):.2f})"
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    repeats = parser.parse_args().repeats
+    cli = [sys.executable, "-m", "mechcheck.cli"]
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}")
+          f"{platform.python_version()}; median of {repeats}")
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
         (out / "e1.toml").write_text(E1)
+        suite, last = repeated([*cli, "run", "-q", "--out", str(out / "suite")], repeats)
+        reference, ref_last = repeated([sys.executable, "-c", API_SUITE], repeats)
+        print(f"built-in suite, every backend, with the report: {spread(suite)}  ({last})")
+        print(f"  reference, the same through mechcheck.check, nothing written: "
+              f"{spread(reference)}  ({ref_last}); ratio "
+              f"{statistics.median(suite) / statistics.median(reference):.2f}")
         for label, args in (
-            ("built-in suite, every backend", ["run", "-q", "--out", str(out / "suite")]),
             ("built-in sweeps (3 × 360 poses), every backend",
              ["sweep", "-q", "--fresh", "--out", str(out / "sweep")]),
             ("analytic sweep, 10^6 poses to Parquet",
              ["sweep", str(out / "e1.toml"), "-b", "analytic", "--theta12", "0:360:0.00036",
               "-q", "--fresh", "--out", str(out / "million")]),
         ):
-            seconds, last = timed(args)
-            print(f"{label}: {seconds:.1f} s  ({last})")
+            times, last = repeated([*cli, *args], repeats)
+            print(f"{label}: {spread(times)}  ({last})")
 
 
 if __name__ == "__main__":
