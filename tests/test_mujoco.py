@@ -24,8 +24,9 @@ from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass,
 from mechcheck.analytic.equilibrium import condition
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.convergence import LEAD_CONDITION_GROWTH
 from mechcheck.sim_models.mujoco.backend import settle, solve_at_pose, sweep
-from mechcheck.sim_models.mujoco.dynamics import DYNAMIC, LEAD_CONDITION_GROWTH, Drive, lead_in_condition
+from mechcheck.sim_models.mujoco.dynamics import DYNAMIC, Drive, lead_in_condition
 from mechcheck.sim_models.mujoco.model import model_xml
 from mechcheck.sim_models.mujoco.settle import (
     FLOOR_WINDOW,

@@ -17,7 +17,7 @@ separate the answer from the rigid motion, and each is driven below its
 threshold by a convergence check, never by a fixed setting:
 
 - the soft constraints' start-up transient: the run is repeated with twice
-  the lead time until two answers agree within :data:`LEAD_AGREEMENT_RTOL`.
+  the lead time until two answers agree within :data:`~mechcheck.sim_models.convergence.LEAD_AGREEMENT_RTOL`.
   The lead-in may not pass a pose whose condition number exceeds
   :data:`LEAD_CONDITION_GROWTH` times the instant's — a change point, or for a
   rocker drive a rocker dead point, where the driven link cannot move the
@@ -32,7 +32,7 @@ threshold by a convergence check, never by a fixed setting:
   with massless links at 1e-5 of the real masses, 1.7e-5 at 1e-2, against
   ~1e-5 on ordinary cases). The run is repeated with half the step
   (and as many lead steps) until two answers agree within
-  :data:`TIMESTEP_AGREEMENT_RTOL`.
+  :data:`~mechcheck.sim_models.convergence.TIMESTEP_AGREEMENT_RTOL`.
 
 Friction (:mod:`.friction`) is emulated from the current reactions every step
 with the senses of the simulator's own joint velocities. A static friction case
@@ -61,7 +61,6 @@ driven hinge's armature is no fictitious inertia: it is subtracted exactly
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import mujoco
@@ -71,10 +70,18 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.equilibrium import condition
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.solution import Solution, quantity_kind
+from mechcheck.sim_models.convergence import (
+    LEAD_AGREEMENT_RTOL,
+    LEAD_CONDITION_GROWTH,
+    Convergence,
+    halve_timestep,
+    lengthen_lead,
+    massless_limit,
+)
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.mujoco.friction import friction_loads, relative_speeds
 from mechcheck.sim_models.mujoco.model import Settings, has_fictitious_inertia
-from mechcheck.sim_models.mujoco.rig import Rig, disagreement
+from mechcheck.sim_models.mujoco.rig import Rig
 
 #: Dynamics: first time step 2.5e-5 s (refined by halving, see the module doc).
 #: With dt = 1e-3 the clock-driven torque was 2–4e-2 off (SIMULATORS.md): the
@@ -87,32 +94,6 @@ QUASI_STATIC = Settings(timestep=1e-3, masses="settle", clock=True)
 #: links, m·ω²·L ≈ 1e-4 N, stay ~1e-6 of the loads.
 QUASI_STATIC_SPEED = 1e-3
 
-#: First lead time, in steps, and the most it may grow to.
-LEAD_STEPS = 50
-MAX_LEAD_STEPS = 1600
-#: Runs with lead N and 2N agree to this fraction of the largest force (or
-#: torque/scale): the start-up transient has died. 100× below the 1e-3 target.
-LEAD_AGREEMENT_RTOL = 1e-5
-#: The lead-in may pass no pose whose condition number is more than this many
-#: times the instant's. The condition number of a rocker-driven four-bar grows
-#: without bound at a rocker dead point (crank and coupler aligned), that of any
-#: drive at a change point; doubling the lead-in through one (exam Q3 with
-#: 6400 steps of 2.5e-5 s passes the rocker dead point at θ12 = 36.7°) would
-#: make the crank's sense there a matter of chance. A factor 2 keeps the whole
-#: lead-in at least half as well conditioned as the instant.
-LEAD_CONDITION_GROWTH = 2.0
-#: Runs with time steps dt and dt/2 (same number of lead steps) agree to this
-#: fraction of the largest force (or torque/scale). The error is O(dt²)
-#: (measured on exam Q3 from 2.5e-5 s down by halves: 3.7e-3, 9.5e-4, 2.4e-4,
-#: 6.1e-5, 1.6e-5 with massless links at 1e-5 of the real masses; 1.7e-5,
-#: 4.3e-6, 1.0e-6 at 1e-2, extrapolated): while the error at least halves per halving, the finer run's
-#: error is at most the difference (a third of it at second order), so 1e-4
-#: keeps it ≥ 10× below the 1e-3 dynamic target.
-TIMESTEP_AGREEMENT_RTOL = 1e-4
-#: The time step may be halved this many times (2.5e-5 s → 7.8e-7 s); exam Q3,
-#: 6.7° from a rocker dead point, needed four with massless links at 1e-5 of the
-#: real masses, and needs one at 1e-2 (:data:`~.model.FICTITIOUS_MASS_FRACTION`).
-MAX_TIMESTEP_HALVINGS = 5
 #: Fixed-point passes at the final instant so that the friction couples match
 #: the reactions they were computed from.
 FINAL_FRICTION_PASSES = 5
@@ -256,16 +237,6 @@ def driven_rigs(case: Case) -> DrivenRigs:
     return DrivenRigs(Rig(case, settings), Rig(case, replace(settings, fictitious_scale=2.0)))
 
 
-def massless_limit(base: dict[str, float], doubled: dict[str, float],
-                   units: dict[str, str] | None = None) -> dict[str, float]:
-    """Forces and torques extrapolated linearly to zero fictitious inertia, F₀ = 2·F(k) − F(2k);
-    the pose as the base run reached it (it is prescribed, not an inertia effect).
-    ``units``: a linkage's quantity units (its names do not say their kind)."""
-    table = units or {}
-    return {q: v if quantity_kind(q, table.get(q)) == "pose" else 2.0 * v - doubled[q]
-            for q, v in base.items()}
-
-
 def massless_reading(rigs: DrivenRigs) -> dict[str, float]:
     """The current values of the models, free of fictitious inertia (see the module doc)."""
     values = rigs.base.read()
@@ -309,42 +280,6 @@ def drive_motion(case: Case) -> tuple[Settings, float, float]:
     return DYNAMIC, case.motion.omega, case.motion.alpha
 
 
-@dataclass
-class Convergence:
-    """Where a driven run's convergence checks ended."""
-
-    values: dict[str, float]
-    lead_steps: int
-    dt: float
-    total_steps: int = 0
-    lead_disagreement: float = np.inf
-    timestep_disagreement: float = np.inf
-    lead_limit: str = ""
-
-    @property
-    def converged(self) -> bool:
-        return (self.lead_disagreement <= LEAD_AGREEMENT_RTOL
-                and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL)
-
-    def verdict(self) -> str:
-        """Why the run is not converged (empty when it is)."""
-        if not self.lead_disagreement <= LEAD_AGREEMENT_RTOL:
-            limit = f"; {self.lead_limit}" if self.lead_limit else ""
-            return (f"start-up transient still {self.lead_disagreement:.1e} of the forces after "
-                    f"{self.lead_steps} lead steps of {self.dt:.3g} s{limit}")
-        if not self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL:
-            return (f"time step not converged: runs with dt = {2.0 * self.dt:.3g} s and "
-                    f"{self.dt:.3g} s still differ by {self.timestep_disagreement:.1e} "
-                    "of the forces")
-        return ""
-
-
-#: One reading of a driven run with a given number of lead steps and time step.
-Reading = Callable[[int, float], dict[str, float]]
-#: Why a run with this many lead steps and this time step may not be made ("" if it may).
-LeadLimit = Callable[[int, float], str]
-
-
 def converge_lead(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
                   dt: float) -> Convergence:
     """Double the lead time until the start-up transient has died (or may not grow)."""
@@ -365,32 +300,6 @@ def converge_lead(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
     return lengthen_lead(read, limit, dt, rigs.base.scale, rigs.runs)
 
 
-def lengthen_lead(read: Reading, limit: LeadLimit, dt: float, scale: float, runs: int,
-                  units: dict[str, str] | None = None) -> Convergence:
-    """Double the lead steps from :data:`LEAD_STEPS` until two readings agree within
-    :data:`LEAD_AGREEMENT_RTOL`, the budget :data:`MAX_LEAD_STEPS` is spent or ``limit``
-    forbids a longer lead-in; ``runs`` simulator runs per reading, forces compared
-    relative to ``scale`` (torques divided by it)."""
-    steps = LEAD_STEPS
-    out = Convergence(read(steps, dt), steps, dt, total_steps=runs * steps)
-    while not out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
-        steps *= 2
-        if steps > MAX_LEAD_STEPS:
-            out.lead_limit = f"step budget {MAX_LEAD_STEPS} reached"
-            break
-        out.lead_limit = limit(steps, dt)
-        if out.lead_limit:
-            break
-        values = read(steps, dt)
-        residual = disagreement(values, out.values, scale, units)
-        out.values, out.lead_steps = values, steps
-        out.total_steps += runs * steps
-        out.lead_disagreement = residual if np.isfinite(residual) else np.inf
-        if not np.isfinite(residual):
-            break
-    return out
-
-
 def refine_timestep(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
                     out: Convergence) -> Convergence:
     """Halve the time step until two runs agree, keeping the number of lead steps
@@ -400,29 +309,6 @@ def refine_timestep(rigs: DrivenRigs, case: Case, omega: float, alpha: float,
         return read_drive(rigs, Drive(case.theta12, omega, alpha, steps, dt), case.has_friction)
 
     return halve_timestep(read, out, rigs.base.scale, rigs.runs)
-
-
-def halve_timestep(read: Reading, out: Convergence, scale: float, runs: int,
-                   units: dict[str, str] | None = None) -> Convergence:
-    """Halve the time step until two readings agree within :data:`TIMESTEP_AGREEMENT_RTOL`,
-    keeping the number of lead steps.
-
-    Every start-up transient of the soft model has time constants ∝ dt (the
-    constraints' 2·dt, and the modes their compliance R/k ∝ dt² gives the
-    links), so it dies in the same number of steps at any dt (measured on exam
-    Q3 with massless links at 1e-5 of the real masses: ~1600 steps at 2.5e-5,
-    6.25e-6 and 1.56e-6 s alike).
-    """
-    for _ in range(MAX_TIMESTEP_HALVINGS):
-        dt = 0.5 * out.dt
-        values = read(out.lead_steps, dt)
-        residual = disagreement(values, out.values, scale, units)
-        out.values, out.dt = values, dt
-        out.total_steps += runs * out.lead_steps
-        out.timestep_disagreement = residual if np.isfinite(residual) else np.inf
-        if not residual > TIMESTEP_AGREEMENT_RTOL:  # converged, or NaN: stop either way
-            break
-    return out
 
 
 def fictitious_correction(rigs: DrivenRigs, values: dict[str, float]) -> float:

@@ -11,13 +11,12 @@ times MuJoCo's q̈ (:func:`.linkage_model.drive_armature`).
 
 The run starts ``steps·dt`` before the instant at rest relative to the prescribed motion:
 the analytic pose and joint velocities there (the analytic side prescribes the motion and
-seeds the start, nothing more). The lead-in is doubled until two readings agree
-(:func:`.dynamics.lengthen_lead`), never through a pose whose condition number grows past
-:data:`.dynamics.LEAD_CONDITION_GROWTH` times the instant's (or that does not assemble),
-then the time step is halved until two readings agree (:func:`.dynamics.halve_timestep`).
-A massless link gets a fictitious mass and every reading is the massless limit
-2·F(k) − F(2k) of the model as built and one with twice the fictitious inertia
-(:func:`.dynamics.massless_limit`).
+seeds the start, nothing more). The rules that judge the reading are both simulators'
+(:mod:`mechcheck.sim_models.convergence`): the lead-in is doubled until two readings
+agree, never through a pose whose condition number grows past ``LEAD_CONDITION_GROWTH``
+times the instant's (or that does not assemble), then the time step is halved until two
+readings agree. A massless link gets a fictitious mass and every reading is the massless
+limit 2·F(k) − F(2k) of the model as built and one with twice the fictitious inertia.
 
 Coulomb friction (:mod:`.linkage_friction`) is applied every step from the current
 massless-limit reactions, on both models alike (:func:`read_drive`), with the senses of
@@ -41,19 +40,21 @@ from mechcheck.analytic.linkage_forces import LinkageResults, solve_linkage
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.solution import Solution, quantity_kind
 from mechcheck.analytic.values import GROUND
-from mechcheck.sim_models.diagnostics import RunDiagnostics
-from mechcheck.sim_models.mujoco.dynamics import (
-    DYNAMIC,
-    FINAL_FRICTION_PASSES,
+from mechcheck.sim_models.convergence import (
     LEAD_AGREEMENT_RTOL,
     LEAD_CONDITION_GROWTH,
-    QUASI_STATIC,
-    QUASI_STATIC_SPEED,
     Convergence,
     LeadLimit,
     halve_timestep,
     lengthen_lead,
     massless_limit,
+)
+from mechcheck.sim_models.diagnostics import RunDiagnostics
+from mechcheck.sim_models.mujoco.dynamics import (
+    DYNAMIC,
+    FINAL_FRICTION_PASSES,
+    QUASI_STATIC,
+    QUASI_STATIC_SPEED,
 )
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
 from mechcheck.sim_models.mujoco.linkage_model import (

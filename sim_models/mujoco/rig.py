@@ -39,7 +39,6 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.kinematics import pose_of
-from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
 from mechcheck.sim_models.mujoco.model import STATIC, Layout, Settings, compile_model
 
 Array = NDArray[np.float64]
@@ -308,17 +307,3 @@ class Rig:
         if self.four_bar:
             diff[2] *= self.scale
         return float(diff.max())
-
-
-def disagreement(a: dict[str, float], b: dict[str, float], length: float,
-                 units: dict[str, str] | None = None) -> float:
-    """Largest difference of forces (and torques/length) relative to the largest of them;
-    ``units`` names the unit of each quantity of a linkage (its names do not say it)."""
-    table = units or {}
-
-    def vector(v: dict[str, float]) -> np.ndarray:
-        kinds = {q: quantity_kind(q, table.get(q)) for q in v}
-        return np.array([x / length if kinds[q] == "torque" else x
-                         for q, x in v.items() if kinds[q] != "pose"])
-    va, vb = vector(a), vector(b)
-    return float(np.abs(va - vb).max()) / max(float(np.abs(vb).max()), FORCE_FLOOR_N)

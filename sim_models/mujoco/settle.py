@@ -38,8 +38,9 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
+from mechcheck.sim_models.convergence import disagreement
 from mechcheck.sim_models.diagnostics import RunDiagnostics
-from mechcheck.sim_models.mujoco.rig import Rig, disagreement
+from mechcheck.sim_models.mujoco.rig import Rig
 
 #: Settled when the forces' remaining change, estimated from their observed
 #: geometric decay, is below this fraction of the largest force (torques divided

@@ -1,0 +1,154 @@
+"""How a driven run's reading is judged converged, for either simulator.
+
+A driven run is read at one instant after a lead-in along the prescribed motion.
+Its reading is trusted only when it no longer depends on the two numbers the run
+chose: the lead-in (:func:`lengthen_lead`: the start-up transient has died) and
+the time step (:func:`halve_timestep`: the discretisation error is below the
+target). Both compare two of the simulator's own readings; nothing here looks at
+the analytic answer. A massless link carries a fictitious inertia k that a
+reading removes by running twice, at k and 2k (:func:`massless_limit`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
+
+#: First lead time, in steps, and the most it may grow to.
+LEAD_STEPS = 50
+MAX_LEAD_STEPS = 1600
+#: Runs with lead N and 2N agree to this fraction of the largest force (or
+#: torque/scale): the start-up transient has died. 100× below the 1e-3 target.
+LEAD_AGREEMENT_RTOL = 1e-5
+#: The lead-in may pass no pose whose condition number is more than this many
+#: times the instant's. The condition number of a rocker-driven four-bar grows
+#: without bound at a rocker dead point (crank and coupler aligned), that of any
+#: drive at a change point; doubling the lead-in through one (exam Q3 with
+#: 6400 steps of 2.5e-5 s passes the rocker dead point at θ12 = 36.7°) would
+#: make the crank's sense there a matter of chance. A factor 2 keeps the whole
+#: lead-in at least half as well conditioned as the instant.
+LEAD_CONDITION_GROWTH = 2.0
+#: Runs with time steps dt and dt/2 (same number of lead steps) agree to this
+#: fraction of the largest force (or torque/scale). The error is O(dt²)
+#: (measured on exam Q3 from 2.5e-5 s down by halves: 3.7e-3, 9.5e-4, 2.4e-4,
+#: 6.1e-5, 1.6e-5 with massless links at 1e-5 of the real masses; 1.7e-5,
+#: 4.3e-6, 1.0e-6 at 1e-2, extrapolated): while the error at least halves per halving, the finer run's
+#: error is at most the difference (a third of it at second order), so 1e-4
+#: keeps it ≥ 10× below the 1e-3 dynamic target.
+TIMESTEP_AGREEMENT_RTOL = 1e-4
+#: The time step may be halved this many times (2.5e-5 s → 7.8e-7 s); exam Q3,
+#: 6.7° from a rocker dead point, needed four with massless links at 1e-5 of the
+#: real masses, and needs one at 1e-2 (:data:`~.model.FICTITIOUS_MASS_FRACTION`).
+MAX_TIMESTEP_HALVINGS = 5
+
+def massless_limit(base: dict[str, float], doubled: dict[str, float],
+                   units: dict[str, str] | None = None) -> dict[str, float]:
+    """Forces and torques extrapolated linearly to zero fictitious inertia, F₀ = 2·F(k) − F(2k);
+    the pose as the base run reached it (it is prescribed, not an inertia effect).
+    ``units``: a linkage's quantity units (its names do not say their kind)."""
+    table = units or {}
+    return {q: v if quantity_kind(q, table.get(q)) == "pose" else 2.0 * v - doubled[q]
+            for q, v in base.items()}
+
+
+def disagreement(a: dict[str, float], b: dict[str, float], length: float,
+                 units: dict[str, str] | None = None) -> float:
+    """Largest difference of forces (and torques/length) relative to the largest of them;
+    ``units`` names the unit of each quantity of a linkage (its names do not say it)."""
+    table = units or {}
+
+    def vector(v: dict[str, float]) -> np.ndarray:
+        kinds = {q: quantity_kind(q, table.get(q)) for q in v}
+        return np.array([x / length if kinds[q] == "torque" else x
+                         for q, x in v.items() if kinds[q] != "pose"])
+    va, vb = vector(a), vector(b)
+    return float(np.abs(va - vb).max()) / max(float(np.abs(vb).max()), FORCE_FLOOR_N)
+
+
+@dataclass
+class Convergence:
+    """Where a driven run's convergence checks ended."""
+
+    values: dict[str, float]
+    lead_steps: int
+    dt: float
+    total_steps: int = 0
+    lead_disagreement: float = np.inf
+    timestep_disagreement: float = np.inf
+    lead_limit: str = ""
+
+    @property
+    def converged(self) -> bool:
+        return (self.lead_disagreement <= LEAD_AGREEMENT_RTOL
+                and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL)
+
+    def verdict(self) -> str:
+        """Why the run is not converged (empty when it is)."""
+        if not self.lead_disagreement <= LEAD_AGREEMENT_RTOL:
+            limit = f"; {self.lead_limit}" if self.lead_limit else ""
+            return (f"start-up transient still {self.lead_disagreement:.1e} of the forces after "
+                    f"{self.lead_steps} lead steps of {self.dt:.3g} s{limit}")
+        if not self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL:
+            return (f"time step not converged: runs with dt = {2.0 * self.dt:.3g} s and "
+                    f"{self.dt:.3g} s still differ by {self.timestep_disagreement:.1e} "
+                    "of the forces")
+        return ""
+
+
+#: One reading of a driven run with a given number of lead steps and time step.
+Reading = Callable[[int, float], dict[str, float]]
+#: Why a run with this many lead steps and this time step may not be made ("" if it may).
+LeadLimit = Callable[[int, float], str]
+
+
+def lengthen_lead(read: Reading, limit: LeadLimit, dt: float, scale: float, runs: int,
+                  units: dict[str, str] | None = None) -> Convergence:
+    """Double the lead steps from :data:`LEAD_STEPS` until two readings agree within
+    :data:`LEAD_AGREEMENT_RTOL`, the budget :data:`MAX_LEAD_STEPS` is spent or ``limit``
+    forbids a longer lead-in; ``runs`` simulator runs per reading, forces compared
+    relative to ``scale`` (torques divided by it)."""
+    steps = LEAD_STEPS
+    out = Convergence(read(steps, dt), steps, dt, total_steps=runs * steps)
+    while not out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
+        steps *= 2
+        if steps > MAX_LEAD_STEPS:
+            out.lead_limit = f"step budget {MAX_LEAD_STEPS} reached"
+            break
+        out.lead_limit = limit(steps, dt)
+        if out.lead_limit:
+            break
+        values = read(steps, dt)
+        residual = disagreement(values, out.values, scale, units)
+        out.values, out.lead_steps = values, steps
+        out.total_steps += runs * steps
+        out.lead_disagreement = residual if np.isfinite(residual) else np.inf
+        if not np.isfinite(residual):
+            break
+    return out
+
+
+def halve_timestep(read: Reading, out: Convergence, scale: float, runs: int,
+                   units: dict[str, str] | None = None) -> Convergence:
+    """Halve the time step until two readings agree within :data:`TIMESTEP_AGREEMENT_RTOL`,
+    keeping the number of lead steps.
+
+    Every start-up transient of the soft model has time constants ∝ dt (the
+    constraints' 2·dt, and the modes their compliance R/k ∝ dt² gives the
+    links), so it dies in the same number of steps at any dt (measured on exam
+    Q3 with massless links at 1e-5 of the real masses: ~1600 steps at 2.5e-5,
+    6.25e-6 and 1.56e-6 s alike).
+    """
+    for _ in range(MAX_TIMESTEP_HALVINGS):
+        dt = 0.5 * out.dt
+        values = read(out.lead_steps, dt)
+        residual = disagreement(values, out.values, scale, units)
+        out.values, out.dt = values, dt
+        out.total_steps += runs * out.lead_steps
+        out.timestep_disagreement = residual if np.isfinite(residual) else np.inf
+        if not residual > TIMESTEP_AGREEMENT_RTOL:  # converged, or NaN: stop either way
+            break
+    return out
