@@ -27,6 +27,7 @@ from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
+from mechcheck.sim_models.inertia import real_inertial
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_friction import (
@@ -34,7 +35,7 @@ from mechcheck.sim_models.mujoco.linkage_friction import (
     clear_friction,
     friction_change,
 )
-from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, real_inertial, spanning_tree
+from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import EXACT
 from mechcheck.sim_models.mujoco.settle import settle_refined, settled_solution

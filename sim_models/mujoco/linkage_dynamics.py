@@ -36,20 +36,20 @@ import mujoco
 import numpy as np
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage_forces import LinkageResults, solve_linkage
+from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.solution import Solution, quantity_kind
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.convergence import (
     LEAD_AGREEMENT_RTOL,
-    LEAD_CONDITION_GROWTH,
     Convergence,
-    LeadLimit,
     halve_timestep,
     lengthen_lead,
     massless_limit,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
+from mechcheck.sim_models.inertia import link_extent, real_inertial
+from mechcheck.sim_models.linkage_motion import Motion, lead_limit
 from mechcheck.sim_models.mujoco.dynamics import (
     DYNAMIC,
     FINAL_FRICTION_PASSES,
@@ -57,32 +57,9 @@ from mechcheck.sim_models.mujoco.dynamics import (
     QUASI_STATIC_SPEED,
 )
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
-from mechcheck.sim_models.mujoco.linkage_model import (
-    INERTIA_FLOOR_FRACTION,
-    link_extent,
-    real_inertial,
-    spanning_tree,
-)
-from mechcheck.sim_models.mujoco.linkage_rig import Array, LinkageRig
+from mechcheck.sim_models.mujoco.linkage_model import INERTIA_FLOOR_FRACTION, spanning_tree
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import Settings
-
-
-@dataclass(frozen=True)
-class Motion:
-    """Each driver's value, velocity and acceleration at the instant (SI)."""
-
-    value: Array
-    velocity: Array
-    acceleration: Array
-    quasi_static: bool
-
-    def at(self, t: Array) -> tuple[Array, Array, Array]:
-        """Drivers' values, velocities and accelerations (N, d) at the times ``t``."""
-        t = np.asarray(t, dtype=float)[:, None]
-        return (self.value + self.velocity * t + 0.5 * self.acceleration * t**2,
-                self.velocity + self.acceleration * t, np.broadcast_to(self.acceleration,
-                                                                        (t.shape[0],
-                                                                         self.value.size)))
 
 
 def motion_of(case: Case) -> Motion:
@@ -154,11 +131,6 @@ def driven_rigs(case: Case, motion: Motion) -> LinkageRigs:
     return LinkageRigs(rigs[0], rigs[1] if len(rigs) > 1 else None)
 
 
-def clock_times(steps: int, dt: float) -> Array:
-    """The clock's angle (time) at each of the ``steps + 1`` forward passes."""
-    return dt * np.arange(-steps, 1, dtype=float)
-
-
 def start_run(rig: LinkageRig, motion: Motion, steps: int, dt: float) -> None:
     """At t = −steps·dt on the prescribed motion: the analytic pose and joint velocities
     there, the clock at that time and turning at 1 rad/s."""
@@ -221,25 +193,6 @@ def read_drive(rigs: LinkageRigs, motion: Motion, steps: int, dt: float,
             forward(rig)
         values = with_friction(rigs) if friction else massless_reading(rigs)
     return values
-
-
-def lead_limit(case: Case, motion: Motion, instant: float) -> LeadLimit:
-    """Why a lead-in of ``steps`` of ``dt`` may not be run (see :mod:`.dynamics`)."""
-
-    def limit(steps: int, dt: float) -> str:
-        values, velocities, accelerations = motion.at(clock_times(steps, dt))
-        lead = solve_linkage(case.linkage, values, velocities, accelerations)
-        cond = np.where(lead.pose.assembled, lead.condition, np.inf)
-        worst = int(np.argmax(cond))
-        if cond[worst] <= LEAD_CONDITION_GROWTH * instant:
-            return ""
-        when = f"{-clock_times(steps, dt)[worst]:.3g} s before the instant"
-        if not lead.pose.assembled[worst]:
-            return f"a longer lead-in would start where the linkage does not assemble ({when})"
-        return (f"a longer lead-in would pass a pose with condition number {cond[worst]:.3g} "
-                f"against {instant:.3g} at the instant ({when})")
-
-    return limit
 
 
 def drive_linkage(case: Case, results: LinkageResults) -> Solution:

@@ -1,0 +1,57 @@
+"""A linkage's prescribed motion along a driven run, for either simulator: each driver's
+value, velocity and acceleration over time, and how far back a lead-in may start."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_forces import solve_linkage
+from mechcheck.analytic.linkage_kinematics import Array
+from mechcheck.sim_models.convergence import LEAD_CONDITION_GROWTH, LeadLimit
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Each driver's value, velocity and acceleration at the instant (SI)."""
+
+    value: Array
+    velocity: Array
+    acceleration: Array
+    quasi_static: bool
+
+    def at(self, t: Array) -> tuple[Array, Array, Array]:
+        """Drivers' values, velocities and accelerations (N, d) at the times ``t``."""
+        t = np.asarray(t, dtype=float)[:, None]
+        return (self.value + self.velocity * t + 0.5 * self.acceleration * t**2,
+                self.velocity + self.acceleration * t, np.broadcast_to(self.acceleration,
+                                                                        (t.shape[0],
+                                                                         self.value.size)))
+
+
+def clock_times(steps: int, dt: float) -> Array:
+    """The clock's angle (time) at each of the ``steps + 1`` forward passes."""
+    return dt * np.arange(-steps, 1, dtype=float)
+
+
+def lead_limit(case: Case, motion: Motion, instant: float) -> LeadLimit:
+    """Why a lead-in of ``steps`` of ``dt`` may not be run: it would pass a pose whose
+    condition number grows past ``LEAD_CONDITION_GROWTH`` times the instant's, or one that
+    does not assemble (:mod:`mechcheck.sim_models.convergence`)."""
+
+    def limit(steps: int, dt: float) -> str:
+        values, velocities, accelerations = motion.at(clock_times(steps, dt))
+        lead = solve_linkage(case.linkage, values, velocities, accelerations)
+        cond = np.where(lead.pose.assembled, lead.condition, np.inf)
+        worst = int(np.argmax(cond))
+        if cond[worst] <= LEAD_CONDITION_GROWTH * instant:
+            return ""
+        when = f"{-clock_times(steps, dt)[worst]:.3g} s before the instant"
+        if not lead.pose.assembled[worst]:
+            return f"a longer lead-in would start where the linkage does not assemble ({when})"
+        return (f"a longer lead-in would pass a pose with condition number {cond[worst]:.3g} "
+                f"against {instant:.3g} at the instant ({when})")
+
+    return limit
