@@ -6,8 +6,9 @@
   solver at the fixed analytic pose (statics).
 - :func:`sweep` — a θ12 sweep with continuation in one Space.
 
-Linkage cases (``mechanism = "linkage"``) go to :mod:`~mechcheck.sim_models.pymunk.linkage`
-(model: :mod:`~mechcheck.sim_models.pymunk.linkage_model`).
+Linkage cases (``mechanism = "linkage"``) go to :mod:`~mechcheck.sim_models.pymunk.linkage`,
+moving ones to :mod:`~mechcheck.sim_models.pymunk.linkage_dynamics` (model:
+:mod:`~mechcheck.sim_models.pymunk.linkage_model`).
 
 Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
 ``loads``, ``readout``, ``settle``, ``solve``, ``dynamics``, ``friction``,
@@ -15,8 +16,9 @@ Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
 """
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.pymunk import linkage, settle as settling, solve as solving
+from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, settle as settling, solve as solving
 from mechcheck.sim_models.pymunk.settings import (
     LINKAGE_SETTLE,
     LINKAGE_SOLVE,
@@ -31,7 +33,11 @@ __all__ = ["settle", "solve_at_pose", "sweep"]
 
 def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
     """The ``pymunk`` backend (:func:`mechcheck.sim_models.pymunk.settle.settle`; linkages:
-    :func:`mechcheck.sim_models.pymunk.linkage.settle`), with its own settings by default."""
+    :func:`mechcheck.sim_models.pymunk.linkage.settle`, moving ones
+    :func:`mechcheck.sim_models.pymunk.linkage_dynamics.drive_linkage`), with its own
+    settings by default."""
+    if case.mechanism == "linkage" and case.kind == "dynamic":
+        return linkage_dynamics.drive_linkage(case, analytic_results(case))
     if case.mechanism == "linkage":
         return linkage.settle(case, settings or LINKAGE_SETTLE)
     return settling.settle(case, settings or SETTLE)

@@ -47,6 +47,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Joint, LinearSpring, Link, Linkage
 from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.inertia import real_inertial
 from mechcheck.sim_models.pymunk.loads import apply_forces
 from mechcheck.sim_models.pymunk.settings import SolverSettings
 
@@ -59,6 +60,12 @@ GROOVE_REACH = 100.0
 #: Smallest radius of gyration of a fictitious body, as a fraction of the linkage's
 #: size: a link carrying one point (a slider) still needs a finite moment of inertia.
 MIN_RADIUS = 0.25
+#: In a driven run, a massless link's fictitious mass as a fraction of the heaviest real
+#: mass (MuJoCo's linkage model uses the same, :data:`.mujoco.model.FICTITIOUS_MASS_FRACTION`).
+FICTITIOUS_FRACTION = 1.0e-2
+#: In a driven run, the smallest moment of a link about its centre of mass, × m·r² (r its
+#: gyration radius): below it the link gets that much fictitious moment (removed again).
+MOMENT_FLOOR = 1.0e-2
 
 
 @dataclass
@@ -113,16 +120,51 @@ def _link(linkage: Linkage, name: str) -> Link:
     return next(link for link in linkage.links if link.name == name)
 
 
-def make_bodies(linkage: Linkage, settings: SolverSettings) -> dict[str, pymunk.Body]:
-    """One dynamic body per moving link: the fictitious mass at the link's centroid, with
-    the moment of a uniform bar of half-length ``gyration_radius`` (m·r²/3)."""
+def make_bodies(linkage: Linkage, settings: SolverSettings,
+                driven: bool = False) -> dict[str, pymunk.Body]:
+    """One dynamic body per moving link. Statics: the fictitious mass at the link's
+    centroid, with the moment of a uniform bar of half-length ``gyration_radius``
+    (m·r²/3). ``driven``: the link's real inertia (:func:`driven_inertial`)."""
     bodies = {}
     for link in linkage.moving_links:
-        m = settings.fictitious_mass
-        body = pymunk.Body(m, m * gyration_radius(linkage, link) ** 2 / 3.0)
-        body.center_of_gravity = centroid(linkage, link)
+        if driven:
+            mass, moment, cog = driven_inertial(linkage, link, settings)
+        else:
+            mass = settings.fictitious_mass
+            moment, cog = mass * gyration_radius(linkage, link) ** 2 / 3.0, centroid(linkage, link)
+        body = pymunk.Body(mass, moment)
+        body.center_of_gravity = cog
         bodies[link] = body
     return bodies
+
+
+def driven_inertial(linkage: Linkage, link: str, settings: SolverSettings
+                    ) -> tuple[float, float, Vec]:
+    """(mass, moment about the centre of mass, centre of mass) of a link in a driven run.
+
+    A massless link gets :data:`FICTITIOUS_FRACTION` of the heaviest real mass as a bar
+    (m·r²/3) at its centroid; a real mass whose moment is below ``MOMENT_FLOOR`` × m·r²
+    (a point mass: pymunk needs a positive moment) gets that much more. Both are ×
+    ``fictitious_scale``, so a reading removes them by extrapolation to zero
+    (:func:`mechcheck.sim_models.convergence.massless_limit`).
+    """
+    k, r = settings.fictitious_scale, gyration_radius(linkage, link)
+    real = real_inertial(linkage, link)
+    if real is None:
+        m = k * FICTITIOUS_FRACTION * max((m.mass for m in linkage.masses), default=1.0)
+        return m, m * r * r / 3.0, centroid(linkage, link)
+    floor = MOMENT_FLOOR * real.mass * r * r
+    moment = real.inertia + (k * floor if real.inertia < floor else 0.0)
+    return real.mass, moment, real.com
+
+
+def has_fictitious_inertia(linkage: Linkage) -> bool:
+    """True when a driven model gives some link inertia the Case does not."""
+    for link in linkage.moving_links:
+        real = real_inertial(linkage, link)
+        if real is None or real.inertia < MOMENT_FLOOR * real.mass * gyration_radius(linkage, link) ** 2:
+            return True
+    return False
 
 
 def along(joint: Joint, point: Vec, distance: float) -> Vec:
@@ -185,11 +227,13 @@ def make_space(settings: SolverSettings) -> pymunk.Space:
     return space
 
 
-def build_linkage_model(case: Case, settings: SolverSettings, q: Array) -> LinkageModel:
-    """The pymunk model of a linkage case, its bodies placed at coordinates q (3n,)."""
+def build_linkage_model(case: Case, settings: SolverSettings, q: Array,
+                        driven: bool = False) -> LinkageModel:
+    """The pymunk model of a linkage case, its bodies placed at coordinates q (3n,);
+    ``driven``: with the links' real inertia (:func:`make_bodies`)."""
     linkage = case.linkage
     space = make_space(settings)
-    bodies = make_bodies(linkage, settings)
+    bodies = make_bodies(linkage, settings, driven)
     model = LinkageModel(case, settings, space, bodies, {}, {}, {}, {}, {}, {},
                          {link: gyration_radius(linkage, link) for link in bodies})
     make_joints(model)
