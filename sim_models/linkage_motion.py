@@ -31,6 +31,13 @@ class Motion:
                                                                          self.value.size)))
 
 
+def prescribed_motion(case: Case) -> Motion:
+    """A moving linkage's motion: each driver's own value, velocity and acceleration."""
+    drivers = case.linkage.drivers
+    return Motion(np.array([d.value for d in drivers]), np.array([d.velocity for d in drivers]),
+                  np.array([d.acceleration for d in drivers]), False)
+
+
 def clock_times(steps: int, dt: float) -> Array:
     """The clock's angle (time) at each of the ``steps + 1`` forward passes."""
     return dt * np.arange(-steps, 1, dtype=float)

@@ -49,7 +49,7 @@ from mechcheck.sim_models.convergence import (
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import link_extent, real_inertial
-from mechcheck.sim_models.linkage_motion import Motion, lead_limit
+from mechcheck.sim_models.linkage_motion import Motion, lead_limit, prescribed_motion
 from mechcheck.sim_models.mujoco.dynamics import (
     DYNAMIC,
     FINAL_FRICTION_PASSES,
@@ -66,10 +66,9 @@ def motion_of(case: Case) -> Motion:
     """The prescribed motion: the drivers' own, or for a static case with Coulomb friction
     a slow one in each driver's ``sense``."""
     drivers = case.linkage.drivers
-    value = np.array([d.value for d in drivers])
     if case.linkage.is_moving:
-        return Motion(value, np.array([d.velocity for d in drivers]),
-                      np.array([d.acceleration for d in drivers]), False)
+        return prescribed_motion(case)
+    value = np.array([d.value for d in drivers])
     return Motion(value, QUASI_STATIC_SPEED * np.array([float(d.sense) for d in drivers]),
                   np.zeros(len(drivers)), True)
 

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -46,7 +47,7 @@ from mechcheck.sim_models.convergence import (
     massless_limit,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
-from mechcheck.sim_models.linkage_motion import Motion, lead_limit
+from mechcheck.sim_models.linkage_motion import Motion, lead_limit, prescribed_motion
 from mechcheck.sim_models.pymunk.dynamics import DRIVEN
 from mechcheck.sim_models.pymunk.linkage import (
     axis_now,
@@ -65,7 +66,7 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     has_fictitious_inertia,
     place,
 )
-from mechcheck.sim_models.pymunk.loads import apply_forces
+from mechcheck.sim_models.pymunk.loads import LoadLike, MassLike, apply_forces
 
 BACKEND = "pymunk"
 
@@ -85,12 +86,6 @@ def refusal(case: Case) -> str | None:
     return None
 
 
-def motion_of(case: Case) -> Motion:
-    drivers = case.linkage.drivers
-    return Motion(np.array([d.value for d in drivers]), np.array([d.velocity for d in drivers]),
-                  np.array([d.acceleration for d in drivers]), False)
-
-
 def install_loads(model: LinkageModel) -> None:
     """Each body applies its link's loads and real weights inside its velocity integration,
     at the pose the step's impulses belong to."""
@@ -100,7 +95,8 @@ def install_loads(model: LinkageModel) -> None:
         masses = [m for m in linkage.masses if m.link == link]
 
         def velocity(b: pymunk.Body, gravity: tuple[float, float], damping: float, dt: float,
-                     link: str = link, loads: list = loads, masses: list = masses) -> None:  # type: ignore[type-arg]
+                     link: str = link, loads: Sequence[LoadLike] = loads,
+                     masses: Sequence[MassLike] = masses) -> None:
             apply_forces(loads, masses, linkage.gravity, {link: b})
             pymunk.Body.update_velocity(b, gravity, damping, dt)
 
@@ -214,7 +210,7 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     if why is not None:
         return Solution(case.name, BACKEND, {}, status="not_applicable", units=units,
                         message=f"a {case.kind} linkage case: {why}")
-    motion = motion_of(case)
+    motion = prescribed_motion(case)
     runs = 2 if has_fictitious_inertia(case.linkage) else 1
     scale = case.linkage.scale
     last: list[DriveEnd] = []
