@@ -29,6 +29,10 @@ COULOMB_REFUSAL = ("the method applies only to linkages without Coulomb friction
                    "moments depend on the total reactions")
 
 
+class CoulombRefused(ValueError):
+    """A method that superposes or uses power refuses Coulomb friction."""
+
+
 def quantity_units(linkage: Linkage) -> dict[str, str]:
     """The table unit of every quantity a linkage reports (LINKAGES.md "What comes out")."""
     units: dict[str, str] = {}
@@ -132,7 +136,7 @@ def superposition_results(case: Case, first: Array | None = None) -> LinkageResu
     """Each known load alone (every external load, weight with inertia of each mass, spring
     and viscous term), the solutions added; refuses Coulomb friction."""
     if case.has_coulomb_friction:
-        raise ValueError(COULOMB_REFUSAL)
+        raise CoulombRefused(COULOMB_REFUSAL)
     linkage = case.linkage
     results = analytic_results(case, first)
     pose = results.pose
@@ -154,7 +158,7 @@ def virtual_work_results(case: Case, first: Array | None = None) -> LinkageResul
     F·v_O + M·ω with v_O = ṫ − ω·perp(t) the velocity of the link's point at the origin.
     """
     if case.has_coulomb_friction:
-        raise ValueError(COULOMB_REFUSAL)
+        raise CoulombRefused(COULOMB_REFUSAL)
     linkage = case.linkage
     results = analytic_results(case, first)
     pose = results.pose
@@ -175,7 +179,7 @@ def _backend(results_of: Callable[[Case], LinkageResults], name: str, method: st
     start = time.perf_counter()
     try:
         results = results_of(case)
-    except ValueError:  # the method refuses Coulomb friction
+    except CoulombRefused:
         return Solution(case.name, name, {}, status="not_applicable", message=COULOMB_REFUSAL,
                         units=quantity_units(case.linkage))
     return solution_from(case, name, results, method=method, elapsed=time.perf_counter() - start,

@@ -60,15 +60,20 @@ def _static_pose(linkage: Linkage, q: Array, values: Array) -> LinkagePose:
     return LinkagePose(linkage, values, q, zeros, zeros, np.full(q.shape[0], np.nan))
 
 
-def _residual(linkage: Linkage, q: Array, values: Array) -> Array:
-    """[Φ(q); (I − J⁺J)·Q(q) / force scale] for one pose (q: (3n,))."""
-    qq = q[None, :]
-    phi, jac = residual_and_jacobian(linkage, qq, values[None, :])
-    force = generalized_forces(_static_pose(linkage, qq, values[None, :]),
-                               known_vector(_static_pose(linkage, qq, values[None, :])))[0]
+def _generalized(linkage: Linkage, q: Array, values: Array) -> Array:
+    """Q(q) (3n,): the known forces as generalized forces at one pose."""
+    pose = _static_pose(linkage, q[None, :], values[None, :])
+    return generalized_forces(pose, known_vector(pose))[0]
+
+
+def _residual(linkage: Linkage, q: Array, values: Array, scale: float) -> Array:
+    """[Φ(q); (I − J⁺J)·Q(q) / scale] for one pose (q: (3n,)). ``scale`` is fixed for the
+    whole search: divided by a Q-dependent size, the largest component would be ±1
+    wherever it is and its derivative 0 (a 5 m exam-Q1 bar stalled at the drawn pose)."""
+    phi, jac = residual_and_jacobian(linkage, q[None, :], values[None, :])
     projector = np.eye(q.shape[0]) - np.linalg.pinv(jac[0]) @ jac[0]
-    scale = max(float(np.abs(force).max()), 1e-300)
-    return np.concatenate([phi[0] / max(1.0, linkage.scale), projector @ force / scale])
+    return np.concatenate([phi[0] / max(1.0, linkage.scale),
+                           projector @ _generalized(linkage, q, values) / scale])
 
 
 def _steps(linkage: Linkage, size: int) -> Array:
@@ -83,14 +88,16 @@ def equilibrium(linkage: Linkage, values: Array) -> Equilibrium:
     start, _ = positions(linkage, values[None, :])
     q = np.nan_to_num(start[0])
     h = _steps(linkage, q.shape[0])
-    r = _residual(linkage, q, values)
+    scale = max(float(np.abs(_generalized(linkage, q, values)).max()), 1e-300)
+    r = _residual(linkage, q, values, scale)
     for _ in range(ITERATIONS):
-        jac = np.stack([(_residual(linkage, q + e, values) - _residual(linkage, q - e, values))
+        jac = np.stack([(_residual(linkage, q + e, values, scale)
+                         - _residual(linkage, q - e, values, scale))
                         / (2 * e.max()) for e in np.diag(h)], axis=1)
         step = np.linalg.lstsq(jac, -r, rcond=None)[0]
         # Halve the step until the residual falls: Gauss–Newton may overshoot far from it.
         for _ in range(30):
-            trial = _residual(linkage, q + step, values)
+            trial = _residual(linkage, q + step, values, scale)
             if np.linalg.norm(trial) < np.linalg.norm(r) or np.linalg.norm(step) < 1e-15:
                 break
             step = step / 2

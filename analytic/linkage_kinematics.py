@@ -297,6 +297,12 @@ def joint_jacobian_at_drawn_pose(linkage: Linkage) -> Array:
 
 def solve_batched(a: Array, b: Array) -> Array:
     """a·x = b for every pose: exact where a is square and regular, else least squares."""
+    finite = np.isfinite(a).all(axis=(1, 2)) & np.isfinite(b).all(axis=1)
+    if not finite.all():  # a pose that is not there (NaN) has no solution; LAPACK would fail
+        x = np.full((a.shape[0], a.shape[2]), np.nan)
+        if finite.any():
+            x[finite] = solve_batched(a[finite], b[finite])
+        return x
     with np.errstate(all="ignore"):
         if a.shape[1] == a.shape[2]:
             try:

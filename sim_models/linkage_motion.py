@@ -38,6 +38,24 @@ def prescribed_motion(case: Case) -> Motion:
                   np.array([d.acceleration for d in drivers]), False)
 
 
+def is_driven(case: Case) -> bool:
+    """A simulator drives the case: it moves, or it is static with Coulomb friction (a
+    quasi-static motion); viscous friction alone does nothing at rest."""
+    return case.linkage.is_moving or case.has_coulomb_friction
+
+
+def driven_motion(case: Case, quasi_static_speed: float) -> Motion:
+    """The motion a driven run follows: the drivers' own, or for a static case with Coulomb
+    friction a slow one, ``quasi_static_speed`` (rad/s or m/s) in each driver's ``sense``
+    (the analytic friction opposes that sense of motion at rest)."""
+    if case.linkage.is_moving:
+        return prescribed_motion(case)
+    drivers = case.linkage.drivers
+    return Motion(np.array([d.value for d in drivers]),
+                  quasi_static_speed * np.array([float(d.sense) for d in drivers]),
+                  np.zeros(len(drivers)), True)
+
+
 def clock_times(steps: int, dt: float) -> Array:
     """The clock's angle (time) at each of the ``steps + 1`` forward passes."""
     return dt * np.arange(-steps, 1, dtype=float)

@@ -28,6 +28,7 @@ from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
+from mechcheck.sim_models.linkage_motion import is_driven
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_friction import (
@@ -78,12 +79,6 @@ def settle_refusal(case: Case) -> str | None:
     if is_driven(case):
         return SETTLE_REFUSALS["friction" if case.has_coulomb_friction else "dynamic"]
     return None
-
-
-def is_driven(case: Case) -> bool:
-    """A moving case, or a static one with Coulomb friction (a quasi-static motion);
-    viscous friction alone does nothing at rest."""
-    return case.linkage.is_moving or case.has_coulomb_friction
 
 
 def has_free_coordinates(case: Case) -> bool:

@@ -49,7 +49,7 @@ from mechcheck.sim_models.convergence import (
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import link_extent, real_inertial
-from mechcheck.sim_models.linkage_motion import Motion, lead_limit, prescribed_motion
+from mechcheck.sim_models.linkage_motion import Motion, driven_motion, lead_limit
 from mechcheck.sim_models.mujoco.dynamics import (
     DYNAMIC,
     FINAL_FRICTION_PASSES,
@@ -60,17 +60,6 @@ from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_f
 from mechcheck.sim_models.mujoco.linkage_model import INERTIA_FLOOR_FRACTION, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import Settings
-
-
-def motion_of(case: Case) -> Motion:
-    """The prescribed motion: the drivers' own, or for a static case with Coulomb friction
-    a slow one in each driver's ``sense``."""
-    drivers = case.linkage.drivers
-    if case.linkage.is_moving:
-        return prescribed_motion(case)
-    value = np.array([d.value for d in drivers])
-    return Motion(value, QUASI_STATIC_SPEED * np.array([float(d.sense) for d in drivers]),
-                  np.zeros(len(drivers)), True)
 
 
 def turns(case: Case, link: str) -> bool:
@@ -199,7 +188,7 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     (method ``driven``); ``results`` is the analytic pose analysis (verdicts, the instant's
     condition number)."""
     start = time.perf_counter()
-    motion = motion_of(case)
+    motion = driven_motion(case, QUASI_STATIC_SPEED)
     rigs = driven_rigs(case, motion)
     friction = case.has_coulomb_friction
     units = rigs.base.units

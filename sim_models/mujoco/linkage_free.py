@@ -5,16 +5,15 @@ The analytic side seeds nothing but the start: the drawn pose (``qpos = 0``), or
 the caller gives, and the drivers' held values. From there MuJoCo moves the linkage under
 its loads, weights and springs, with viscous damping on every joint that no driver holds,
 until it is at rest; the forces are read at rest, where the dampers exert nothing, so they
-change the path to the equilibrium and never the equilibrium (as exam Q1's bespoke model,
-:mod:`.exam`). Where it came to rest is reported in the pose quantities.
+change the path to the equilibrium and never the equilibrium. Where it came to rest is
+reported in the pose quantities.
 
 Damping and time step come from MuJoCo's own model at the start pose, never from the
 answer: each free joint's stiffness K_j is the curvature of the potential that MuJoCo's
 forces give (a central difference of ``qfrc_smooth`` — springs, loads, weights — in that
 joint alone), its inertia M_jj the diagonal of MuJoCo's mass matrix; the damper is
 :data:`DAMPING_RATIO` × critical for that uncoupled mode, 2·√(K_j·M_jj), and the time step
-resolves the fastest uncoupled mode with :data:`STEPS_PER_PERIOD` steps (exam Q1's
-rule, :func:`~mechcheck.analytic.exam.q1_timestep`).
+resolves the fastest uncoupled mode with :data:`STEPS_PER_PERIOD` steps.
 
 Settling and its stop rules are :mod:`.settle`'s (the refinement passes carry the
 constraint forces and go on from where the last pass stopped), watched on every force the

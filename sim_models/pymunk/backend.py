@@ -18,6 +18,7 @@ Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.linkage_motion import is_driven
 from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, settle as settling, solve as solving
 from mechcheck.sim_models.pymunk.settings import (
     LINKAGE_SETTLE,
@@ -33,10 +34,10 @@ __all__ = ["settle", "solve_at_pose", "sweep"]
 
 def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
     """The ``pymunk`` backend (:func:`mechcheck.sim_models.pymunk.settle.settle`; linkages:
-    :func:`mechcheck.sim_models.pymunk.linkage.settle`, moving ones
+    :func:`mechcheck.sim_models.pymunk.linkage.settle`, moving ones and Coulomb friction
     :func:`mechcheck.sim_models.pymunk.linkage_dynamics.drive_linkage`), with its own
     settings by default."""
-    if case.mechanism == "linkage" and case.kind == "dynamic":
+    if case.mechanism == "linkage" and is_driven(case):
         return linkage_dynamics.drive_linkage(case, analytic_results(case))
     if case.mechanism == "linkage":
         return linkage.settle(case, settings or LINKAGE_SETTLE)

@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -261,10 +261,10 @@ def install_force_callbacks(model: Model, extras: dict[int, tuple[float, float, 
 BodyState = tuple[pymunk.Body, float, tuple[float, float], tuple[float, float], float]
 
 
-def snapshot(model: Model) -> list[BodyState]:
-    """Every moving body's and the clock's angle, position and velocities (to repeat a step)."""
+def snapshot(bodies: Iterable[pymunk.Body]) -> list[BodyState]:
+    """The bodies' angle, position and velocities (to repeat a step)."""
     return [(b, b.angle, (b.position.x, b.position.y), (b.velocity.x, b.velocity.y),
-             b.angular_velocity) for b in (*model.bodies.values(), model.driver)]
+             b.angular_velocity) for b in bodies]
 
 
 def restore(saved: list[BodyState]) -> None:
@@ -488,7 +488,7 @@ def run_drive(models: list[Model], drive: Drive, lead: int,
         rate = (float(targets[step - 1]) - base.driver.angle) / dt
         guess = predicted(history)
         loads = friction_loads(base.case, guess) if guess is not None else FrictionLoads()
-        saved = [snapshot(m) for m in models] if passes > 1 else []
+        saved = [snapshot((*m.bodies.values(), m.driver)) for m in models] if passes > 1 else []
         for attempt in range(passes):
             if attempt:
                 for bodies in saved:

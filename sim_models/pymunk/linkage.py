@@ -16,8 +16,8 @@ Every force is read from pymunk's own state: pivots', grooves' and gears'
 accumulated impulses (:mod:`mechcheck.sim_models.pymunk.forces`), springs' signed
 impulses, each / dt. The pose verdicts (``no_solution``, ``singular``,
 ``indeterminate``) are the analytic backends' (:func:`mechcheck.analytic.linkage_backends.verdict`),
-decided on the pose alone, and withhold the simulation. Driven (dynamic) and
-friction cases are not modelled here yet: ``not_applicable`` with the reason.
+decided on the pose alone, and withhold the simulation. Moving cases and Coulomb
+friction are driven (:mod:`.linkage_dynamics`); here they are ``not_applicable``.
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ from mechcheck.analytic.linkage_kinematics import (
 )
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
+from mechcheck.sim_models.linkage_motion import is_driven
 from mechcheck.sim_models.pymunk.forces import force_on_b, torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -283,13 +284,18 @@ def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Out
 
 
 def refusal(case: Case, backend: str) -> Solution | None:
-    """``not_applicable`` for what the linkage model does not simulate yet, else None."""
-    if case.kind == "static":
+    """``not_applicable`` for a case the held model cannot give (it moves, or it is static
+    with Coulomb friction, a quasi-static motion), else None. The ``pymunk`` backend drives
+    such a case alone (:mod:`.linkage_dynamics`); sweeps and the fixed-pose solve do not."""
+    if not is_driven(case):
         return None
-    return Solution(case.name, backend, {}, status="not_applicable", units=quantity_units(case.linkage),
-                    message=f"a {case.kind} linkage case: the pymunk linkage model holds its "
-                            "drivers for statics only; driving a linkage through its motion "
-                            "(and joint friction) is not modelled in it yet")
+    why = ("the constraint solve at a fixed pose is for statics; a moving linkage or Coulomb "
+           "friction needs velocities (the 'pymunk' backend drives the case)"
+           if backend == "pymunk_solve" else
+           "a sweep in the pymunk backend settles linkages held by their drivers; a sweep of "
+           "a driven linkage (or of Coulomb friction, a quasi-static motion) is not simulated")
+    return Solution(case.name, backend, {}, status="not_applicable",
+                    units=quantity_units(case.linkage), message=f"a {case.kind} linkage case: {why}")
 
 
 def screened(case: Case, backend: str) -> Solution | LinkageResults:

@@ -1,0 +1,106 @@
+"""Joint friction of a linkage emulated from pymunk's reactions and velocities (as the
+four-bar's, :mod:`.friction`).
+
+Pymunk has no friction that scales with a reaction, and a loop-closing pin is a plain
+constraint. So each friction term of LINKAGES.md is an explicit load applied inside the
+velocity integration, one value per joint acting on ``links[1]`` and its opposite on
+``links[0]``:
+
+- a revolute joint: the couple −μ·r·|F|·sign(q̇) − c·q̇ (friction circle and viscous);
+- a prismatic joint: the force −μ·|N|·sign(q̇) − c·q̇ along the axis through ``at``,
+  N the reaction's normal component. This force is part of the joint's reported reaction
+  (:func:`with_sliding`), as in MuJoCo's linkage model.
+
+q̇ is the joint's relative rate measured on the bodies. The loads belong to the step
+they act in; how they are made consistent with that step's own reactions (a prediction,
+then a fixed-point pass) is :func:`.linkage_dynamics.step_with_friction`'s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pymunk
+
+from mechcheck.analytic.linkage import Joint
+from mechcheck.sim_models.pymunk.friction import sign
+from mechcheck.sim_models.pymunk.linkage import axis_now
+from mechcheck.sim_models.pymunk.linkage_model import LinkageModel
+from mechcheck.sim_models.pymunk.readout import Values
+
+#: Per joint, the friction acting on links[1]: a couple (N·m, revolute) or a force along
+#: the axis (N, prismatic); links[0] takes the opposite.
+JointLoads = dict[str, float]
+
+
+def joint_rate(model: LinkageModel, joint: Joint) -> float:
+    """q̇ of a joint from the bodies' velocities: ω_b − ω_a, or the speed of ``at`` on
+    links[1] relative to links[0] along the axis."""
+    a, b = (model.body(link) for link in joint.links)
+    if joint.kind == "revolute":
+        return float(b.angular_velocity - a.angular_velocity)
+    point = b.local_to_world(model.linkage.points[joint.at])
+    relative = b.velocity_at_world_point(point) - a.velocity_at_world_point(point)
+    ux, uy = axis_now(model, joint)
+    return float(relative.x * ux + relative.y * uy)
+
+
+def joint_rates(model: LinkageModel) -> dict[str, float]:
+    """``qdot_<joint>`` of every joint."""
+    return {f"qdot_{joint.name}": joint_rate(model, joint) for joint in model.linkage.joints}
+
+
+def friction_loads(model: LinkageModel, state: Values, viscous: bool = True) -> JointLoads:
+    """The friction of every joint at ``state`` (reactions ``F_<joint>_x/y`` and rates
+    ``qdot_<joint>``; a prismatic joint's axis at the model's pose); ``viscous=False``
+    leaves out the viscous terms (a quasi-static run, whose analytic motion has no speed)."""
+    linkage = model.linkage
+    f = linkage.friction
+    if f is None:
+        return {}
+    out: JointLoads = {}
+    for joint in linkage.joints:
+        name = joint.name
+        rate = state[f"qdot_{name}"]
+        fx, fy = state[f"F_{name}_x"], state[f"F_{name}_y"]
+        if joint.kind == "revolute":
+            arm = f.coefficient(name) * f.pin_radius.get(name, 0.0)
+            coulomb = arm * math.hypot(fx, fy)
+        else:
+            ux, uy = axis_now(model, joint)
+            coulomb = f.coefficient(name) * abs(-fx * uy + fy * ux)
+        damping = f.viscous.get(name, 0.0) if viscous else 0.0
+        value = -coulomb * sign(rate) - damping * rate
+        if value:
+            out[name] = value
+    return out
+
+
+def apply_joint_friction(model: LinkageModel, link: str, body: pymunk.Body,
+                         loads: JointLoads) -> None:
+    """Add the friction on ``link`` (its body) from ``loads``, at the current pose."""
+    linkage = model.linkage
+    for name, value in loads.items():
+        joint = linkage.joint(name)
+        if link not in joint.links:
+            continue
+        share = 1.0 if joint.links[1] == link else -1.0
+        if joint.kind == "revolute":
+            body.torque += share * value
+            continue
+        ux, uy = axis_now(model, joint)
+        point = model.body(joint.links[1]).local_to_world(linkage.points[joint.at])
+        body.apply_force_at_world_point((share * value * ux, share * value * uy), point)
+
+
+def with_sliding(model: LinkageModel, values: Values, loads: JointLoads) -> Values:
+    """The reactions with each prismatic joint's friction force added to its F (the force
+    by links[0] on links[1] includes it)."""
+    out = dict(values)
+    for name, value in loads.items():
+        joint = model.linkage.joint(name)
+        if joint.kind == "prismatic":
+            ux, uy = axis_now(model, joint)
+            out[f"F_{name}_x"] += value * ux
+            out[f"F_{name}_y"] += value * uy
+    return out
