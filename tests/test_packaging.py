@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import subprocess
 import sys
+import sysconfig
 import tomllib
 from pathlib import Path
 
@@ -17,8 +18,12 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def test_one_top_level_package_from_the_installation() -> None:
-    """The tests import the installed ``mechcheck``; the repository's folders are not packages."""
-    assert REPO not in Path(mechcheck.__file__).resolve().parents
+    """The tests import the installed ``mechcheck`` (from the interpreter's site-packages,
+    wherever its environment lives: README's commands put ``.venv`` inside the clone);
+    the repository's folders are not packages."""
+    installed = Path(sysconfig.get_paths()["purelib"]).resolve()
+    assert installed in Path(mechcheck.__file__).resolve().parents
+    assert Path(mechcheck.__file__).resolve().parent != REPO / "compare"
     for folder in ("analytic", "compare", "sim_models", "builtin", "strategies", "reference_solver"):
         assert importlib.util.find_spec(folder) is None, folder
 

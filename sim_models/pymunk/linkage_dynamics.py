@@ -1,5 +1,5 @@
 """Driven linkages in pymunk (backend ``pymunk``): a moving linkage case, every
-coordinate driven, no joint friction.
+coordinate driven, or a static one with Coulomb friction driven quasi-statically.
 
 The model is the linkage builder's (:mod:`.linkage_model`) with the links' real
 inertia; each driver's lock follows the prescribed motion. Its targets are moved
@@ -17,11 +17,14 @@ nothing more), and its reading is the step that reaches the instant. The reading
 judged by the rules both simulators share (:mod:`mechcheck.sim_models.convergence`):
 the lead-in doubles until two readings agree, then the time step halves until two
 agree. A massless link (or a point mass) gets fictitious inertia, removed by running
-the model as built and with twice that inertia, F₀ = 2·F(k) − F(2k).
+the model as built and with twice that inertia, F₀ = 2·F(k) − F(2k); the two run in
+lockstep (:class:`Twins`). Joint friction is applied from pymunk's own reactions and joint
+rates (:mod:`.linkage_friction`, :meth:`Twins.step_with_friction`), the same on both
+models, from their extrapolated reactions.
 
-Not modelled here (``not_applicable`` with the reason): joint friction, free
-coordinates in a moving linkage, and spring dampers (Chipmunk damps a spring
-implicitly, which is not the analytic c·v under a prescribed motion).
+Not modelled here (``not_applicable`` with the reason): free coordinates in a moving
+linkage, and spring dampers (Chipmunk damps a spring implicitly, which is not the
+analytic c·v under a prescribed motion).
 """
 
 from __future__ import annotations
