@@ -4,9 +4,10 @@ slider-crank as linkages"): the same mechanism, drawn at the case's pose.
 Links ``ground``, ``crank``, ``coupler``, ``rocker`` / ``slider``; joints ``A0``
 (ground, crank), ``A`` (crank, coupler), ``B`` (coupler, rocker or slider) and ``B0``
 (ground, rocker) or ``slide`` (ground, slider, prismatic at B along the slide axis). The
-crank's joint A0 is driven with the case's ω and α from the drawn pose, so the generic
-engine solves exactly the case's problem. Legacy quantity names map one to one
-(:data:`LEGACY_NAMES`).
+crank's joint A0 is driven with the case's ω and α from the drawn pose (with
+``drive_link = 4``, the rocker's joint B0 with the rocker's ω and α at that instant), so the
+generic engine solves exactly the case's problem. Legacy quantity names map one to one
+(:func:`names_of`).
 """
 
 from __future__ import annotations
@@ -37,6 +38,14 @@ SLIDER_CRANK_NAMES = LEGACY_NAMES | {"F14_x": "F_slide_x", "F14_y": "F_slide_y",
                                      "M14": "M_slide"}
 
 
+def names_of(case: Case) -> dict[str, str]:
+    """Legacy quantity → linkage quantity for ``case`` (its drive torque included)."""
+    names = FOUR_BAR_NAMES if case.mechanism == "four_bar" else SLIDER_CRANK_NAMES
+    if case.drive_link == 4:
+        names = {k: v for k, v in names.items() if k != "T12"} | {"T14": "Q_B0"}
+    return names
+
+
 def link_name(case: Case, link: int) -> str:
     if link == 4:
         return "rocker" if case.mechanism == "four_bar" else "slider"
@@ -44,14 +53,14 @@ def link_name(case: Case, link: int) -> str:
 
 
 def linkage_of(case: Case) -> Linkage:
-    """The case's mechanism as a linkage drawn at the case's pose, driven at A0.
+    """The case's mechanism as a linkage drawn at the case's pose, driven at A0, or at B0
+    for ``drive_link = 4``.
 
-    Only ``drive_link = 2`` has a direct spelling (LINKAGES.md); a drive on the rocker
-    needs its own driver on B0 and is refused here.
+    LINKAGES.md gives ``drive_link = 4`` no direct spelling because its motion is prescribed
+    through link 2; at one instant of a one-freedom linkage that motion is the rocker's
+    ω14, α14 (from the crank's, by the velocity and acceleration analysis), so a driver on
+    B0 with those rates is the same problem, and the same state at the reading.
     """
-    if case.drive_link != 2:
-        raise ValueError("a drive on link 4 with motion prescribed through link 2 has no "
-                         "linkage spelling; drive joint B0 instead")
     pose = pose_of(case)
 
     def drawn(link: int, local: Vec2) -> Vec2:
@@ -71,11 +80,9 @@ def linkage_of(case: Case) -> Linkage:
     else:
         axis = (math.cos(case.ground_angle), math.sin(case.ground_angle))
         joints.append(Joint("slide", "prismatic", ("ground", rocker), "B", axis))
-    sense = case.input_sense if case.has_coulomb_friction else 0
     return Linkage(
         points=points, links=tuple(links), joints=tuple(joints),
-        drivers=(Driver("A0", 0.0, case.motion.omega, case.motion.alpha,
-                        sense if not case.motion.omega else 0),),
+        drivers=(_driver_of(case),),
         loads=tuple(PointLoad(link_name(case, ld.link), drawn(ld.link, ld.at), ld.force, ld.torque)
                     for ld in case.loads),
         masses=tuple(LinkMass(link_name(case, m.link), m.mass, drawn(m.link, m.com), m.inertia)
@@ -83,6 +90,17 @@ def linkage_of(case: Case) -> Linkage:
         gravity=case.gravity,
         friction=_friction_of(case),
     )
+
+
+def _driver_of(case: Case) -> Driver:
+    sense = case.input_sense if case.has_coulomb_friction and not case.motion.omega else 0
+    if case.drive_link == 2:
+        return Driver("A0", 0.0, case.motion.omega, case.motion.alpha, sense)
+    rocker = pose_of(case).links[4]
+    # The rocker's sense of a quasi-static motion: the crank's times dθ14/dθ12.
+    ratio = float(pose_of(case, omega=1.0, alpha=0.0).links[4].omega[0])
+    return Driver("B0", 0.0, float(rocker.omega[0]), float(rocker.alpha[0]),
+                  sense * (1 if ratio > 0 else -1))
 
 
 def _friction_of(case: Case) -> JointFriction | None:

@@ -55,6 +55,16 @@ def massless_limit(base: dict[str, float], doubled: dict[str, float],
             for q, v in base.items()}
 
 
+def inertia_correction(base: dict[str, float], limit: dict[str, float], length: float,
+                       units: dict[str, str] | None = None) -> float:
+    """The largest change the massless extrapolation ``limit`` made to the base run's
+    reading ``base``: the fictitious inertia removed, N (torques divided by ``length``)."""
+    table = units or {}
+    kinds = {q: quantity_kind(q, table.get(q)) for q in limit}
+    return max((abs(base[q] - v) / (length if kinds[q] == "torque" else 1.0)
+                for q, v in limit.items() if kinds[q] != "pose"), default=0.0)
+
+
 def disagreement(a: dict[str, float], b: dict[str, float], length: float,
                  units: dict[str, str] | None = None) -> float:
     """Largest difference of forces (and torques/length) relative to the largest of them;

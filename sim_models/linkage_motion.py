@@ -3,13 +3,15 @@ value, velocity and acceleration over time, and how far back a lead-in may start
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_forces import solve_linkage
 from mechcheck.analytic.linkage_kinematics import Array
+from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.convergence import LEAD_CONDITION_GROWTH, LeadLimit
 
 
@@ -42,6 +44,31 @@ def is_driven(case: Case) -> bool:
     """A simulator drives the case: it moves, or it is static with Coulomb friction (a
     quasi-static motion); viscous friction alone does nothing at rest."""
     return case.linkage.is_moving or case.has_coulomb_friction
+
+
+#: rad/s or m/s: a driver slower than this is at rest for a simulator. In 1 s it moves
+#: 1e-9, below what a driven run tracks its motion to; measured (four-bar, 2026-11): MuJoCo
+#: read T12 7.8e-3 off at ω = −3e-232 rad/s, α = 0, where only the sign of ω sets the
+#: Coulomb senses.
+REST_SPEED = 1e-9
+
+
+def at_rest_reason(case: Case) -> str:
+    """Why a simulator cannot measure a moving linkage's Coulomb friction, or ``""``: a
+    driver is at rest at the reading while it accelerates, so the relative motions reverse
+    there and the sense each Coulomb force opposes is the case's convention (the driver's
+    ``sense``), which no simulated motion shows."""
+    linkage = case.linkage
+    if not (linkage.is_moving and linkage.has_coulomb_friction):
+        return ""
+    for d in linkage.drivers:
+        if abs(d.velocity) <= REST_SPEED and (d.acceleration or d.velocity):
+            return (f"the driver at {d.joint} is at rest at the reading (velocity "
+                    f"{d.velocity:g}, acceleration {d.acceleration:g}): the relative motions "
+                    "of the Coulomb friction reverse there, so the sense each opposes is not a "
+                    "property of the motion (the case's sense settles it by convention), and "
+                    "a simulator cannot measure it")
+    return ""
 
 
 def driven_motion(case: Case, quasi_static_speed: float) -> Motion:
@@ -80,3 +107,18 @@ def lead_limit(case: Case, motion: Motion, instant: float) -> LeadLimit:
                 f"against {instant:.3g} at the instant ({when})")
 
     return limit
+
+
+def at_first_driver(case: Case, value: float) -> Case:
+    """``case`` with its first driver at ``value`` (rad or m from the drawn pose), its rates
+    and every other driver as they are."""
+    linkage = case.linkage
+    first = replace(linkage.drivers[0], value=float(value))
+    return replace(case, geometry=replace(linkage, drivers=(first, *linkage.drivers[1:])))
+
+
+def driven_sweep(case: Case, first: Array, drive: Callable[[Case], Solution]) -> list[Solution]:
+    """A driven linkage over values of its first driver: one driven run per pose (``drive``),
+    each reaching its pose with the case's rates. A run needs its own lead-in along its own
+    motion, so nothing carries over from the last pose."""
+    return [drive(at_first_driver(case, v)) for v in first]

@@ -18,10 +18,13 @@ import mechcheck
 from mechcheck.analytic.case import Case, Friction, Load, Mass, Motion, SliderCrankGeometry
 from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
+from mechcheck.sim_models.convergence import LEAD_AGREEMENT_RTOL, TIMESTEP_AGREEMENT_RTOL
+from mechcheck.sim_models.linkage_motion import driven_motion
+from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sim_models.pymunk.backend import settle, solve_at_pose, sweep
-from mechcheck.sim_models.pymunk.dynamics import DRIVEN, SMOOTHNESS, STEP_AGREEMENT, Drive, lead_window
 from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 
@@ -137,22 +140,28 @@ def test_builtin_rocker_driven_dynamics_match_analytic(name: str) -> None:
     sol = settle(case)
     assert_agrees(sol, case)
     assert sol.diagnostics["method"] == "driven"
-    assert float(sol.diagnostics["roughness"]) <= SMOOTHNESS
-    assert float(sol.diagnostics["step_change"]) <= STEP_AGREEMENT
-    assert int(sol.diagnostics["lead_steps"]) <= int(sol.diagnostics["lead_window"])
+    assert float(sol.diagnostics["lead_disagreement"]) <= LEAD_AGREEMENT_RTOL
+    assert float(sol.diagnostics["timestep_disagreement"]) <= TIMESTEP_AGREEMENT_RTOL
 
 
 def test_lead_in_stops_short_of_the_rocker_dead_point() -> None:
-    """fourbar-dynamic-drive4's lead-in ends before dθ14/dθ12 changes sign (θ12 ≈ 223.7°)."""
+    """fourbar-dynamic-drive4, driven at B0 as a linkage, has a rocker dead point (where
+    dθ14/dθ12 changes sign, θ12 ≈ 223.7°) shortly before the instant: the rocker's motion
+    cannot be continued back past it. The run's lead-in ends where the linkage still
+    assembles along the prescribed rocker motion."""
     case = builtin_case("fourbar-dynamic-drive4")
-    drive = Drive(case, case.motion.omega, case.motion.alpha)
-    window = lead_window(case, drive, DRIVEN.dt)
-    ratio = pose_of(case, drive.theta12(-DRIVEN.dt * np.arange(400)), omega=1.0,
-                    alpha=0.0).links[4].omega
-    dead_point = int(np.argmax(ratio <= 0.0))
-    assert 300 < dead_point < 400
-    assert 0 < window.steps < dead_point
-    assert "dead point of the rocker drive" in window.reason
+    sol = settle(case)
+    linkage = as_linkage(case)
+    motion = driven_motion(linkage, 0.0)
+    lead = float(sol.diagnostics["lead_steps"]) * float(sol.diagnostics["timestep"])
+    along = solve_pose(linkage.linkage, motion.at(np.linspace(-lead, 0.0, 200))[0])
+    assert along.assembled.all()
+    # By hand (the crank's motion, θ12 + ω·t + α·t²/2): the dead point is 300–400 steps of
+    # 1e-4 s before the instant, so a lead-in twice as long as the run's would pass it.
+    t = -1e-4 * np.arange(400)
+    theta = case.theta12 + case.motion.omega * t + 0.5 * case.motion.alpha * t**2
+    ratio = pose_of(case, theta, omega=1.0, alpha=0.0).links[4].omega
+    assert 300 < int(np.argmax(ratio <= 0.0)) < 400
 
 
 def test_reading_next_to_a_rocker_dead_point_is_withheld_with_the_reason() -> None:
@@ -161,7 +170,8 @@ def test_reading_next_to_a_rocker_dead_point_is_withheld_with_the_reason() -> No
     sol = settle(case)
     assert sol.status == "not_settled"
     assert not any(q[0] in "FTM" for q in sol.values)
-    assert "dead point of the rocker drive" in sol.message
+    # Driven at B0, the rocker's motion cannot be continued back past its dead point.
+    assert "lead-in would start where the linkage does not assemble" in sol.message
 
 
 def test_rocker_clock_is_continuous_where_the_closed_form_theta14_wraps() -> None:
@@ -226,9 +236,9 @@ def test_sweep_with_constraint_solve_backend() -> None:
 
 def test_budget_exhausted_reports_not_settled_without_forces() -> None:
     """A run stopped by its step budget says not_settled and withholds every force."""
-    from mechcheck.sim_models.pymunk.settings import SETTLE
+    from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE
 
-    sol = settle(e1(), SETTLE.with_(max_steps=3))
+    sol = settle(e1(), LINKAGE_SETTLE.with_(max_steps=3))
     assert sol.status == "not_settled"
     assert not any(q[0] in "FTM" for q in sol.values)
 

@@ -17,50 +17,34 @@ from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.coulomb import at_rest_reason
-from mechcheck.sim_models.mujoco import solve as exact, sweep as sweeps
-from mechcheck.sim_models.mujoco.dynamics import driven
 from mechcheck.sim_models.mujoco.linkage import settle_linkage, solve_linkage_at_pose, sweep_linkage
 from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
-from mechcheck.sim_models.mujoco.settle import settle_static
+from mechcheck.sim_models.presets import sweep_through_linkage, through_linkage
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
 
 
 def settle(case: Case) -> Solution:
-    """The ``mujoco`` backend: settled statics, or a driven run for motion/friction.
-
-    The harness calls it only at poses whose forces exist and are unique (the pose gate,
-    :func:`mechcheck.run.gated`): elsewhere a soft model would settle to whatever its
-    bending allows. A moving case is not run either where its Coulomb friction is at rest
-    at the reading
-    (ω = 0, α ≠ 0: :func:`~mechcheck.sim_models.coulomb.at_rest_reason`);
-    measured: the run read the sense of its lead-in, 1.1e-2 off where the
-    case's direction is the other one.
-    """
-    if case.mechanism == "linkage":
-        return noting_warnings(lambda: settle_linkage(case))
-    if case.kind == "static":
-        return noting_warnings(lambda: settle_static(case))
-    at_rest = "" if case.motion.is_static else at_rest_reason(case, case.motion.omega,
-                                                              case.motion.alpha)
-    if at_rest:
-        return Solution(case.name, "mujoco", {}, status="indeterminate", message=at_rest,
-                        diagnostics={"method": "driven"})
-    return noting_warnings(lambda: driven(case))
+    """The ``mujoco`` backend: a linkage held until settled (statics), or driven along its
+    prescribed motion (moving and Coulomb-friction cases); a four-bar or slider-crank as its
+    linkage (:mod:`mechcheck.sim_models.presets`)."""
+    if case.mechanism != "linkage":
+        return through_linkage(case, settle, "mujoco")
+    return noting_warnings(lambda: settle_linkage(case))
 
 
 def solve_at_pose(case: Case) -> Solution:
     """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose."""
-    if case.mechanism == "linkage":
-        return noting_warnings(lambda: solve_linkage_at_pose(case))
-    return noting_warnings(lambda: exact.solve_at_pose(case))
+    if case.mechanism != "linkage":
+        return through_linkage(case, solve_at_pose, "mujoco_solve")
+    return noting_warnings(lambda: solve_linkage_at_pose(case))
 
 
 def sweep(case: Case, grid: ArrayLike, backend: str = "mujoco") -> list[Solution]:
-    """Either backend over a sweep: θ12 (rad) of a four-bar or slider-crank
-    (:func:`.sweep.sweep`), or a linkage's first driver (rad or m from the drawn pose,
-    :func:`.linkage.sweep_linkage`)."""
-    if case.mechanism == "linkage":
-        return sweep_linkage(case, np.asarray(grid, dtype=float), backend)
-    return sweeps.sweep(case, grid, backend)
+    """Either backend over a sweep of a linkage's first driver (rad or m from the drawn
+    pose, :func:`.linkage.sweep_linkage`), or of θ12 (rad) of a four-bar or slider-crank."""
+    if case.mechanism != "linkage":
+        return sweep_through_linkage(case, np.asarray(grid, dtype=float), backend,
+                                     lambda linkage, offsets: sweep(linkage, offsets, backend),
+                                     settle if backend == "mujoco" else solve_at_pose)
+    return sweep_linkage(case, np.asarray(grid, dtype=float), backend)

@@ -28,7 +28,7 @@ from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
-from mechcheck.sim_models.linkage_motion import is_driven
+from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_friction import (
@@ -46,12 +46,6 @@ from mechcheck.sim_models.mujoco.solve import (
     impose_rigid_forces,
 )
 
-SETTLE_REFUSALS = {
-    "dynamic": "a sweep in the mujoco backend settles linkages held by their drivers; a "
-               "sweep of a driven (moving) linkage is not simulated",
-    "friction": "a sweep in the mujoco backend settles linkages held by their drivers; a "
-                "sweep with Coulomb friction (a quasi-static motion) is not simulated",
-}
 FREE_SWEEP_REFUSAL = ("the mujoco backend settles free coordinates case by case, from the "
                       "drawn pose; a sweep of them is not simulated")
 
@@ -71,13 +65,6 @@ def unbuildable(case: Case) -> str | None:
         spanning_tree(case.linkage)
     except Unbuildable as error:
         return str(error)
-    return None
-
-
-def settle_refusal(case: Case) -> str | None:
-    """Why a sweep does not settle the case (it holds the drivers at rest), or None."""
-    if is_driven(case):
-        return SETTLE_REFUSALS["friction" if case.has_coulomb_friction else "dynamic"]
     return None
 
 
@@ -227,9 +214,10 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     """
     first = np.asarray(first, dtype=float)
     why = unbuildable(case)
+    if backend == "mujoco" and why is None and is_driven(case):
+        return driven_sweep(case, first, settle_linkage)
     if backend == "mujoco":
-        why = why or settle_refusal(case) or (FREE_SWEEP_REFUSAL if has_free_coordinates(case)
-                                              else None)
+        why = why or (FREE_SWEEP_REFUSAL if has_free_coordinates(case) else None)
     if why is not None:
         return [refused(case, backend, why)] * len(first)
     if results is None:

@@ -36,6 +36,7 @@ import mujoco
 import numpy as np
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.solution import Solution, quantity_kind
@@ -44,12 +45,13 @@ from mechcheck.sim_models.convergence import (
     LEAD_AGREEMENT_RTOL,
     Convergence,
     halve_timestep,
+    inertia_correction,
     lengthen_lead,
     massless_limit,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import link_extent, real_inertial
-from mechcheck.sim_models.linkage_motion import Motion, driven_motion, lead_limit
+from mechcheck.sim_models.linkage_motion import Motion, at_rest_reason, driven_motion, lead_limit
 from mechcheck.sim_models.mujoco.dynamics import (
     DYNAMIC,
     FINAL_FRICTION_PASSES,
@@ -188,6 +190,10 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     (method ``driven``); ``results`` is the analytic pose analysis (verdicts, the instant's
     condition number)."""
     start = time.perf_counter()
+    at_rest = at_rest_reason(case)
+    if at_rest:
+        return Solution(case.name, "mujoco", {}, status="indeterminate", message=at_rest,
+                        diagnostics={"method": "driven"}, units=quantity_units(case.linkage))
     motion = driven_motion(case, QUASI_STATIC_SPEED)
     rigs = driven_rigs(case, motion)
     friction = case.has_coulomb_friction
@@ -214,7 +220,9 @@ def driven_solution(case: Case, rigs: LinkageRigs, out: Convergence,
         rig.loop_violation(), 0.0,
     ).as_dict(lead_disagreement=out.lead_disagreement, lead_steps=out.lead_steps,
               timestep=out.dt, timestep_disagreement=out.timestep_disagreement,
-              fictitious_runs=rigs.runs)
+              fictitious_runs=rigs.runs, fictitious_inertia_correction=(
+                  inertia_correction(rig.read(), out.values, rig.scale, units)
+                  if rigs.doubled is not None else 0.0))
     if not out.converged:
         pose = {q: v for q, v in out.values.items() if quantity_kind(q, units.get(q)) == "pose"}
         return Solution(case.name, "mujoco", pose, status="not_settled", message=out.verdict(),

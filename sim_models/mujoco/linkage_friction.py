@@ -12,7 +12,8 @@ load through ``xfrc_applied``, its magnitude from the reactions MuJoCo reports
   its opposite on links[0] at the same point; N is the reaction's normal component. This
   force is part of the joint's reported reaction (:attr:`LinkageRig.sliding`).
 
-Viscous friction is MuJoCo's own joint damping (:mod:`.linkage_model`).
+Viscous friction is MuJoCo's own joint damping (:mod:`.linkage_model`), or on a loop-closing joint
+a couple from MuJoCo's joint rates (:meth:`.linkage_rig.LinkageRig.apply_closure_damping`).
 """
 
 from __future__ import annotations

@@ -80,7 +80,7 @@ def _priority(linkage: Linkage, joint: Joint) -> int:
         return 0
     if any(d.joint == joint.name for d in linkage.drivers):
         return 1
-    if _torsion(linkage, joint)[0] or _viscous(linkage, joint):
+    if _torsion(linkage, joint)[0] or joint_damping(linkage, joint):
         return 2
     return 3
 
@@ -89,7 +89,7 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
     """Kruskal's spanning tree in :func:`_priority` order, then oriented from the ground.
 
     Raises :class:`Unbuildable` for a loop without a revolute joint, and for a driver or a
-    torsional spring on a joint that must close a loop.
+    torsional spring on a joint that must close a loop (a damper there is emulated).
     """
     order = sorted(linkage.joints, key=lambda j: _priority(linkage, j))
     root = {link.name: link.name for link in linkage.links}
@@ -113,8 +113,10 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
             raise Unbuildable(f"the loop through joints {', '.join(loop)} has no revolute "
                               "joint: the MuJoCo model closes every loop with a connect at a "
                               "revolute joint")
-        if _priority(linkage, joint) < 3:
-            what = "driver" if _priority(linkage, joint) == 1 else "torsional spring or damper"
+        # A damper closing a loop is a couple from the joint's rate (LinkageRig.apply_loads);
+        # a driver or a torsional spring needs a MuJoCo joint.
+        if _priority(linkage, joint) == 1 or _torsion(linkage, joint)[0]:
+            what = "driver" if _priority(linkage, joint) == 1 else "torsional spring"
             raise Unbuildable(f"the {what} at joint {joint.name} is on a joint that closes a "
                               "loop of prismatic and driven joints: the MuJoCo model holds it "
                               "only on a tree joint")
@@ -296,7 +298,7 @@ def _add_body(parent: mujoco.MjsBody, tree: LinkageTree, linkage: Linkage, t: Tr
     body.add_joint(name=joint.name, type=kind, axis=axis,
                    armature=settings.armature + drive_armature(linkage, joint, settings),
                    stiffness=[stiffness, 0.0, 0.0], springref=springref,
-                   damping=[_viscous(linkage, joint), 0.0, 0.0])
+                   damping=[joint_damping(linkage, joint), 0.0, 0.0])
     return body
 
 
@@ -309,7 +311,7 @@ def _torsion(linkage: Linkage, joint: Joint) -> tuple[float, float]:
     return k, sum(s.stiffness * s.free_rotation for s in springs) / k
 
 
-def _viscous(linkage: Linkage, joint: Joint) -> float:
+def joint_damping(linkage: Linkage, joint: Joint) -> float:
     """Joint damping: the torsional springs' and the friction table's viscous terms."""
     damping = sum(s.damping for s in linkage.springs
                   if isinstance(s, TorsionSpring) and s.joint == joint.name)

@@ -44,6 +44,7 @@ from mechcheck.sim_models.mujoco.linkage_model import (
     body_name,
     build_spec,
     closure_sites,
+    joint_damping,
     origin_of,
     spanning_tree,
 )
@@ -136,6 +137,10 @@ class LinkageRig:
         self.extra = np.zeros((m.nbody, 6))
         self.sliding: dict[str, float] = {}
         self.viscous = True
+        #: Dampers on loop-closing joints (no MuJoCo joint to damp): couples −c·q̇ from
+        #: MuJoCo's own joint rates, applied with the loads.
+        self.closure_damping = {j.name: c for j in self.tree.closures
+                                if (c := joint_damping(linkage, j)) > 0.0}
 
     def _id(self, kind: mujoco.mjtObj, name: str) -> int:
         found = int(mujoco.mj_name2id(self.model, kind, name))
@@ -230,8 +235,20 @@ class LinkageRig:
                       np.zeros(self.model.nbody))
         if self.extra.any():
             self.data.xfrc_applied[:] += self.extra
+        if self.closure_damping and self.viscous:
+            self.apply_closure_damping()
         if self.carried.any():
             self.apply_carried()
+
+    def apply_closure_damping(self) -> None:
+        """The couple −c·q̇ of each damper on a loop-closing joint on its second link, and
+        its opposite on the first, from the current joint velocities."""
+        rates = self.joint_rates(self.data.qvel)
+        for name, c in self.closure_damping.items():
+            i, j = self.linkage.joint(name).links
+            for link, share in ((j, 1.0), (i, -1.0)):
+                if link != GROUND:
+                    self.data.xfrc_applied[self.body[link], 5] -= share * c * rates[name]
 
     def reset_carried(self) -> None:
         self.carried = np.zeros(self.nefc)

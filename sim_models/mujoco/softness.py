@@ -6,24 +6,35 @@ from __future__ import annotations
 import mujoco
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.sim_models.mujoco.linkage import driver_values, seed
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import STATIC, Settings
-from mechcheck.sim_models.mujoco.rig import Rig
-from mechcheck.sim_models.mujoco.settle import run_until_settled, seed_at
+from mechcheck.sim_models.mujoco.settle import run_until_settled
+from mechcheck.sim_models.presets import as_linkage, preset_values
 
 
 def forces_at_softness(case: Case, timeconst: float | None,
                        solimp0: float) -> tuple[dict[str, float], dict[str, float]]:
     """The forces of a static case read after one forward pass at the exact pose, and after
     settling, with ``solref`` time constant ``timeconst`` (None: the stiffest, 2·dt) and
-    ``solimp[0] = solimp0`` (``solimp[1]`` at least 0.95, the rest as the backend's)."""
+    ``solimp[0] = solimp0`` (``solimp[1]`` at least 0.95, the rest as the backend's); a
+    four-bar or slider-crank under its own quantity names."""
     settings = Settings(solref_timeconst=timeconst,
                         solimp=(solimp0, max(solimp0, 0.95), *STATIC.solimp[2:]))
-    rig = Rig(case, settings)
-    seed_at(rig, case.theta12)
+    linkage = case if case.mechanism == "linkage" else as_linkage(case)
+    qpos = LinkageRig(linkage, settings).joint_states(analytic_results(linkage).pose)[0][0]
+
+    def seeded() -> LinkageRig:
+        rig = LinkageRig(linkage, settings)
+        seed(rig, qpos, driver_values(linkage))
+        return rig
+
+    rig = seeded()
     mujoco.mj_forward(rig.model, rig.data)
     rig.apply_loads()  # loads are read by the next forward pass
     mujoco.mj_forward(rig.model, rig.data)
-    first = rig.read()
-    rig = Rig(case, settings)
-    seed_at(rig, case.theta12)
-    return first, run_until_settled(rig).values
+    first, settled = rig.read(), run_until_settled(seeded()).values
+    if case.mechanism == "linkage":
+        return first, settled
+    return preset_values(case, first), preset_values(case, settled)

@@ -15,38 +15,48 @@ Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
 ``sweep``, ``study`` (solver-setting study), ``settings``.
 """
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import is_driven
-from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, settle as settling, solve as solving
-from mechcheck.sim_models.pymunk.settings import (
-    LINKAGE_SETTLE,
-    LINKAGE_SOLVE,
-    SETTLE,
-    SOLVE,
-    SolverSettings,
-)
-from mechcheck.sim_models.pymunk.sweep import sweep
+from mechcheck.sim_models.presets import sweep_through_linkage, through_linkage
+from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, linkage_sweep
+from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
 
 
 def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
-    """The ``pymunk`` backend (:func:`mechcheck.sim_models.pymunk.settle.settle`; linkages:
-    :func:`mechcheck.sim_models.pymunk.linkage.settle`, moving ones and Coulomb friction
-    :func:`mechcheck.sim_models.pymunk.linkage_dynamics.drive_linkage`), with its own
-    settings by default."""
-    if case.mechanism == "linkage" and is_driven(case):
+    """The ``pymunk`` backend: a linkage held until settled
+    (:func:`mechcheck.sim_models.pymunk.linkage.settle`), or driven along its prescribed motion
+    when it moves or has Coulomb friction
+    (:func:`mechcheck.sim_models.pymunk.linkage_dynamics.drive_linkage`); a four-bar or
+    slider-crank as its linkage (:mod:`mechcheck.sim_models.presets`)."""
+    if case.mechanism != "linkage":
+        return through_linkage(case, lambda linkage: settle(linkage, settings), "pymunk")
+    if is_driven(case):
         return linkage_dynamics.drive_linkage(case, analytic_results(case))
-    if case.mechanism == "linkage":
-        return linkage.settle(case, settings or LINKAGE_SETTLE)
-    return settling.settle(case, settings or SETTLE)
+    return linkage.settle(case, settings or LINKAGE_SETTLE)
 
 
 def solve_at_pose(case: Case, settings: SolverSettings | None = None) -> Solution:
-    """The ``pymunk_solve`` backend (:func:`mechcheck.sim_models.pymunk.solve.solve_at_pose`;
-    linkages: :func:`mechcheck.sim_models.pymunk.linkage.solve_at_pose`)."""
-    if case.mechanism == "linkage":
-        return linkage.solve_at_pose(case, settings or LINKAGE_SOLVE)
-    return solving.solve_at_pose(case, settings or SOLVE)
+    """The ``pymunk_solve`` backend: pymunk's constraint solver at the analytic pose
+    (:func:`mechcheck.sim_models.pymunk.linkage.solve_at_pose`)."""
+    if case.mechanism != "linkage":
+        return through_linkage(case, lambda linkage: solve_at_pose(linkage, settings),
+                               "pymunk_solve")
+    return linkage.solve_at_pose(case, settings or LINKAGE_SOLVE)
+
+
+def sweep(case: Case, grid: ArrayLike, backend: str = "pymunk") -> list[Solution]:
+    """``pymunk`` or ``pymunk_solve`` over a sweep of a linkage's first driver (rad or m from
+    the drawn pose, :func:`mechcheck.sim_models.pymunk.linkage_sweep.sweep`), or of θ12
+    (rad) of a four-bar or slider-crank."""
+    if case.mechanism != "linkage":
+        return sweep_through_linkage(case, np.asarray(grid, dtype=float), backend,
+                                     lambda linkage, offsets: sweep(linkage, offsets, backend),
+                                     settle if backend == "pymunk" else solve_at_pose)
+    return linkage_sweep.sweep(case, grid, backend)

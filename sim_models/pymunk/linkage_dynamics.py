@@ -46,11 +46,12 @@ from mechcheck.sim_models.convergence import (
     LEAD_AGREEMENT_RTOL,
     Convergence,
     halve_timestep,
+    inertia_correction,
     lengthen_lead,
     massless_limit,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
-from mechcheck.sim_models.linkage_motion import Motion, driven_motion, lead_limit
+from mechcheck.sim_models.linkage_motion import Motion, at_rest_reason, driven_motion, lead_limit
 from mechcheck.sim_models.pymunk.dynamics import (
     DRIVEN,
     FRICTION_PASSES,
@@ -153,6 +154,8 @@ class DriveEnd:
     values: dict[str, float]
     q: Array
     rate_error: float
+    #: What the massless extrapolation removed from the base model's reading, N.
+    correction: float = 0.0
 
 
 @dataclass
@@ -172,9 +175,17 @@ class Twins:
     def reactions(self) -> dict[str, float]:
         """The last step's reactions, free of fictitious inertia (prismatic friction
         included)."""
+        return self.reading()[0]
+
+    def reading(self) -> tuple[dict[str, float], float]:
+        """:meth:`reactions`, and what the extrapolation removed from the base model's
+        (:func:`~mechcheck.sim_models.convergence.inertia_correction`)."""
         units = quantity_units(self.base.linkage)
         read = [with_sliding(m, reactions(m), self.friction) for m in self.models]
-        return read[0] if len(read) == 1 else massless_limit(read[0], read[1], units)
+        if len(read) == 1:
+            return read[0], 0.0
+        limit = massless_limit(read[0], read[1], units)
+        return limit, inertia_correction(read[0], limit, self.base.linkage.scale, units)
 
     def step(self, loads: JointLoads, dt: float) -> Values:
         """One step of every model under the friction ``loads``; the state it makes: the
@@ -232,8 +243,9 @@ def run_drive(twins: Twins, motion: Motion, steps: int, dt: float) -> DriveEnd:
     _, prescribed, _ = motion.at(np.array([0.5 * dt]))
     q = coordinates(base)
     pose = {k: float(v[0]) for k, v in pose_table(linkage, q[None, :]).items()}
-    return DriveEnd(pose | twins.reactions(), q,
-                    float(np.abs(driver_rates(base) - prescribed[0]).max(initial=0.0)))
+    reactions_now, correction = twins.reading()
+    return DriveEnd(pose | reactions_now, q,
+                    float(np.abs(driver_rates(base) - prescribed[0]).max(initial=0.0)), correction)
 
 
 def driver_rates(model: LinkageModel) -> Array:
@@ -282,6 +294,18 @@ def read_drive(case: Case, motion: Motion, steps: int, dt: float, iterations: in
         return DriveEnd(dict.fromkeys(units, math.nan), coordinates(twins.base), math.nan)
 
 
+def drive_at_timestep(case: Case, dt: float, lead_time: float) -> Solution:
+    """One driven run of ``lead_time`` seconds at the fixed time step ``dt``, with no lead-in
+    or time-step refinement: how the reading's error depends on the step (the rigid-joints
+    study). The reading is the run's, converged or not."""
+    start = time.perf_counter()
+    steps = max(1, round(lead_time / dt))
+    end = read_drive(case, driven_motion(case, QUASI_STATIC_OMEGA), steps, dt, DRIVEN.iterations)
+    return Solution(case.name, BACKEND, end.values, units=quantity_units(case.linkage),
+                    diagnostics={"method": "driven", "steps": steps, "timestep": dt,
+                                 "wall_time_s": time.perf_counter() - start})
+
+
 def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     """The ``pymunk`` backend for a moving linkage (method ``driven``); ``results`` is the
     analytic pose analysis of the instant (its condition number bounds the lead-in)."""
@@ -291,6 +315,10 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     if why is not None:
         return Solution(case.name, BACKEND, {}, status="not_applicable", units=units,
                         message=f"a {case.kind} linkage case: {why}")
+    at_rest = at_rest_reason(case)
+    if at_rest:
+        return Solution(case.name, BACKEND, {}, status="indeterminate", message=at_rest,
+                        diagnostics={"method": "driven"}, units=units)
     motion = driven_motion(case, QUASI_STATIC_OMEGA)
     runs = 2 if has_fictitious_inertia(case.linkage) else 1
     scale = case.linkage.scale
@@ -325,7 +353,8 @@ def driven_solution(case: Case, results: LinkageResults, out: Convergence, end: 
         float(pose_drifts(radius, q, results.pose.q[:1])[0]),
     ).as_dict(lead_disagreement=out.lead_disagreement, lead_steps=out.lead_steps,
               timestep=out.dt, timestep_disagreement=out.timestep_disagreement,
-              fictitious_runs=runs, iterations=iterations)
+              fictitious_runs=runs, iterations=iterations,
+              fictitious_inertia_correction=end.correction)
     pose = {k: v for k, v in out.values.items() if quantity_kind(k, units.get(k)) == "pose"}
     if not out.converged:
         return Solution(case.name, BACKEND, pose, status="not_settled", message=out.verdict(),

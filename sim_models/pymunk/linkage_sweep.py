@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, driver_values
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
 from mechcheck.sim_models.pymunk.linkage import (
     Outcome,
     free_start,
@@ -65,6 +66,10 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solutio
         raise ValueError(f"case {case.name!r}: a linkage sweep moves the first driver, and this "
                          "linkage has none")
     values = np.atleast_1d(np.asarray(first, dtype=float))
+    if backend == "pymunk" and is_driven(case):
+        from mechcheck.sim_models.pymunk.linkage_dynamics import drive_linkage
+
+        return driven_sweep(case, values, lambda at: drive_linkage(at, analytic_results(at)))
     refused = refusal(case, backend)
     if refused is not None:
         return [refused] * len(values)

@@ -1,0 +1,162 @@
+"""The four-bar and the slider-crank in the simulators: each is built, held, driven and swept
+as its linkage (:func:`mechcheck.analytic.presets.linkage_of`, LINKAGES.md "The four-bar and
+slider-crank as linkages"), through the same builders as any linkage, and its numbers are
+renamed back to the contract's names (CONVENTIONS.md: ``F12`` … ``F14``, ``T12`` or ``T14``,
+``M14``, ``theta13``, ``theta14``, ``s14``).
+
+There is no four-bar or slider-crank model of its own in either simulator: what a preset
+adds is only this translation, in both directions.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.forces import solve_poses, verdict_at
+from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.linkage_forces import pose_quantities
+from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.presets import link_name, linkage_of, names_of
+from mechcheck.analytic.solution import Solution
+
+
+def as_linkage(case: Case) -> Case:
+    """The preset ``case`` as a ``mechanism = "linkage"`` case drawn at its pose."""
+    return Case(name=case.name, geometry=linkage_of(case), theta12=0.0,
+                tolerance=case.tolerance, source=case.source)
+
+
+def wrapped(angle: float) -> float:
+    """An angle in (−π, π], as the analytic preset reports θ13 and θ14."""
+    return math.atan2(math.sin(angle), math.cos(angle))
+
+
+def preset_values(case: Case, values: Mapping[str, float]) -> dict[str, float]:
+    """A linkage solution's values under the preset's names, with the pose as θ13, θ14
+    (four-bar) or s14 (slider-crank): the pose ``case`` is drawn at, moved by the links'
+    rotations φ and the slide's displacement q that the simulator reached."""
+    pose = pose_of(case)
+    out = {legacy: float(values[name]) for legacy, name in names_of(case).items()
+           if name in values}
+    coupler = f"phi_{link_name(case, 3)}"
+    if coupler in values:
+        out["theta13"] = wrapped(float(pose.links[3].angle[0]) + float(values[coupler]))
+    rocker = f"phi_{link_name(case, 4)}"
+    if case.mechanism == "four_bar" and rocker in values:
+        out["theta14"] = wrapped(float(pose.links[4].angle[0]) + float(values[rocker]))
+    if case.mechanism == "slider_crank" and "q_slide" in values:
+        drawn = float(np.dot(pose.joints["B"][0], (math.cos(case.ground_angle),
+                                                    math.sin(case.ground_angle))))
+        out["s14"] = drawn + float(values["q_slide"])
+    return out
+
+
+def preset_solution(case: Case, solution: Solution, name: str | None = None) -> Solution:
+    """A linkage solution of the preset ``case`` (the linkage drawn at its pose) under the
+    preset's names, as case ``name`` (default: the case's)."""
+    return dataclasses.replace(solution, case=name or case.name,
+                               values=preset_values(case, solution.values))
+
+
+def through_linkage(case: Case, solve: Callable[[Case], Solution], backend: str = "") -> Solution:
+    """``solve`` (a linkage backend) run on the preset ``case``, read under its names; the
+    preset's own verdict instead where it has one (:func:`verdicts`: ``backend`` names it)."""
+    verdict = verdicts(case, np.array([case.theta12]), backend)[0] if backend else None
+    return verdict or preset_solution(case, solve(as_linkage(case)))
+
+
+def driver_offsets(case: Case, theta12: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The linkage driver's coordinate (rad from the drawn pose) at each θ12 of a preset
+    sweep: θ12 itself for a drive at A0, the rocker's θ14 for a drive at B0."""
+    grid = np.asarray(theta12, dtype=float)
+    if case.drive_link == 2:
+        return grid - case.theta12
+    rocker = pose_of(case, grid).links[4].angle - pose_of(case).links[4].angle[0]
+    return np.arctan2(np.sin(rocker), np.cos(rocker))
+
+
+#: rad (or m per unit of the mechanism's size): the linkage's continued pose and the preset's
+#: closed form are the same branch when they agree this closely (both are exact: they agree
+#: to rounding on the same branch, and differ by a finite angle on another).
+SAME_BRANCH = 1e-6
+
+
+def follows_branch(case: Case, theta12: np.ndarray) -> int:
+    """How many poses of ``theta12`` (the first is ``case``'s own) the linkage drawn at the
+    first one reaches on the preset's branch, by continuation from its drawn pose.
+
+    The closed form keeps its branch by definition (``open``/``crossed``, ``right``/``left``),
+    also through a change point, where the two branches meet; continuation goes straight on
+    and ends on the other one, as it does after poses that do not assemble."""
+    linkage = linkage_of(case)
+    pose = solve_pose(linkage, driver_offsets(case, theta12)[:, None])
+    values = pose_quantities(pose)
+    closed = pose_of(case, theta12)
+    phi = {3: link_name(case, 3), 4: link_name(case, 4)}
+    gap = np.zeros(theta12.size)
+    for link in (3, 4) if case.mechanism == "four_bar" else (3,):
+        turned = closed.links[link].angle - closed.links[link].angle[0]
+        gap = np.maximum(gap, np.abs(np.sin(0.5 * (turned - values[f"phi_{phi[link]}"]))))
+    if case.mechanism == "slider_crank":
+        u = np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
+        s14 = closed.joints["B"] @ u
+        gap = np.maximum(gap, np.abs(s14 - s14[0] - values["q_slide"]) / linkage.scale)
+    off = np.flatnonzero(~(gap <= SAME_BRANCH))
+    return int(off[0]) if off.size else theta12.size
+
+
+def verdicts(case: Case, theta12: np.ndarray, backend: str) -> list[Solution | None]:
+    """The preset's own verdict at each pose (does not assemble, singular, friction
+    reversing or self-locking: :func:`mechcheck.analytic.forces.verdict_at`) as ``backend``'s
+    Solution, None where it has forces. A linkage drawn at such a pose is degenerate (at a
+    change point its pins are collinear and its constraints redundant), so none is built."""
+    results = solve_poses(case, theta12)
+    out: list[Solution | None] = []
+    for i, t in enumerate(theta12):
+        verdict = verdict_at(case, results, i)
+        out.append(None if verdict is None else Solution(
+            case.name, backend, {}, status=verdict.status, message=verdict.message,
+            diagnostics={"condition_number": verdict.condition, "theta12": float(t)}))
+    return out
+
+
+def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, backend: str,
+                          sweep: Callable[[Case, np.ndarray], list[Solution]],
+                          solve: Callable[[Case], Solution]) -> list[Solution]:
+    """A preset θ12 sweep through a linkage backend, each pose read under the preset's
+    names.
+
+    Poses with a verdict of their own get it (:func:`verdicts`). Held statics run as the
+    linkage's driver sweep (``sweep``, continuation from pose to pose), in stretches on the
+    preset's branch (:func:`follows_branch`) between verdicts, each drawn at its first pose.
+    A moving or friction case is driven pose by pose (``solve``): with a drive on the
+    rocker, each pose has its own rocker rates."""
+    grid = np.asarray(theta12, dtype=float)
+    poses = [dataclasses.replace(case, theta12=float(t)) for t in grid]
+    given = verdicts(case, grid, backend)
+    out: list[Solution] = []
+    i = 0
+    while i < grid.size:
+        verdict = given[i]
+        if verdict is not None or through_drive(case):
+            out.append(verdict or through_linkage(poses[i], solve))
+            i += 1
+            continue
+        stop = i + 1
+        while stop < grid.size and given[stop] is None:
+            stop += 1
+        stop = i + max(1, follows_branch(poses[i], grid[i:stop]))
+        results = sweep(as_linkage(poses[i]), driver_offsets(poses[i], grid[i:stop]))
+        out += [preset_solution(poses[i], s, case.name) for s in results]
+        i = stop
+    return out
+
+
+def through_drive(case: Case) -> bool:
+    """The simulators drive the case (it moves, or has Coulomb friction)."""
+    return not case.motion.is_static or case.has_coulomb_friction
