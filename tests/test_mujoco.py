@@ -21,13 +21,15 @@ import pytest
 
 import mechcheck
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
-from mechcheck.analytic.equilibrium import condition
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.presets import linkage_of
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.convergence import LEAD_CONDITION_GROWTH
+from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
 from mechcheck.sim_models.mujoco.backend import settle, solve_at_pose, sweep
-from mechcheck.sim_models.mujoco.dynamics import DYNAMIC, Drive, lead_in_condition
-from mechcheck.sim_models.mujoco.model import model_xml
+from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
+from mechcheck.sim_models.mujoco.linkage_model import model_xml
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.settle import (
     FLOOR_WINDOW,
     REFINE_RTOL,
@@ -37,6 +39,7 @@ from mechcheck.sim_models.mujoco.settle import (
     refinement_left,
     remaining_change,
 )
+from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 
@@ -158,16 +161,29 @@ def test_exam_q3_rocker_drive_next_to_a_dead_point() -> None:
 
 
 def test_lead_in_stops_short_of_a_rocker_dead_point() -> None:
-    """Exam Q3's rocker dead point (θ12 ≈ 36.7°) lies in a 6400-step lead-in (the crank reverses
-    and comes back through it), not in the 1600-step one the run uses: the guard sees it."""
+    """Exam Q3 runs as its linkage, driven at B0 with the rocker's rates at the instant,
+    θ14 = θ14* + v·t + a·t²/2. Back in time the rocker turns towards its upper extreme (a
+    dead point of the rocker drive), past which the linkage does not assemble: the guard
+    refuses a lead-in that starts beyond it and passes the one the run used."""
     case = builtin("seed-exam-Q3")
-    instant = float(condition(case, pose_of(case))[0])
-    long = Drive(case.theta12, case.motion.omega, case.motion.alpha, 6400, DYNAMIC.timestep)
-    worst, where = lead_in_condition(case, long)
-    assert worst > LEAD_CONDITION_GROWTH * instant
-    assert 35.0 < np.degrees(where) < 38.5
-    used = Drive(case.theta12, case.motion.omega, case.motion.alpha, 1600, DYNAMIC.timestep)
-    assert lead_in_condition(case, used)[0] <= LEAD_CONDITION_GROWTH * instant
+    linkage = as_linkage(case)
+    driver = linkage.linkage.drivers[0]
+    # By hand, from the closed-form kinematics: the rocker's range about θ14* on a 0.005°
+    # grid of the crank, and when the prescribed rocker motion reaches its top (t < 0).
+    grid = case.theta12 + np.radians(np.linspace(-180.0, 180.0, 72001))
+    turned = pose_of(case, grid).links[4].angle - pose_of(case).links[4].angle[0]
+    top = float(np.max(np.angle(np.exp(1j * turned))))
+    v, a = driver.velocity, driver.acceleration
+    reached = (v - math.sqrt(v * v + 2.0 * a * top)) / a
+    assert -0.25 < reached < -0.15
+    limit = lead_limit(linkage, driven_motion(linkage, 0.0),
+                       float(analytic_results(linkage).condition[0]))
+    beyond = math.ceil(1.2 * -reached / DYNAMIC.timestep)
+    assert "does not assemble" in limit(beyond, DYNAMIC.timestep)
+    sim = settle(case)
+    used = int(sim.diagnostics["lead_steps"]) * float(sim.diagnostics["timestep"])
+    assert used < -reached and not limit(int(sim.diagnostics["lead_steps"]),
+                                         float(sim.diagnostics["timestep"]))
 
 
 def test_stop_rule_estimates_what_is_still_to_come() -> None:
@@ -316,25 +332,26 @@ def test_unsettled_run_reports_no_forces(monkeypatch: pytest.MonkeyPatch) -> Non
     # The package exports the function ``settle``, which hides the module's name.
     settle_module = importlib.import_module("mechcheck.sim_models.mujoco.settle")
     monkeypatch.setattr(settle_module, "MAX_STEPS", 3)
-    sim = settle_module.settle_static(fourbar_e1())
+    sim = settle(fourbar_e1())
     assert sim.status == "not_settled"
     assert not any(q.startswith(("F", "T")) for q in sim.values)
 
 
 @pytest.mark.parametrize("name", GOLDEN_CASES)
 def test_golden_xml_is_reproduced(name: str) -> None:
-    """The committed MJCF of each seed case is exactly what the builder produces today."""
-    assert model_xml(builtin(name)) == (GOLDEN / f"{name}.xml").read_text()
+    """The committed MJCF of each seed case, built as its linkage, is exactly what the builder
+    produces today."""
+    assert model_xml(name, linkage_of(builtin(name))) == (GOLDEN / f"{name}.xml").read_text()
 
 
 def test_model_is_planar_fourbar() -> None:
-    """The four-bar model has three z-hinges and one loop connect, and no contacts."""
-    from mechcheck.sim_models.mujoco.model import compile_model
-
-    model, layout = compile_model(fourbar_e1())
-    assert model.nv == 3 and model.neq == 2
+    """The four-bar, built as its linkage, has three z-hinges, one loop connect and the
+    crank's drive equality, and no contacts."""
+    rig = LinkageRig(as_linkage(fourbar_e1()))
+    model = rig.model
+    assert model.nv == 3 and model.neq == 2 and len(rig.loop_eq) == 1
     assert np.allclose(model.jnt_axis, [0.0, 0.0, 1.0])
-    assert layout.drive_joint == "A0"
+    assert list(rig.drive_eq) == ["A0"]
 
 
 def test_geometry_types_unchanged() -> None:

@@ -6,11 +6,13 @@ import pymunk
 import pytest
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sim_models.pymunk import forces
-from mechcheck.sim_models.pymunk.loads import apply_loads
-from mechcheck.sim_models.pymunk.model import build_model
-from mechcheck.sim_models.pymunk.readout import reactions
-from mechcheck.sim_models.pymunk.settings import SETTLE
+from mechcheck.sim_models.pymunk.linkage import reactions
+from mechcheck.sim_models.pymunk.linkage_model import LinkageModel, apply_loads, build_linkage_model
+from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, SolverSettings
 
 from .builtin import builtin
 
@@ -29,6 +31,12 @@ def e2() -> Case:
     return builtin("seed-E2-friction")
 
 
+def built(case: Case, settings: SolverSettings = LINKAGE_SETTLE) -> LinkageModel:
+    """The pymunk model of a four-bar or slider-crank (as its linkage) at its analytic pose."""
+    linkage = as_linkage(case)
+    return build_linkage_model(linkage, settings, analytic_results(linkage).pose.q[0])
+
+
 def test_layout_check_passes_on_this_build() -> None:
     """The private offsets agree with pymunk's public fields and impulse magnitudes."""
     forces.check_layout()
@@ -43,9 +51,9 @@ def test_layout_check_fails_loudly_on_a_wrong_offset(monkeypatch: pytest.MonkeyP
 
 def test_read_magnitudes_equal_public_impulse() -> None:
     """Every pivot's read vector has the length pymunk itself reports as its impulse."""
-    model = build_model(e1(), SETTLE)
+    model = built(e1())
     apply_loads(model)
-    model.space.step(SETTLE.dt)
+    model.space.step(LINKAGE_SETTLE.dt)
     for pin in model.pins.values():
         jx, jy = forces.accumulated_impulse(pin)  # type: ignore[misc]
         assert abs(complex(jx, jy)) == pytest.approx(pin.impulse, rel=1e-12)
@@ -60,18 +68,22 @@ def test_read_forces_balance_each_body_momentum(make: object) -> None:
     still accelerate (the first, unconverged step).
     """
     case = make()  # type: ignore[operator]
-    model = build_model(case, SETTLE.with_(damping=1.0))
+    settings = LINKAGE_SETTLE.with_(damping=1.0)
+    model = built(case, settings)
     apply_loads(model)
     loads = {k: (b.force.x, b.force.y) for k, b in model.bodies.items()}
-    model.space.step(SETTLE.dt)
+    model.space.step(settings.dt)
     v = reactions(model)
-    on = {2: [v["F12_x"] - v["F23_x"], v["F12_y"] - v["F23_y"]],
-          3: [v["F23_x"] - v["F34_x"], v["F23_y"] - v["F34_y"]],
-          4: [v["F34_x"] + v["F14_x"], v["F34_y"] + v["F14_y"]]}
+    on = {link: [0.0, 0.0] for link in model.bodies}
+    for joint in model.linkage.joints:  # F_j acts on links[1], its opposite on links[0]
+        for link, sign in zip(joint.links, (-1.0, 1.0), strict=True):
+            if link != GROUND:
+                on[link][0] += sign * v[f"F_{joint.name}_x"]
+                on[link][1] += sign * v[f"F_{joint.name}_y"]
+    scale = max(abs(x) for x in v.values())
     for link, body in model.bodies.items():
-        inertial = (body.mass * body.velocity.x / SETTLE.dt, body.mass * body.velocity.y / SETTLE.dt)
+        inertial = (body.mass * body.velocity.x / settings.dt, body.mass * body.velocity.y / settings.dt)
         total = (loads[link][0] + on[link][0], loads[link][1] + on[link][1])
-        scale = max(abs(x) for x in v.values())
         assert inertial == pytest.approx(total, rel=BALANCE_RTOL, abs=BALANCE_RTOL * scale)
 
 

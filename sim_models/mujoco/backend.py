@@ -1,13 +1,12 @@
-"""MuJoCo backends (issue 3): the mechanism held or driven in MuJoCo, forces
-read from MuJoCo's own constraint state.
+"""MuJoCo backends, on any linkage (:mod:`.linkage`); a four-bar or slider-crank runs as its
+linkage (:mod:`mechcheck.sim_models.presets`). Forces are read from MuJoCo's own constraint
+state.
 
-- :func:`settle` — backend ``mujoco``: statics by settling with the crank
-  locked; moving and friction cases by driving the input (``driven``).
-- :func:`solve_at_pose` — backend ``mujoco_solve``: exact constraint forces at
-  the analytic pose from MuJoCo's constraint Jacobian.
-- :func:`sweep` — either backend over an array of θ12.
-
-A ``mechanism = "linkage"`` case goes to :mod:`.linkage` (any planar linkage, issue 12).
+- :func:`settle` — backend ``mujoco``: statics by settling with the drivers held; moving
+  and Coulomb-friction cases driven along their motion (:mod:`.linkage_dynamics`).
+- :func:`solve_at_pose` — backend ``mujoco_solve``: exact constraint forces at the analytic
+  pose from MuJoCo's constraint Jacobian (:mod:`.solve`).
+- :func:`sweep` — either backend over the first driver (or θ12 of a preset).
 """
 
 from __future__ import annotations

@@ -166,7 +166,7 @@ def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
 
     With Coulomb friction (``senses``: each joint's sense of motion) the friction loads
     come from the reactions and the reactions from the loads, repeated until they agree
-    to :data:`.solve.FRICTION_RTOL` (as the four-bar's :func:`.solve.solve_with_friction`).
+    to :data:`.solve.FRICTION_RTOL`.
     """
     qpos, qvel, qacc = state
     clear_friction(rig)

@@ -1,6 +1,6 @@
-"""Driven linkages in MuJoCo (issue 12): every driver follows its prescribed motion by
-forward simulation, and the forces are read at the instant, as the four-bar's driven runs
-(:mod:`.dynamics`, whose convergence checks this module reuses).
+"""Driven linkages in MuJoCo (the four-bar and slider-crank among them, as their linkage):
+every driver follows its prescribed motion by forward simulation, and the forces are read at
+the instant.
 
 The model (:func:`.linkage_model.build_spec` with a clock) has a heavy clock hinge turning
 at 1 rad/s, so its angle is the time t, 0 at the instant read; each driver's joint
@@ -22,9 +22,17 @@ Coulomb friction (:mod:`.linkage_friction`) is applied every step from the curre
 massless-limit reactions, on both models alike (:func:`read_drive`), with the senses of
 the simulator's own joint velocities; viscous friction is MuJoCo's joint damping.
 A static case with Coulomb friction is a quasi-static motion: the heavy settling
-masses driven at :data:`.dynamics.QUASI_STATIC_SPEED` (rad/s or m/s) in each driver's
+masses driven at :data:`QUASI_STATIC_SPEED` (rad/s or m/s) in each driver's
 ``sense``, without dampers (the analytic motion has no speed), extrapolated to no
 fictitious inertia like any other.
+
+Why the time step must be refined, not fixed: a soft constraint holds its force with a
+violation ∝ R·f·(2·dt)² (R grows as the links touching it get lighter), and MuJoCo leaves
+out the constraints' J̇·v, which the same stiffness makes up with a violation ∝ dt². The
+pose error this makes is magnified near a dead point by the inverse transmission ratio
+(the four-bar of exam Q3, driven at its rocker: the crank follows at 16 times the rocker's
+angle; 3.7e-3 of the forces at dt = 2.5e-5 s with massless links at 1e-5 of the real
+masses, 1.7e-5 at 1e-2, against ~1e-5 on ordinary cases, measured).
 """
 
 from __future__ import annotations
@@ -52,16 +60,24 @@ from mechcheck.sim_models.convergence import (
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import link_extent, real_inertial
 from mechcheck.sim_models.linkage_motion import Motion, at_rest_reason, driven_motion, lead_limit
-from mechcheck.sim_models.mujoco.dynamics import (
-    DYNAMIC,
-    FINAL_FRICTION_PASSES,
-    QUASI_STATIC,
-    QUASI_STATIC_SPEED,
-)
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
 from mechcheck.sim_models.mujoco.linkage_model import INERTIA_FLOOR_FRACTION, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import Settings
+
+#: Dynamics: first time step 2.5e-5 s (refined by halving). With dt = 1e-3 the
+#: clock-driven torque was 2–4e-2 off (SIMULATORS.md): the soft constraint's time constant
+#: 2·dt must be short against the motion. The driven joint gets an armature
+#: (:data:`.model.DRIVE_ARMATURE_INERTIA`).
+DYNAMIC = Settings(timestep=2.5e-5, masses="real", clock=True, drive_armature=True)
+#: Quasi-static friction runs use the heavy settling masses (:data:`.model.SETTLE_MASS`).
+QUASI_STATIC = Settings(timestep=1e-3, masses="settle", clock=True)
+#: Driver speed of a quasi-static run, rad/s or m/s: the inertia forces of the 1 t links,
+#: m·ω²·L ≈ 1e-4 N, stay ~1e-6 of the loads.
+QUASI_STATIC_SPEED = 1e-3
+#: Fixed-point passes at the final instant so that the friction loads match the reactions
+#: they were computed from.
+FINAL_FRICTION_PASSES = 5
 
 
 def turns(case: Case, link: str) -> bool:
@@ -167,7 +183,7 @@ def read_drive(rigs: LinkageRigs, motion: Motion, steps: int, dt: float,
                friction: bool) -> dict[str, float]:
     """Simulate to the instant and return the values there, free of fictitious inertia:
     the models run in step and share the friction of the extrapolated reactions, so they
-    differ by their inertia alone (:func:`.dynamics.read_drive`)."""
+    differ by their inertia alone."""
     for rig in rigs.members:
         start_run(rig, motion, steps, dt)
     for _ in range(steps):

@@ -1,5 +1,4 @@
-"""Coulomb friction of a linkage emulated from MuJoCo's current reactions (as the four-bar's,
-:mod:`.friction`).
+"""Coulomb friction of a linkage emulated from MuJoCo's current reactions.
 
 MuJoCo's ``frictionloss`` is a constant limit, not μ·|F|, and a loop-closing pin has no
 joint at all (it is a ``connect``). So each Coulomb term of LINKAGES.md is applied as a
@@ -23,9 +22,13 @@ import math
 import numpy as np
 
 from mechcheck.analytic.values import GROUND
-from mechcheck.sim_models.mujoco.friction import magnitude
 from mechcheck.sim_models.mujoco.linkage_rig import Array, LinkageRig
 from mechcheck.sim_models.mujoco.rig import cross_z
+
+
+def magnitude(values: dict[str, float], name: str) -> float:
+    """|F| of the reaction ``name`` (``F_<joint>``) in a reading."""
+    return math.hypot(values[f"{name}_x"], values[f"{name}_y"])
 
 
 def friction_loads(rig: LinkageRig, values: dict[str, float],

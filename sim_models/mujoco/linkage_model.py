@@ -245,7 +245,7 @@ CLOCK = "clock"
 def _add_clock(spec: mujoco.MjSpec) -> None:
     """A separate grounded body with the clock hinge: an armature of
     :data:`~.model.CLOCK_ARMATURE` makes the drivers' reactions change its unit speed by
-    ~1e-8 rad/s² (as the four-bar's clock, :mod:`.dynamics`)."""
+    ~1e-8 rad/s²."""
     body = spec.worldbody.add_body(name=CLOCK, mass=1.0, inertia=[1.0, 1.0, 1.0],
                                    explicitinertial=True)
     body.add_joint(name=CLOCK, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 0.0, 1.0],

@@ -1,4 +1,8 @@
-"""Pure builders: :class:`~mechcheck.analytic.case.Case` → ``MjSpec`` / ``MjModel`` / XML.
+"""The model settings every MuJoCo model is built with (:class:`Settings`, :data:`STATIC`,
+:data:`EXACT`, the mass and armature constants), and the four-bar's and slider-crank's own
+builder (:func:`build_spec`), which now serves only the turning experiments
+(:mod:`.turning`): every backend builds its model with :mod:`.linkage_model`, the four-bar
+and slider-crank as their linkage.
 
 The model is planar by construction: every hinge turns about z and the slider
 slides along the slide axis u, so nothing can leave the plane. Loop closure at
@@ -12,7 +16,7 @@ frame at ``qpos = 0``, so the joint coordinates are
 - crank hinge ``A0``: θ12 (global);
 - coupler hinge ``A`` (child of the crank): θ13 − θ12;
 - rocker hinge ``B0``: θ14 (global); or slider ``slide``: s14 along u;
-- optional ``clock`` hinge: φ = θ12 − θ12* (time-like, see :mod:`.dynamics`).
+- optional ``clock`` hinge: φ = θ12 − θ12* (time-like).
 
 Gravity is switched off in MuJoCo: weights are applied as loads on the real
 masses only (:mod:`.loads`), which is what lets statics use fictitious masses.
@@ -21,7 +25,7 @@ masses only (:mod:`.loads`), which is what lets statics use fictitious masses.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import mujoco
 
@@ -37,7 +41,7 @@ SETTLE_MASS = 1000.0
 
 #: Mass given to a massless link in a dynamic run, as a fraction of the
 #: heaviest real mass (or of 1 kg). MuJoCo refuses massless moving bodies. The
-#: inertia forces this adds are removed by extrapolation (:mod:`.dynamics`), so
+#: inertia forces this adds are removed by extrapolation (:mod:`.linkage_dynamics`), so
 #: the fraction is chosen for the simulation, not for its bias: a soft
 #: constraint's violation grows as the links it holds get lighter (its
 #: regulariser R ∝ inverse inertia), and with 1e-5 exam Q3 needed dt = 1.6e-6 s
@@ -98,7 +102,7 @@ class Settings:
     multiplies every inertia the Case does not have — the settle mass, a
     massless link's mass and inertia, a point mass's floor inertia — so that a
     driven run can be repeated with twice of it and extrapolated to none
-    (:mod:`.dynamics`).
+    (:mod:`.linkage_dynamics`).
     """
 
     timestep: float = 1e-3
@@ -132,24 +136,6 @@ STATIC = Settings()
 #: joint keeps it invertible, and the solve subtracts armature·qacc exactly.
 EXACT = Settings(masses="real", fictitious_fraction=1e-6, armature=1.0)
 #: MuJoCo's default softness, for the stiffness study only.
-MUJOCO_DEFAULT_SOFTNESS = Settings(solref_timeconst=DEFAULT_SOLREF[0], solimp=DEFAULT_SOLIMP)
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where each link, joint and equality ended up in the compiled model."""
-
-    body: dict[int, int]              # link number -> body id
-    qpos: dict[str, int]              # joint name -> qpos address (= dof address here)
-    loop_eq: int                      # connect at B (first site on link 4)
-    drive_eq: int                     # joint lock / clock coupling of the driven link
-    drive_joint: str                  # "A0" or "B0"
-    clock: bool = False
-    names: dict[str, str] = field(default_factory=dict)
-
-    @property
-    def drive_dof(self) -> int:
-        return self.qpos[self.drive_joint]
 
 
 def link_length(case: Case, link: int) -> float:
@@ -289,13 +275,6 @@ def add_slider(world: mujoco.MjsBody, case: Case, g: SliderCrankGeometry,
     slider.add_site(name="B_on_4", pos=[0.0, 0.0, 0.0])
 
 
-def compile_model(case: Case, settings: Settings = STATIC) -> tuple[mujoco.MjModel, Layout]:
-    """Compile ``case`` and locate its parts."""
-    model = build_spec(case, settings).compile()
-    place_frames_exactly(model)
-    return model, layout_of(case, model, settings)
-
-
 def place_frames_exactly(model: mujoco.MjModel) -> None:
     """Switch off MuJoCo's same-frame shortcut in a compiled model.
 
@@ -307,44 +286,3 @@ def place_frames_exactly(model: mujoco.MjModel) -> None:
     """
     model.site_sameframe[:] = 0
     model.body_sameframe[:] = 0
-
-
-def zero_fictitious_masses(case: Case, model: mujoco.MjModel, layout: Layout) -> None:
-    """Remove the fictitious mass of massless links from a compiled model.
-
-    MuJoCo's compiler refuses massless moving bodies, but the exact solve only
-    multiplies by M (never factorises it for the answer), so a zero mass there
-    is harmless and makes the inertia terms exactly the Case's.
-    """
-    for link, body in layout.body.items():
-        if case.mass_of(link) is None:
-            model.body_mass[body] = 0.0
-            model.body_inertia[body] = 0.0
-    # Real point masses were given a floor inertia to compile; restore the real one.
-    for m in case.masses:
-        model.body_inertia[layout.body[m.link]] = m.inertia
-    # MuJoCo caches constant inertia entries of simple bodies at compile time.
-    mujoco.mj_setConst(model, mujoco.MjData(model))
-    place_frames_exactly(model)  # mj_setConst sets the same-frame flags again
-
-
-def layout_of(case: Case, model: mujoco.MjModel, settings: Settings) -> Layout:
-    def body(name: str) -> int:
-        return int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name))
-
-    joints = ["A0", "A", "B0" if case.mechanism == "four_bar" else "slide"]
-    if settings.clock:
-        joints.append("clock")
-    qpos = {j: int(model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j)])
-            for j in joints}
-    eq = {n: int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_EQUALITY, n))
-          for n in ("loop_B", "drive")}
-    return Layout(body={k: body(f"link{k}") for k in (2, 3, 4)}, qpos=qpos,
-                  loop_eq=eq["loop_B"], drive_eq=eq["drive"],
-                  drive_joint="A0" if case.drive_link == 2 else "B0", clock=settings.clock)
-
-
-def model_xml(case: Case, settings: Settings = STATIC) -> str:
-    """The model of ``case`` as MJCF text (committed as golden files for review)."""
-    return str(build_spec(case, settings).to_xml())
-

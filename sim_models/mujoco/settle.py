@@ -1,10 +1,9 @@
 """The ``mujoco`` backend for statics: hold the mechanism and let it settle.
 
-The crank (or, for ``drive_link = 4``, the rocker) is held by a joint
-equality at the pose's angle; the loads are re-applied at the current pose
+Each driver is held by a joint equality at its value; the loads are re-applied at the current pose
 every step; the model is stepped until it has SETTLED — its joints at rest and
 its forces no longer changing — never for a fixed number of steps.
-Settling damps itself: with the driven link locked the mechanism has no
+Settling damps itself: with the drivers held the mechanism has no
 freedom left, and the only motion is the relaxation of the soft constraints —
 critically damped (dampratio 1) at ordinary poses, a lightly damped slow mode
 next to a change point (:func:`run_until_settled`, stop rule
@@ -27,7 +26,6 @@ number is still MuJoCo's: carried forces are its own earlier constraint forces.
 from __future__ import annotations
 
 import itertools
-import time
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
@@ -40,7 +38,6 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
 from mechcheck.sim_models.convergence import disagreement
 from mechcheck.sim_models.diagnostics import RunDiagnostics
-from mechcheck.sim_models.mujoco.rig import Rig
 
 #: Settled when the forces' remaining change, estimated from their observed
 #: geometric decay, is below this fraction of the largest force (torques divided
@@ -123,8 +120,7 @@ MAX_PASSES = 16
 
 
 class SettlingRig(Protocol):
-    """What settling needs of a model: :class:`~.rig.Rig` (four-bar, slider-crank) and
-    :class:`~.linkage_rig.LinkageRig` (any linkage)."""
+    """What settling needs of a model (:class:`~.linkage_rig.LinkageRig`)."""
 
     model: mujoco.MjModel
     data: mujoco.MjData
@@ -245,17 +241,6 @@ def reseed(rig: SettlingRig, qpos: np.ndarray) -> None:
     rig.set_state(qpos, np.zeros_like(qpos))
 
 
-def seed_at(rig: Rig, theta12: float) -> np.ndarray:
-    """Start at rest in the analytic pose, with the driven link locked there;
-    returns that pose's joint coordinates."""
-    q, _, _ = rig.qpos_at(theta12, 0.0, 0.0)
-    mujoco.mj_resetData(rig.model, rig.data)
-    rig.set_state(q, np.zeros(3))
-    rig.set_lock(float(q[0] if rig.case.drive_link == 2 else q[2]))
-    rig.reset_carried()
-    return q
-
-
 def settle_refined(rig: SettlingRig, qpos: np.ndarray,
                    restart: Callable[[], None] | None = None,
                    max_steps: int | None = None) -> Settled:
@@ -326,12 +311,3 @@ def settled_solution(rig: SettlingRig, qpos: np.ndarray, result: Settled, elapse
                         diagnostics=diagnostics, units=units)
     return Solution(case.name, "mujoco", result.values, diagnostics=diagnostics,
                     units=rig.units or {})
-
-
-def settle_static(case: Case, rig: Rig | None = None) -> Solution:
-    """Static equilibrium of ``case`` by settling (no motion, no friction)."""
-    start = time.perf_counter()
-    rig = rig or Rig(case)
-    qpos = seed_at(rig, case.theta12)
-    result = settle_refined(rig, qpos)
-    return settled_solution(rig, qpos, result, time.perf_counter() - start)

@@ -1,18 +1,16 @@
-"""The pymunk (Munk2D / Chipmunk 7) backends.
+"""The pymunk (Munk2D / Chipmunk 7) backends, on any linkage; a four-bar or slider-crank runs
+as its linkage (:mod:`mechcheck.sim_models.presets`).
 
-- :func:`settle` — backend ``pymunk``: static equilibrium held by simulation
-  until settled; dynamic and friction cases are driven through θ12.
-- :func:`solve_at_pose` — backend ``pymunk_solve``: pymunk's constraint
-  solver at the fixed analytic pose (statics).
-- :func:`sweep` — a θ12 sweep with continuation in one Space.
+- :func:`settle` — backend ``pymunk``: statics held by simulation until settled
+  (:mod:`.linkage`); moving and Coulomb-friction cases driven along their motion
+  (:mod:`.linkage_dynamics`).
+- :func:`solve_at_pose` — backend ``pymunk_solve``: pymunk's constraint solver at the
+  fixed analytic pose (statics).
+- :func:`sweep` — either backend over the first driver (:mod:`.linkage_sweep`).
 
-Linkage cases (``mechanism = "linkage"``) go to :mod:`~mechcheck.sim_models.pymunk.linkage`,
-moving ones to :mod:`~mechcheck.sim_models.pymunk.linkage_dynamics` (model:
-:mod:`~mechcheck.sim_models.pymunk.linkage_model`).
-
-Modules: ``model`` (Case → Space), ``forces`` (reading force vectors),
-``loads``, ``readout``, ``settle``, ``solve``, ``dynamics``, ``friction``,
-``sweep``, ``study`` (solver-setting study), ``settings``.
+Modules: ``linkage_model`` (linkage → Space), ``forces`` (reading force vectors),
+``loads``, ``readout``, ``settle`` (the stop rule), ``linkage_friction``, ``settings``;
+``model`` and ``turning``: the four-bar's own model for the turning experiments.
 """
 
 import numpy as np

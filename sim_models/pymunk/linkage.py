@@ -54,7 +54,6 @@ from mechcheck.sim_models.pymunk.linkage_model import (
 from mechcheck.sim_models.pymunk.readout import Values
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
-from mechcheck.sim_models.pymunk.verdict import not_settled
 
 #: A held linkage that comes to rest farther than this × its size from the pose it was
 #: held at has left that assembly (it settles within ~1e-12 of it otherwise).
@@ -241,6 +240,16 @@ class Outcome:
     q: Array
     elapsed: float
     index: int = 0
+
+
+def not_settled(case: str, backend: str, pose: dict[str, float], diag: dict[str, float | str],
+                units: dict[str, str] | None = None) -> Solution:
+    """``not_settled`` for any model: the pose it reached, its diagnostics, no forces."""
+    return Solution(case, backend, pose, status="not_settled",
+                    message=f"did not settle within {diag['steps']} steps "
+                            f"(residual velocity {diag['residual_velocity']:.3g} m/s, "
+                            f"force change {diag['force_change']:.3g})",
+                    diagnostics=diag, units=units or {})
 
 
 def outcome(model: LinkageModel, run: Run, start: float, index: int = 0) -> Outcome:

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -52,15 +52,6 @@ from mechcheck.sim_models.convergence import (
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.linkage_motion import Motion, at_rest_reason, driven_motion, lead_limit
-from mechcheck.sim_models.pymunk.dynamics import (
-    DRIVEN,
-    FRICTION_PASSES,
-    QUASI_STATIC_OMEGA,
-    predicted,
-    restore,
-    snapshot,
-)
-from mechcheck.sim_models.pymunk.friction import Diverged
 from mechcheck.sim_models.pymunk.linkage import (
     has_free_coordinates,
     loop_violations,
@@ -69,6 +60,7 @@ from mechcheck.sim_models.pymunk.linkage import (
     reactions,
 )
 from mechcheck.sim_models.pymunk.linkage_friction import (
+    Diverged,
     JointLoads,
     apply_joint_friction,
     friction_loads,
@@ -87,8 +79,59 @@ from mechcheck.sim_models.pymunk.linkage_model import (
 )
 from mechcheck.sim_models.pymunk.loads import LoadLike, MassLike, apply_forces
 from mechcheck.sim_models.pymunk.readout import Values
+from mechcheck.sim_models.pymunk.settings import SolverSettings
 
 BACKEND = "pymunk"
+
+#: rad/s (or m/s) of the quasi-static drive of a static case with Coulomb friction. Slow
+#: enough that the inertia forces of the bodies, m·ω²·L, are ~1e-10 of the loads, fast
+#: enough that every joint keeps a definite sense of relative motion.
+QUASI_STATIC_OMEGA = 0.01
+
+#: Settings of driven runs. dt is small because here, unlike in statics, the integration
+#: error is part of the force (the reactions carry m·a); the reading is checked against
+#: dt/2 (:func:`~mechcheck.sim_models.convergence.halve_timestep`). No damping: it would
+#: remove momentum that the constraint forces must supply. error_bias = 0 corrects the
+#: whole joint error every step (Chipmunk's bias coefficient is 1 − error_bias^dt): at
+#: dt = 1e-4 any "per second" bias that is not ~0 corrects almost nothing per step, and the
+#: drifting loop then biases the forces (measured on a slider-crank at 20 rad/s:
+#: 0.9⁶⁰ → 7e-3, 1e-300 → 5e-5, 0 → 2e-6). ``iterations`` is the first rung of
+#: :data:`ITERATIONS`.
+DRIVEN = SolverSettings(dt=1.0e-4, iterations=100, error_bias=0.0, damping=1.0)
+
+#: Passes per step of a run with friction: the step under the loads of its predicted
+#: state, then once more under the loads of the state that pass made. One correction
+#: leaves the loads' error at the friction's feedback gain times the prediction's O(dt²)
+#: error; the time-step check measures what is left.
+FRICTION_PASSES = 2
+
+BodyState = tuple[pymunk.Body, float, tuple[float, float], tuple[float, float], float]
+
+
+def snapshot(bodies: Iterable[pymunk.Body]) -> list[BodyState]:
+    """The bodies' angle, position and velocities (to repeat a step)."""
+    return [(b, b.angle, (b.position.x, b.position.y), (b.velocity.x, b.velocity.y),
+             b.angular_velocity) for b in bodies]
+
+
+def restore(saved: list[BodyState]) -> None:
+    """Put the bodies back where :func:`snapshot` found them (angle first: pymunk
+    rotates about the centre of gravity)."""
+    for body, angle, position, velocity, spin in saved:
+        body.angle = angle
+        body.position = position
+        body.velocity = velocity
+        body.angular_velocity = spin
+
+
+def predicted(history: list[Values]) -> Values | None:
+    """The next step's state extrapolated linearly from the last two (error O(dt²))."""
+    if not history:
+        return None
+    if len(history) == 1:
+        return history[-1]
+    last, before = history[-1], history[-2]
+    return {q: 2.0 * v - before[q] for q, v in last.items()}
 
 
 def refusal(case: Case) -> str | None:

@@ -23,10 +23,19 @@ import math
 import pymunk
 
 from mechcheck.analytic.linkage import Joint
-from mechcheck.sim_models.pymunk.friction import sign
 from mechcheck.sim_models.pymunk.linkage import axis_now
 from mechcheck.sim_models.pymunk.linkage_model import LinkageModel
 from mechcheck.sim_models.pymunk.readout import Values
+
+
+class Diverged(RuntimeError):
+    """The simulation produced a non-finite number: the run is lost, no reading."""
+
+
+def sign(x: float) -> float:
+    """Sign with sign(0) = 0."""
+    return math.copysign(1.0, x) if x else 0.0
+
 
 #: Per joint, the friction acting on links[1]: a couple (N·m, revolute) or a force along
 #: the axis (N, prismatic); links[0] takes the opposite.

@@ -12,9 +12,6 @@ from typing import Any, Protocol
 
 import pymunk
 
-from mechcheck.analytic.case import Case
-from mechcheck.sim_models.pymunk.model import Model
-
 Vec = tuple[float, float]
 
 
@@ -62,13 +59,3 @@ def apply_forces(loads: Iterable[LoadLike], masses: Iterable[MassLike], gravity:
             body = bodies[m.link]
             body.apply_force_at_world_point((m.mass * gx, m.mass * gy),
                                             body.local_to_world(m.com))
-
-
-def apply_load_set(case: Case, bodies: dict[int, pymunk.Body]) -> None:
-    """Add a four-bar or slider-crank case's loads and real weights to the body forces."""
-    apply_forces(case.loads, case.masses, case.gravity, bodies)
-
-
-def apply_loads(model: Model) -> None:
-    """Apply the case's loads and weights to the model for the next step."""
-    apply_load_set(model.case, model.bodies)

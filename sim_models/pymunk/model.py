@@ -1,4 +1,6 @@
-"""Case → pymunk Space: the pure model builder.
+"""The four-bar's and slider-crank's own pymunk model, which now serves only the turning
+experiments (:mod:`.turning`): every backend builds its model with :mod:`.linkage_model`,
+the four-bar and slider-crank as their linkage.
 
 One dynamic body per moving link, placed on its link frame (CONVENTIONS.md):
 link 2 at A0 along A0→A, link 3 at A along A→B, the rocker at B0 along
@@ -45,7 +47,7 @@ class Model:
     ``pins`` maps joint names to pivots, ``groove``/``slider_lock`` exist for a
     slider-crank only, ``drive`` is the lock on the drive link, ``driver`` the
     body it is locked to, ``reach`` a characteristic radius per link for speeds.
-    Friction is applied as explicit loads (:mod:`~mechcheck.sim_models.pymunk.friction`).
+    Friction is applied as explicit loads.
     """
 
     case: Case
@@ -138,12 +140,6 @@ def added_inertia(case: Case, link: int, settings: SolverSettings) -> float:
     return settings.fictitious_scale * (bar + real.mass * d2 / INERTIA_RATIO)
 
 
-def has_fictitious_inertia(case: Case, settings: SolverSettings) -> bool:
-    """True when a driven run gives some link fictitious mass or inertia (:func:`body_inertia`)."""
-    return any(case.mass_of(k) is None or added_inertia(case, k, settings) > 0.0
-               for k in (2, 3, 4))
-
-
 def body_inertia(case: Case, link: int, settings: SolverSettings,
                  mode: MassMode) -> tuple[float, float, Vec]:
     """(mass, moment about the centre of gravity, centre of gravity in the link frame).
@@ -157,7 +153,7 @@ def body_inertia(case: Case, link: int, settings: SolverSettings,
     :class:`~mechcheck.sim_models.pymunk.settings.SolverSettings`): the price
     of pymunk refusing massless bodies and of its solver stalling on point
     masses off the pins. A driven run removes their inertia forces by
-    extrapolation (:func:`mechcheck.sim_models.pymunk.dynamics.drive`).
+    extrapolation.
     """
     length = link_lengths(case)[link]
     bar_centre = (0.5 * length, 0.0) if not (link == 4 and _has_slider(case)) else (0.0, 0.0)

@@ -21,7 +21,7 @@ class SolverSettings:
         Chipmunk rescales its warm-start impulses by the step ratio. At rest
         the integration error vanishes, so statics can use a long step
         (0.1 s with 1 t links); driven runs use their own (see
-        :data:`mechcheck.sim_models.pymunk.dynamics.DRIVEN`).
+        :data:`mechcheck.sim_models.pymunk.linkage_dynamics.DRIVEN`).
     iterations : Gauss–Seidel iterations per step (``Space.iterations``).
         Warm starting carries the accumulated impulses from step to step, so
         the solver keeps converging over steps; more iterations per step
@@ -51,7 +51,7 @@ class SolverSettings:
         (dynamic or friction) run, as a uniform bar between its pins. There
         its inertia force m·a does enter the reactions, so it is chosen small
         against the loads; the error it causes is measured, not hidden (see
-        :mod:`mechcheck.sim_models.pymunk.dynamics`).
+        :mod:`mechcheck.sim_models.pymunk.linkage_dynamics`).
     fictitious_scale : factor on all fictitious inertia of a driven run (the
         massless links' and what near-point links get, see
         :func:`mechcheck.sim_models.pymunk.model.body_inertia`); the twin run
