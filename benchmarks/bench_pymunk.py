@@ -1,6 +1,6 @@
 """Benchmark: settled static equilibrium per pose over 360-pose continuation sweeps.
 
-1. Seed E1 (four-bar builder) over a full turn of θ12, as the harness runs it: the pose
+1. Seed E1 (as its linkage) over a full turn of θ12, as the harness runs it: the pose
    gate first, so the change point is never simulated.
 2. The Watt II six-bar (linkage builder; the built-in case with its crank held still)
    over 360 crank angles from 1° after its lower lock to 1° before its upper lock, against
@@ -65,7 +65,7 @@ def four_bar_sweep(repeats: int) -> None:
     case = next(c for c in load_cases(*builtin_case_files()) if c.name == "seed-E1-as-stated")
     theta = np.radians(np.arange(360.0))
     reference = solve_poses(case, theta).values
-    print(f"Seed E1, four-bar builder, 360 poses, the pose gate included; median of {repeats}\n")
+    print(f"Seed E1, as its linkage, 360 poses, the pose gate included; median of {repeats}\n")
     print("| backend | poses | ok | gated (singular) | ms/pose (min, max) | steps/pose | "
           "worst rel. error |")
     print("|---|---:|---:|---:|---:|---:|---:|")

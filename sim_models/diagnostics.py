@@ -3,7 +3,7 @@ the same names and units in MuJoCo and pymunk (issue 12)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,10 @@ class RunDiagnostics:
 
     def as_dict(self, **extra: float | str) -> dict[str, float | str]:
         """The diagnostics as a Solution carries them: these keys first, then ``extra``."""
-        common = {k: v for k, v in asdict(self).items() if k != "warnings" or v}
+        # Field by field: dataclasses.asdict deep-copies, a third of an exact solve's time.
+        common: dict[str, float | str] = {k: getattr(self, k) for k in COMMON_KEYS}
+        if self.warnings:
+            common["warnings"] = self.warnings
         return common | extra
 
 

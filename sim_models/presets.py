@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -36,31 +37,54 @@ def wrapped(angle: float) -> float:
     return math.atan2(math.sin(angle), math.cos(angle))
 
 
+@dataclass(frozen=True)
+class Renaming:
+    """How a linkage solution of the preset ``case`` reads under the preset's names: the
+    quantity names, and the pose the linkage is drawn at (θ13, θ14 or s14), which the
+    simulator's rotations φ and slide displacement q move."""
+
+    names: dict[str, str]
+    coupler: str
+    rocker: str
+    drawn: dict[str, float]
+
+    @classmethod
+    def of(cls, case: Case) -> Renaming:
+        pose = pose_of(case)
+        drawn = {"theta13": float(pose.links[3].angle[0])}
+        if case.mechanism == "four_bar":
+            drawn["theta14"] = float(pose.links[4].angle[0])
+        else:
+            drawn["s14"] = float(np.dot(pose.joints["B"][0], (math.cos(case.ground_angle),
+                                                              math.sin(case.ground_angle))))
+        return cls(names_of(case), f"phi_{link_name(case, 3)}", f"phi_{link_name(case, 4)}",
+                   drawn)
+
+    def values(self, values: Mapping[str, float]) -> dict[str, float]:
+        out = {legacy: float(values[name]) for legacy, name in self.names.items()
+               if name in values}
+        moved = {"theta13": self.coupler, "theta14": self.rocker, "s14": "q_slide"}
+        for quantity, drawn in self.drawn.items():
+            if moved[quantity] in values:
+                at = drawn + float(values[moved[quantity]])
+                out[quantity] = at if quantity == "s14" else wrapped(at)
+        return out
+
+    def solution(self, solution: Solution, name: str) -> Solution:
+        """``solution`` under the preset's names, as case ``name``."""
+        return dataclasses.replace(solution, case=name, values=self.values(solution.values))
+
+
 def preset_values(case: Case, values: Mapping[str, float]) -> dict[str, float]:
-    """A linkage solution's values under the preset's names, with the pose as θ13, θ14
-    (four-bar) or s14 (slider-crank): the pose ``case`` is drawn at, moved by the links'
-    rotations φ and the slide's displacement q that the simulator reached."""
-    pose = pose_of(case)
-    out = {legacy: float(values[name]) for legacy, name in names_of(case).items()
-           if name in values}
-    coupler = f"phi_{link_name(case, 3)}"
-    if coupler in values:
-        out["theta13"] = wrapped(float(pose.links[3].angle[0]) + float(values[coupler]))
-    rocker = f"phi_{link_name(case, 4)}"
-    if case.mechanism == "four_bar" and rocker in values:
-        out["theta14"] = wrapped(float(pose.links[4].angle[0]) + float(values[rocker]))
-    if case.mechanism == "slider_crank" and "q_slide" in values:
-        drawn = float(np.dot(pose.joints["B"][0], (math.cos(case.ground_angle),
-                                                    math.sin(case.ground_angle))))
-        out["s14"] = drawn + float(values["q_slide"])
-    return out
+    """A linkage solution's values under the preset's names (:class:`Renaming`), for the
+    linkage drawn at ``case``'s pose."""
+    return Renaming.of(case).values(values)
 
 
-def preset_solution(case: Case, solution: Solution, name: str | None = None) -> Solution:
+def preset_solution(case: Case, solution: Solution) -> Solution:
     """A linkage solution of the preset ``case`` (the linkage drawn at its pose) under the
-    preset's names, as case ``name`` (default: the case's)."""
-    return dataclasses.replace(solution, case=name or case.name,
-                               values=preset_values(case, solution.values))
+    preset's names."""
+    return Renaming.of(case).solution(solution, case.name)
 
 
 def through_linkage(case: Case, solve: Callable[[Case], Solution], backend: str = "") -> Solution:
@@ -152,7 +176,8 @@ def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, bac
             stop += 1
         stop = i + max(1, follows_branch(poses[i], grid[i:stop]))
         results = sweep(as_linkage(poses[i]), driver_offsets(poses[i], grid[i:stop]))
-        out += [preset_solution(poses[i], s, case.name) for s in results]
+        renaming = Renaming.of(poses[i])
+        out += [renaming.solution(s, case.name) for s in results]
         i = stop
     return out
 

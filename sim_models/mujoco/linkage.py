@@ -185,7 +185,7 @@ def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
     diagnostics = RunDiagnostics("constraint_solve", passes, time.perf_counter() - start,
                                  0.0, rig.loop_violation(), 0.0).as_dict(equation_residual=residual)
     return Solution(case.name, "mujoco_solve", values, diagnostics=diagnostics,
-                    units=quantity_units(case.linkage))
+                    units=rig.units or {})
 
 
 def predicted(history: list[tuple[float, np.ndarray]], value: float) -> np.ndarray:
