@@ -162,3 +162,18 @@ def halve_timestep(read: Reading, out: Convergence, scale: float, runs: int,
         if not residual > TIMESTEP_AGREEMENT_RTOL:  # converged, or NaN: stop either way
             break
     return out
+
+
+#: A driven run whose pose at the instant is farther than this × the linkage's size from
+#: the prescribed one has left its assembly (measured on the built-in linkages: at most
+#: 1.8e-5 m in pymunk, the crank shaper; a random six-bar that folded over read 2.75 m).
+DRIVEN_DRIFT = 1.0e-3
+
+
+def left_assembly(drift: float, scale: float) -> str:
+    """Why a driven reading ``drift`` (m) from the prescribed pose is withheld, or ``""``."""
+    if drift <= DRIVEN_DRIFT * scale:
+        return ""
+    return (f"the driven run reached the instant {drift:.3g} m from the prescribed pose: it "
+            "left the assembly it was started on (readings that agree there are another "
+            "linkage's); forces withheld")

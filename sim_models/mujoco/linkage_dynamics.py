@@ -54,6 +54,7 @@ from mechcheck.sim_models.convergence import (
     Convergence,
     halve_timestep,
     inertia_correction,
+    left_assembly,
     lengthen_lead,
     massless_limit,
 )
@@ -223,24 +224,31 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
                         units)
     if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
         out = halve_timestep(read, out, rigs.base.scale, rigs.runs, units)
-    return driven_solution(case, rigs, out, time.perf_counter() - start)
+    return driven_solution(case, rigs, out, results, time.perf_counter() - start)
 
 
-def driven_solution(case: Case, rigs: LinkageRigs, out: Convergence,
+def driven_solution(case: Case, rigs: LinkageRigs, out: Convergence, results: LinkageResults,
                     elapsed: float) -> Solution:
+    """The reading with its diagnostics; the pose drift is the last run's pose at the instant
+    against the analytic one (the same rule as pymunk's: a run that left its assembly gives
+    no forces)."""
     rig = rigs.base
     units = rig.units or {}
     diagnostics = RunDiagnostics(
         "driven", out.total_steps, elapsed,
         abs(float(rig.data.qvel[rig.clock]) - 1.0) if rig.clock is not None else 0.0,
-        rig.loop_violation(), 0.0,
+        rig.loop_violation(), rig.pose_drift(qpos=rig.joint_states(results.pose)[0][0]),
     ).as_dict(lead_disagreement=out.lead_disagreement, lead_steps=out.lead_steps,
               timestep=out.dt, timestep_disagreement=out.timestep_disagreement,
               fictitious_runs=rigs.runs, fictitious_inertia_correction=(
                   inertia_correction(rig.read(), out.values, rig.scale, units)
                   if rigs.doubled is not None else 0.0))
+    pose = {q: v for q, v in out.values.items() if quantity_kind(q, units.get(q)) == "pose"}
     if not out.converged:
-        pose = {q: v for q, v in out.values.items() if quantity_kind(q, units.get(q)) == "pose"}
         return Solution(case.name, "mujoco", pose, status="not_settled", message=out.verdict(),
+                        diagnostics=diagnostics, units=units)
+    left = left_assembly(float(diagnostics["pose_drift"]), case.linkage.scale)
+    if left:
+        return Solution(case.name, "mujoco", pose, status="not_settled", message=left,
                         diagnostics=diagnostics, units=units)
     return Solution(case.name, "mujoco", out.values, diagnostics=diagnostics, units=units)

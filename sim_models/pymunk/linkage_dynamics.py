@@ -47,6 +47,7 @@ from mechcheck.sim_models.convergence import (
     Convergence,
     halve_timestep,
     inertia_correction,
+    left_assembly,
     lengthen_lead,
     massless_limit,
 )
@@ -297,11 +298,6 @@ def driver_rates(model: LinkageModel) -> Array:
                      for d in model.linkage.drivers])
 
 
-#: A driven run whose pose at the instant is farther than this × the linkage's size from
-#: the prescribed one has left its assembly (measured on the built-in linkages: at most
-#: 1.8e-5 m, the crank shaper; a random six-bar that folded over read 2.75 m).
-DRIVEN_DRIFT = 1.0e-3
-
 #: Gauss–Seidel iterations per step, tried in turn until the lead-in converges. Mass
 #: ratios slow the solver: the crank shaper (8 kg links, a 0.4 kg block of 1e-4 kg·m²
 #: on the slot) needs 1000 where the other built-in linkages agree at 100; at 100 its
@@ -402,12 +398,8 @@ def driven_solution(case: Case, results: LinkageResults, out: Convergence, end: 
     if not out.converged:
         return Solution(case.name, BACKEND, pose, status="not_settled", message=out.verdict(),
                         diagnostics=diagnostics, units=units)
-    drift = float(diagnostics["pose_drift"])
-    if not drift <= DRIVEN_DRIFT * linkage.scale:
+    left = left_assembly(float(diagnostics["pose_drift"]), linkage.scale)
+    if left:
         return Solution(case.name, BACKEND, pose, status="not_settled", diagnostics=diagnostics,
-                        units=units,
-                        message=f"the driven run reached the instant {drift:.3g} m from the "
-                                "prescribed pose: it left the assembly it was started on "
-                                "(readings that agree there are another linkage's); forces "
-                                "withheld")
+                        units=units, message=left)
     return Solution(case.name, BACKEND, out.values, diagnostics=diagnostics, units=units)

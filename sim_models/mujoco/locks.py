@@ -1,0 +1,92 @@
+"""A linkage's driver turned by a servo in MuJoCo, to measure where it locks
+(:mod:`mechcheck.sim_models.locks`): the linkage builder's model with that driver's joint
+equality switched off, a bounded-torque velocity servo on its joint and every other tree
+joint damped, as the four-bar's turning model (:mod:`.turning`) does for the crank."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from mechcheck.analytic.case import Case
+from mechcheck.sim_models.locks import DriverLocks, drive_both_ways
+from mechcheck.sim_models.mujoco.linkage_model import build_spec, spanning_tree
+from mechcheck.sim_models.mujoco.model import SETTLE_MASS, Settings, place_frames_exactly
+from mechcheck.sim_models.turning import (
+    CRANK_ARMATURE,
+    JOINT_DAMPING,
+    SERVO_GAIN,
+    SERVO_SPEED,
+    TIMESTEP,
+    TORQUE_LIMIT,
+    Sample,
+)
+
+#: Links of the settling mass, as the four-bar's turning model.
+TURN_SETTINGS = Settings(timestep=TIMESTEP, masses="settle")
+
+
+def inertia_unit(case: Case) -> float:
+    """m·L², kg·m²: the unit of the servo gain, torque bound and joint damping."""
+    return SETTLE_MASS * case.linkage.scale**2
+
+
+def servo_spec(case: Case, joint: str) -> mujoco.MjSpec:
+    """The linkage's model with ``joint``'s driver let go, a velocity servo on the joint and
+    the other tree joints damped (a slide by the same rate per metre of the size)."""
+    linkage = case.linkage
+    spec = build_spec(case.name, linkage, TURN_SETTINGS)
+    spec.equality(f"drive_{joint}").active = False
+    # The servo's −kv·q̇ is integrated implicitly, so its gain is not limited by the
+    # inertia of a short link.
+    spec.option.integrator = int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
+    unit = inertia_unit(case)
+    for t in spanning_tree(linkage).tree:
+        if t.joint.name != joint:
+            scale = unit if t.joint.kind == "revolute" else SETTLE_MASS
+            spec.joint(t.joint.name).damping = [JOINT_DAMPING * scale, 0.0, 0.0]
+    spec.joint(joint).armature = CRANK_ARMATURE * unit
+    servo = spec.add_actuator(name="servo", trntype=mujoco.mjtTrn.mjTRN_JOINT, target=joint)
+    servo.set_to_velocity(kv=SERVO_GAIN * unit)
+    servo.forcelimited = True
+    bound = TORQUE_LIMIT * unit * SERVO_SPEED**2
+    servo.forcerange = [-bound, bound]
+    return spec
+
+
+class LinkageServo:
+    """The servo-driven MuJoCo model of a linkage's driver (a
+    :class:`~mechcheck.sim_models.turning.Turner`; its "θ12" is the driver's angle from the
+    drawn pose, the other sample fields are not measured)."""
+
+    def __init__(self, case: Case, joint: str) -> None:
+        self.case = case
+        self.timestep = TIMESTEP
+        self.torque_limit = TORQUE_LIMIT * inertia_unit(case) * SERVO_SPEED**2
+        self.model = servo_spec(case, joint).compile()
+        place_frames_exactly(self.model)
+        self.data = mujoco.MjData(self.model)
+        self.q = int(self.model.joint(joint).qposadr[0])
+        self.loop_rows: NDArray[np.int_] = np.zeros(0, dtype=int)
+
+    def reset(self, sense: int) -> None:
+        """At rest in the drawn pose (every joint coordinate 0), servo aimed at sense·ω."""
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        d.ctrl[0] = sense * SERVO_SPEED
+        mujoco.mj_forward(m, d)
+        self.loop_rows = np.flatnonzero(d.efc_type[:d.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+
+    def step(self) -> Sample:
+        m, d = self.model, self.data
+        mujoco.mj_step(m, d)
+        return Sample(float(d.qpos[self.q]), math.nan, math.nan, float(d.actuator_force[0]),
+                      float(np.linalg.norm(d.efc_pos[self.loop_rows])))
+
+
+def driver_locks(case: Case, joint: str) -> DriverLocks:
+    """Where ``joint``'s driver locks in MuJoCo, each way from the drawn pose."""
+    return drive_both_ways("mujoco", case, joint, LinkageServo)
