@@ -40,21 +40,26 @@ def servo_spec(case: Case, joint: str) -> mujoco.MjSpec:
     linkage = case.linkage
     spec = build_spec(case.name, linkage, TURN_SETTINGS)
     spec.equality(f"drive_{joint}").active = False
-    # The servo's −kv·q̇ is integrated implicitly, so its gain is not limited by the
-    # inertia of a short link.
-    spec.option.integrator = int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
     unit = inertia_unit(case)
     for t in spanning_tree(linkage).tree:
         if t.joint.name != joint:
             scale = unit if t.joint.kind == "revolute" else SETTLE_MASS
             spec.joint(t.joint.name).damping = [JOINT_DAMPING * scale, 0.0, 0.0]
+    add_servo(spec, joint, unit)
+    return spec
+
+
+def add_servo(spec: mujoco.MjSpec, joint: str, unit: float) -> None:
+    """A bounded-torque velocity servo on ``joint`` (gain, bound and armature in units of
+    ``unit`` = m·L², :mod:`mechcheck.sim_models.turning`), integrated implicitly so that
+    its gain −kv·q̇ is not limited by the inertia of a short link."""
+    spec.option.integrator = int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
     spec.joint(joint).armature = CRANK_ARMATURE * unit
     servo = spec.add_actuator(name="servo", trntype=mujoco.mjtTrn.mjTRN_JOINT, target=joint)
     servo.set_to_velocity(kv=SERVO_GAIN * unit)
     servo.forcelimited = True
     bound = TORQUE_LIMIT * unit * SERVO_SPEED**2
     servo.forcerange = [-bound, bound]
-    return spec
 
 
 class LinkageServo:

@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic.case import Case
+from mechcheck.sim_models.mujoco.locks import add_servo
 from mechcheck.sim_models.mujoco.model import (
     SETTLE_MASS,
     Settings,
@@ -43,9 +44,7 @@ from mechcheck.sim_models.mujoco.model import (
     place_frames_exactly,
 )
 from mechcheck.sim_models.turning import (
-    CRANK_ARMATURE,
     JOINT_DAMPING,
-    SERVO_GAIN,
     SERVO_SPEED,
     TIMESTEP,
     TORQUE_LIMIT,
@@ -83,19 +82,11 @@ def turning_spec(case: Case) -> mujoco.MjSpec:
     passive joints."""
     spec = build_spec(case, TURN_SETTINGS)
     spec.equality("drive").active = False
-    # The servo's −kv·q̇ is integrated implicitly, so its gain is not limited by
-    # the (small) inertia of a short crank.
-    spec.option.integrator = int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
     unit = inertia_unit(case)
     spec.joint("A").damping = [JOINT_DAMPING * unit, 0.0, 0.0]
-    spec.joint("A0").armature = CRANK_ARMATURE * unit
     out = output_joint(case)
     spec.joint(out).damping = [JOINT_DAMPING * (unit if out == "B0" else SETTLE_MASS), 0.0, 0.0]
-    servo = spec.add_actuator(name="servo", trntype=mujoco.mjtTrn.mjTRN_JOINT, target="A0")
-    servo.set_to_velocity(kv=SERVO_GAIN * unit)
-    servo.forcelimited = True
-    bound = TORQUE_LIMIT * unit * SERVO_SPEED**2
-    servo.forcerange = [-bound, bound]
+    add_servo(spec, "A0", unit)
     return spec
 
 
