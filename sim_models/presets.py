@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.forces import solve_poses, verdict_at
+from mechcheck.analytic.forces import solve_poses, verdict_at, wrap_angle
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_forces import pose_quantities
 from mechcheck.analytic.linkage_kinematics import solve_pose
@@ -30,11 +30,6 @@ def as_linkage(case: Case) -> Case:
     """The preset ``case`` as a ``mechanism = "linkage"`` case drawn at its pose."""
     return Case(name=case.name, geometry=linkage_of(case), theta12=0.0,
                 tolerance=case.tolerance, source=case.source)
-
-
-def wrapped(angle: float) -> float:
-    """An angle in (−π, π], as the analytic preset reports θ13 and θ14."""
-    return math.atan2(math.sin(angle), math.cos(angle))
 
 
 @dataclass(frozen=True)
@@ -67,7 +62,7 @@ class Renaming:
         for quantity, drawn in self.drawn.items():
             if moved[quantity] in values:
                 at = drawn + float(values[moved[quantity]])
-                out[quantity] = at if quantity == "s14" else wrapped(at)
+                out[quantity] = at if quantity == "s14" else float(wrap_angle(np.array(at)))
         return out
 
     def solution(self, solution: Solution, name: str) -> Solution:
@@ -81,17 +76,11 @@ def preset_values(case: Case, values: Mapping[str, float]) -> dict[str, float]:
     return Renaming.of(case).values(values)
 
 
-def preset_solution(case: Case, solution: Solution) -> Solution:
-    """A linkage solution of the preset ``case`` (the linkage drawn at its pose) under the
-    preset's names."""
-    return Renaming.of(case).solution(solution, case.name)
-
-
 def through_linkage(case: Case, solve: Callable[[Case], Solution], backend: str = "") -> Solution:
     """``solve`` (a linkage backend) run on the preset ``case``, read under its names; the
     preset's own verdict instead where it has one (:func:`verdicts`: ``backend`` names it)."""
     verdict = verdicts(case, np.array([case.theta12]), backend)[0] if backend else None
-    return verdict or preset_solution(case, solve(as_linkage(case)))
+    return verdict or Renaming.of(case).solution(solve(as_linkage(case)), case.name)
 
 
 def driver_offsets(case: Case, theta12: Sequence[float] | np.ndarray) -> np.ndarray:
