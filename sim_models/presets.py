@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mechcheck.analytic.case import Case
+from mechcheck.analytic.case import Case, Load
 from mechcheck.analytic.forces import solve_poses, verdict_at, wrap_angle
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_forces import pose_quantities
@@ -174,3 +174,13 @@ def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, bac
 def through_drive(case: Case) -> bool:
     """The simulators drive the case (it moves, or has Coulomb friction)."""
     return not case.motion.is_static or case.has_coulomb_friction
+
+
+def output_load(case: Case, load: float) -> Load:
+    """The output load of the turning experiments' holding runs: a pure couple ``load`` on
+    the rocker, or a force ``load`` on the slider along the slide direction u through B (no
+    moment)."""
+    if case.mechanism == "four_bar":
+        return Load(4, at=(0.0, 0.0), force=(0.0, 0.0), torque=load)
+    g = case.ground_angle
+    return Load(4, at=(0.0, 0.0), force=(load * math.cos(g), load * math.sin(g)))

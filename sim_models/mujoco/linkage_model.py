@@ -264,13 +264,19 @@ def drive_armature(linkage: Linkage, joint: Joint, settings: Settings) -> float:
 
 
 def _options(spec: mujoco.MjSpec, settings: Settings) -> None:
-    """The four-bar model's options (:func:`.model.build_spec` says why each is set)."""
+    """The model's options."""
     opt = spec.option
     opt.timestep = settings.timestep
-    opt.gravity = [0.0, 0.0, 0.0]
-    opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-    opt.jacobian = int(mujoco.mjtJacobian.mjJAC_DENSE)
+    opt.gravity = [0.0, 0.0, 0.0]  # weights are loads on the real masses only
+    opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)  # links overlap in the plane
+    opt.jacobian = int(mujoco.mjtJacobian.mjJAC_DENSE)  # efc_J read as a dense matrix
     opt.integrator = int(mujoco.mjtIntegrator.mjINT_EULER)
+    # Newton's default tolerance (1e-8) stops with a residual acceleration that makes the
+    # heavy links creep: the forces then drift by ~1e-8 per step and never settle. The
+    # tolerance is relative to the whole problem, which the 1e9 clock armature dominates:
+    # 1e-12 still left 7e-5 N·m of step-to-step noise in a clock-driven torque, 1e-16
+    # leaves 2e-9 (measured on the four-bar). Newton still stops after one iteration (the
+    # problem is quadratic).
     opt.tolerance = SOLVER_TOLERANCE
 
 

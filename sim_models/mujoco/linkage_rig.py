@@ -1,6 +1,6 @@
 """A linkage's compiled model and data: put it in a pose, apply the loads, read the forces
-back in the quantities of LINKAGES.md — the linkage counterpart of :class:`.rig.Rig`,
-with the interface :mod:`.settle` drives.
+back in the quantities of LINKAGES.md, with the interface :mod:`.settle` drives (loads in
+and forces out: :mod:`.rig`).
 
 Forces are read from MuJoCo's own state only:
 
@@ -20,13 +20,14 @@ Forces are read from MuJoCo's own state only:
 - ``S_<spring>``: k(L − L0) + c·L̇ of MuJoCo's tendon length and speed with the model's
   own stiffness, spring length and damping; a torsional spring's from the hinge's qpos.
 
-Carried constraint forces (:mod:`.settle`): as :class:`.rig.Rig`, the forces of a settled
+Carried constraint forces (:mod:`.settle`, why: :mod:`.rig`): the forces of a settled
 state can be moved into explicit loads — each connect's force as an equal and opposite
 pair at its two sites, each driver's effort as ``qfrc_applied`` on its joint.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
@@ -68,13 +69,19 @@ class CarriedPairs:
 class LinkageRig:
     """One linkage Case's compiled model and data, with loads, pose and force read-out."""
 
-    def __init__(self, case: Case, settings: Settings = STATIC) -> None:
+    def __init__(self, case: Case, settings: Settings = STATIC,
+                 customize: Callable[[mujoco.MjSpec], None] | None = None) -> None:
+        """``customize`` edits the spec before it is compiled (the servo models of
+        :mod:`.locks` and :mod:`.turning`)."""
         self.case = case
         self.settings = settings
         self.linkage = linkage = case.linkage
         self.tree: LinkageTree = spanning_tree(linkage)
         self.tree_joints = {t.joint.name: t for t in self.tree.tree}
-        self.model = build_spec(case.name, linkage, settings).compile()
+        spec = build_spec(case.name, linkage, settings)
+        if customize is not None:
+            customize(spec)
+        self.model = spec.compile()
         place_frames_exactly(self.model)
         self.data = mujoco.MjData(self.model)
         self.scale = linkage.scale
@@ -112,7 +119,9 @@ class LinkageRig:
         mujoco.mj_forward(m, self.data)
         self.nefc = int(self.data.nefc)  # constant: equalities only, no contacts or limits
         self.loop_rows = {j: self.equality_rows(e) for j, e in self.loop_eq.items()}
-        self.drive_rows = {j: self.equality_rows(e) for j, e in self.drive_eq.items()}
+        # A switched-off driver (a servo model, ``customize``) has no constraint rows.
+        self.drive_rows = {j: rows for j, e in self.drive_eq.items()
+                           if (rows := self.equality_rows(e)).size}
         self.efc_scale = np.ones(self.nefc)
         for joint, rows in self.drive_rows.items():
             if linkage.joint(joint).kind == "revolute":
@@ -218,7 +227,7 @@ class LinkageRig:
 
     def set_timestep(self, dt: float) -> None:
         """Change the time step, with the constraints' time constant (as
-        :meth:`.rig.Rig.set_timestep`)."""
+        MuJoCo's stiffest 2·dt unless the settings fix it)."""
         self.model.opt.timestep = dt
         if self.settings.solref_timeconst is None:
             self.model.eq_solref[:, 0] = 2.0 * dt
@@ -301,7 +310,7 @@ class LinkageRig:
         for joint in self.linkage.joints:
             values.update(self._reaction(joint, total, efforts.get(joint.name, 0.0)))
         values.update(self._springs())
-        values.update(self._pose())
+        values.update(self.pose_values())
         return {k: float(v) for k, v in values.items()}
 
     def _reaction(self, joint: Joint, total: Array, effort: float) -> dict[str, float]:
@@ -349,7 +358,7 @@ class LinkageRig:
                     + (torsion.damping * d.qvel[dof] if self.viscous else 0.0))
         return out
 
-    def _pose(self) -> dict[str, float]:
+    def pose_values(self) -> dict[str, float]:
         d = self.data
         out: dict[str, float] = {}
         for p, site in self.point_sites.items():

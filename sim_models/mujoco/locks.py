@@ -6,15 +6,15 @@ joint damped, as the four-bar's turning model (:mod:`.turning`) does for the cra
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import mujoco
-import numpy as np
-from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
 from mechcheck.sim_models.locks import DriverLocks, drive_both_ways
-from mechcheck.sim_models.mujoco.linkage_model import build_spec, spanning_tree
-from mechcheck.sim_models.mujoco.model import SETTLE_MASS, Settings, place_frames_exactly
+from mechcheck.sim_models.mujoco.linkage_model import spanning_tree
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
+from mechcheck.sim_models.mujoco.model import SETTLE_MASS, Settings
 from mechcheck.sim_models.turning import (
     CRANK_ARMATURE,
     JOINT_DAMPING,
@@ -34,19 +34,22 @@ def inertia_unit(case: Case) -> float:
     return SETTLE_MASS * case.linkage.scale**2
 
 
-def servo_spec(case: Case, joint: str) -> mujoco.MjSpec:
-    """The linkage's model with ``joint``'s driver let go, a velocity servo on the joint and
-    the other tree joints damped (a slide by the same rate per metre of the size)."""
+def servo_customizer(case: Case, joint: str) -> Callable[[mujoco.MjSpec], None]:
+    """The edit that turns the linkage's model into the servo model of ``joint``'s driver:
+    its joint equality switched off, a velocity servo on the joint and the other tree
+    joints damped (a slide by the same rate per metre of the size)."""
     linkage = case.linkage
-    spec = build_spec(case.name, linkage, TURN_SETTINGS)
-    spec.equality(f"drive_{joint}").active = False
     unit = inertia_unit(case)
-    for t in spanning_tree(linkage).tree:
-        if t.joint.name != joint:
-            scale = unit if t.joint.kind == "revolute" else SETTLE_MASS
-            spec.joint(t.joint.name).damping = [JOINT_DAMPING * scale, 0.0, 0.0]
-    add_servo(spec, joint, unit)
-    return spec
+
+    def customize(spec: mujoco.MjSpec) -> None:
+        spec.equality(f"drive_{joint}").active = False
+        for t in spanning_tree(linkage).tree:
+            if t.joint.name != joint:
+                scale = unit if t.joint.kind == "revolute" else SETTLE_MASS
+                spec.joint(t.joint.name).damping = [JOINT_DAMPING * scale, 0.0, 0.0]
+        add_servo(spec, joint, unit)
+
+    return customize
 
 
 def add_servo(spec: mujoco.MjSpec, joint: str, unit: float) -> None:
@@ -71,25 +74,21 @@ class LinkageServo:
         self.case = case
         self.timestep = TIMESTEP
         self.torque_limit = TORQUE_LIMIT * inertia_unit(case) * SERVO_SPEED**2
-        self.model = servo_spec(case, joint).compile()
-        place_frames_exactly(self.model)
-        self.data = mujoco.MjData(self.model)
-        self.q = int(self.model.joint(joint).qposadr[0])
-        self.loop_rows: NDArray[np.int_] = np.zeros(0, dtype=int)
+        self.rig = LinkageRig(case, TURN_SETTINGS, servo_customizer(case, joint))
+        self.q = int(self.rig.model.joint(joint).qposadr[0])
 
     def reset(self, sense: int) -> None:
         """At rest in the drawn pose (every joint coordinate 0), servo aimed at sense·ω."""
-        m, d = self.model, self.data
+        m, d = self.rig.model, self.rig.data
         mujoco.mj_resetData(m, d)
         d.ctrl[0] = sense * SERVO_SPEED
         mujoco.mj_forward(m, d)
-        self.loop_rows = np.flatnonzero(d.efc_type[:d.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
 
     def step(self) -> Sample:
-        m, d = self.model, self.data
-        mujoco.mj_step(m, d)
-        return Sample(float(d.qpos[self.q]), math.nan, math.nan, float(d.actuator_force[0]),
-                      float(np.linalg.norm(d.efc_pos[self.loop_rows])))
+        rig = self.rig
+        mujoco.mj_step(rig.model, rig.data)
+        return Sample(float(rig.data.qpos[self.q]), math.nan, math.nan,
+                      float(rig.data.actuator_force[0]), rig.loop_violation())
 
 
 def driver_locks(case: Case, joint: str) -> DriverLocks:

@@ -96,7 +96,7 @@ VELOCITY_TOL = 1e-9
 #: condition number ~4000 on the budget runs out, which is the honest verdict.
 MAX_STEPS = 3000
 #: Settling passes: after each one the constraint forces are carried as loads
-#: (:meth:`~.rig.Rig.carry`), the pose is re-seeded unbent and the mechanism
+#: (:meth:`~.linkage_rig.LinkageRig.carry`), the pose is re-seeded unbent and the mechanism
 #: settles again. A single pass is off by the soft constraints' bending — 2e-5
 #: of the forces at θ12 = 179° of seed E1 (condition number 119), 8e-3 at
 #: condition number 880 — and each pass shrinks that by a factor c (measured:

@@ -19,7 +19,7 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     along,
     build_linkage_model,
 )
-from mechcheck.sim_models.pymunk.turning import LINK_MASS, TURN_SETTINGS
+from mechcheck.sim_models.pymunk.settings import SolverSettings
 from mechcheck.sim_models.turning import (
     JOINT_DAMPING,
     SERVO_SPEED,
@@ -27,6 +27,26 @@ from mechcheck.sim_models.turning import (
     TORQUE_LIMIT,
     Sample,
 )
+
+#: Link mass of the turning and holding models, kg (uniform bars, as the
+#: static backend's fictitious masses).
+LINK_MASS = 1000.0
+
+#: Settings of a turning run. Same step as MuJoCo's (one sample per 0.057° of
+#: crank); damping = 1: no global drag, the dissipation is the passive joints'
+#: damping alone, as in MuJoCo. error_bias = 1e-100 corrects ~20 % of a joint
+#: error per step. Full correction (error_bias = 0) keeps the loop tightest
+#: while turning (double-crank: 1e-6 m open) but, at a toggle, where the
+#: servo's bounded torque becomes loop forces of T/(a short lever arm),
+#: kicks the links so hard that some linkages never come to rest (measured on
+#: random non-Grashof four-bars, links 0.05–0.5 m: 2 of 55 rang in a limit
+#: cycle, one with the crank 0.45° past its limit and the loop 0.14 mm
+#: open). A gentle correction (1e-6, ~1.4 % per step) jams all of them but
+#: leaves the turning double-crank's loop 6.6e-5 m open; 1e-100 jammed 60 of
+#: 60 with it 4.8e-6 m open and the dead positions 2e-4° off. 100
+#: iterations: with 50, one of 30 still rang.
+TURN_SETTINGS = SolverSettings(dt=TIMESTEP, iterations=100, error_bias=1e-100, damping=1.0,
+                               fictitious_mass=LINK_MASS)
 
 
 def inertia_unit(case: Case) -> float:
@@ -62,6 +82,7 @@ class LinkageServo:
 
     def __init__(self, case: Case, joint: str) -> None:
         self.case = case
+        self.built = case  # the linkage the model is built from
         self.joint = case.linkage.joint(joint)
         self.timestep = TIMESTEP
         self.torque_limit = TORQUE_LIMIT * inertia_unit(case) * SERVO_SPEED**2
@@ -72,7 +93,7 @@ class LinkageServo:
     def reset(self, sense: int) -> None:
         """A fresh model at rest in the drawn pose (a new Space has no warm-start
         impulses), the driver's gear replaced by the motor."""
-        model = build_linkage_model(self.case, TURN_SETTINGS, self.drawn)
+        model = build_linkage_model(self.built, TURN_SETTINGS, self.drawn)
         model.space.remove(model.drives[self.joint.name])
         a, b = (model.body(link) for link in self.joint.links)
         # SimpleMotor drives ω_b − ω_a to −rate.
@@ -91,6 +112,20 @@ class LinkageServo:
         # from the driver's angle and the motor's torque alone.
         return Sample(float(b.angle - a.angle), math.nan, math.nan,
                       torque_on_b(motor, self.timestep), math.nan)
+
+
+def loop_gap(model: LinkageModel) -> float:
+    """Largest distance between the two anchors of any pin, or of a groove's pin from its
+    line, m (the joints' violation)."""
+    worst = 0.0
+    for pin in model.pins.values():
+        worst = max(worst, abs(pin.a.local_to_world(pin.anchor_a)
+                               - pin.b.local_to_world(pin.anchor_b)))
+    for groove in model.grooves.values():
+        a, b = groove.a.local_to_world(groove.groove_a), groove.a.local_to_world(groove.groove_b)
+        p = groove.b.local_to_world(groove.anchor_b)
+        worst = max(worst, abs((p - a).dot((b - a).perpendicular_normal())))
+    return worst
 
 
 def driver_locks(case: Case, joint: str) -> DriverLocks:

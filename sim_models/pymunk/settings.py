@@ -38,8 +38,7 @@ class SolverSettings:
         change point, where the mechanism is soft and a weakly damped run
         with strong error correction keeps oscillating (seen at 5° from the
         E1 change point with damping 0.5).
-    fictitious_mass : kg, the mass given to every link in a *static* run (and
-        to massless links in a driven run, see ``driven_fictitious_mass``).
+    fictitious_mass : kg, the mass given to every link in a *static* run.
         Pymunk cannot integrate a massless dynamic body. At rest the
         inertia terms vanish, so any positive mass gives the same static
         reactions, provided gravity is applied only to the real masses (it
@@ -47,14 +46,9 @@ class SolverSettings:
         through ``Space.gravity``). Equal heavy masses keep the iterative
         solver well conditioned (no mass ratios) and the transient drift,
         which scales as F·dt²/m, tiny.
-    driven_fictitious_mass : kg, the mass of a massless link in a driven
-        (dynamic or friction) run, as a uniform bar between its pins. There
-        its inertia force m·a does enter the reactions, so it is chosen small
-        against the loads; the error it causes is measured, not hidden (see
-        :mod:`mechcheck.sim_models.pymunk.linkage_dynamics`).
     fictitious_scale : factor on all fictitious inertia of a driven run (the
         massless links' and what near-point links get, see
-        :func:`mechcheck.sim_models.pymunk.model.body_inertia`); the twin run
+        :func:`mechcheck.sim_models.pymunk.linkage_model.driven_inertial`); the twin run
         that removes it by extrapolation has 2.
     settle_speed : 1/s, settled when every body's largest point speed
         (|v| + |ω|·L), divided by the mechanism's length scale L, is below
@@ -77,7 +71,6 @@ class SolverSettings:
     error_bias: float = 1.0e-6
     damping: float = 0.01
     fictitious_mass: float = 1000.0
-    driven_fictitious_mass: float = 1.0e-4
     fictitious_scale: float = 1.0
     settle_speed: float = 1.0e-9
     settle_force_change: float = 1.0e-10
