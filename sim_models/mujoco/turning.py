@@ -32,13 +32,10 @@ from numpy.typing import ArrayLike
 from mechcheck.analytic.case import Case, Motion
 from mechcheck.sim_models.locks import held_at_drawn
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
-from mechcheck.sim_models.mujoco.locks import TURN_SETTINGS, inertia_unit, servo_customizer
+from mechcheck.sim_models.mujoco.locks import LinkageServo
 from mechcheck.sim_models.mujoco.model import Settings
 from mechcheck.sim_models.presets import Renaming, as_linkage, output_load
 from mechcheck.sim_models.turning import (
-    SERVO_SPEED,
-    TIMESTEP,
-    TORQUE_LIMIT,
     Amplification,
     Sample,
     TurnResult,
@@ -78,23 +75,16 @@ class PresetPose:
                 output)
 
 
-class MujocoTurner:
+class MujocoTurner(LinkageServo):
     """The servo-driven MuJoCo model of a four-bar's or slider-crank's crank (a
-    :class:`~mechcheck.sim_models.turning.Turner`)."""
+    :class:`~mechcheck.sim_models.turning.Turner`): the lock servo on the crank of its
+    linkage, sampled as the preset's θ12, θ13 and θ14 (or s14)."""
 
     def __init__(self, case: Case) -> None:
+        super().__init__(held_at_drawn(as_linkage(bare(case))), "A0")
+        # The protocol starts at the preset's θ12 (run_leg reads case.theta12).
         self.case = case
-        linkage = held_at_drawn(as_linkage(bare(case)))
-        self.timestep = TIMESTEP
-        self.torque_limit = TORQUE_LIMIT * inertia_unit(linkage) * SERVO_SPEED**2
-        self.rig = LinkageRig(linkage, TURN_SETTINGS, servo_customizer(linkage, "A0"))
         self.pose = PresetPose(case, self.rig)
-
-    def reset(self, sense: int) -> None:
-        m, d = self.rig.model, self.rig.data
-        mujoco.mj_resetData(m, d)
-        d.ctrl[0] = sense * SERVO_SPEED
-        mujoco.mj_forward(m, d)
 
     def step(self) -> Sample:
         rig = self.rig
