@@ -9,8 +9,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import Joint
 from mechcheck.analytic.linkage_forces import solve_linkage
-from mechcheck.analytic.linkage_kinematics import Array
+from mechcheck.analytic.linkage_kinematics import Array, solve_pose
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.convergence import LEAD_CONDITION_GROWTH, LeadLimit
 
@@ -46,28 +47,46 @@ def is_driven(case: Case) -> bool:
     return case.linkage.is_moving or case.has_coulomb_friction
 
 
-#: rad/s or m/s: a driver slower than this is at rest for a simulator. In 1 s it moves
-#: 1e-9, below what a driven run tracks its motion to; measured (four-bar, 2026-11): MuJoCo
-#: read T12 7.8e-3 off at ω = −3e-232 rad/s, α = 0, where only the sign of ω sets the
-#: Coulomb senses.
+#: rad/s or m/s: a joint slower than this at the reading is at rest for a simulator. In 1 s
+#: it moves 1e-9, below what a driven run tracks its motion to; measured (four-bar,
+#: 2026-11): MuJoCo read T12 7.8e-3 off at ω = −3e-232 rad/s, α = 0, where only the sign of
+#: ω sets the Coulomb senses.
 REST_SPEED = 1e-9
 
 
-def at_rest_reason(case: Case) -> str:
-    """Why a simulator cannot measure a moving linkage's Coulomb friction, or ``""``: a
-    driver is at rest at the reading while it accelerates, so the relative motions reverse
-    there and the sense each Coulomb force opposes is the case's convention (the driver's
-    ``sense``), which no simulated motion shows."""
-    linkage = case.linkage
-    if not (linkage.is_moving and linkage.has_coulomb_friction):
+def coulomb_joints(case: Case) -> list[Joint]:
+    """The joints with a Coulomb term (a pin radius and μ, or a prismatic μ)."""
+    f = case.linkage.friction
+    if f is None:
+        return []
+    return [j for j in case.linkage.joints
+            if f.coefficient(j.name) * (f.pin_radius.get(j.name, 0.0)
+                                        if j.kind == "revolute" else 1.0) > 0.0]
+
+
+def at_rest_reason(case: Case, window: float) -> str:
+    """Why a simulator cannot measure a moving linkage's Coulomb friction, or ``""``: the
+    relative motion of a Coulomb joint is at rest at the reading, or reverses within
+    ``window`` (s, the simulator's longest time step) before it. A simulator takes each
+    Coulomb sense from its own joint rates, which a step's velocity error or a step across
+    the reversal can turn over, while the analytic sense there is the prescribed one (or,
+    at rest, the case's convention). Found by the random driven-friction test (2026-11-25):
+    ω = 6e-8 rad/s with α = 1 rad/s² at the reading, the crank reversing 6e-8 s before it;
+    MuJoCo read the pin friction with the other sign."""
+    joints = coulomb_joints(case)
+    if not (case.linkage.is_moving and joints):
         return ""
-    for d in linkage.drivers:
-        if abs(d.velocity) <= REST_SPEED and (d.acceleration or d.velocity):
-            return (f"the driver at {d.joint} is at rest at the reading (velocity "
-                    f"{d.velocity:g}, acceleration {d.acceleration:g}): the relative motions "
-                    "of the Coulomb friction reverse there, so the sense each opposes is not a "
-                    "property of the motion (the case's sense settles it by convention), and "
-                    "a simulator cannot measure it")
+    motion = prescribed_motion(case)
+    pose = solve_pose(case.linkage, *motion.at(np.array([-window, 0.0])))
+    for joint in joints:
+        _, rate, _ = pose.joint_coordinate(joint)
+        before, now = float(rate[0]), float(rate[1])
+        if abs(now) <= REST_SPEED or before * now <= 0.0:
+            return (f"the relative motion at the Coulomb joint {joint.name} is at rest at the "
+                    f"reading or reverses within {window:g} s of it (rate {now:.3g} at the "
+                    f"reading, {before:.3g} {window:g} s before): the sense its friction "
+                    "opposes there is not a property of the simulated motion, so a simulator "
+                    "cannot measure it")
     return ""
 
 

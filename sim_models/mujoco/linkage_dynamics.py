@@ -207,7 +207,7 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     (method ``driven``); ``results`` is the analytic pose analysis (verdicts, the instant's
     condition number)."""
     start = time.perf_counter()
-    at_rest = at_rest_reason(case)
+    at_rest = at_rest_reason(case, DYNAMIC.timestep)
     if at_rest:
         return Solution(case.name, "mujoco", {}, status="indeterminate", message=at_rest,
                         diagnostics={"method": "driven"}, units=quantity_units(case.linkage))

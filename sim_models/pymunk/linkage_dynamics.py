@@ -354,7 +354,7 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     if why is not None:
         return Solution(case.name, BACKEND, {}, status="not_applicable", units=units,
                         message=f"a {case.kind} linkage case: {why}")
-    at_rest = at_rest_reason(case)
+    at_rest = at_rest_reason(case, DRIVEN.dt)
     if at_rest:
         return Solution(case.name, BACKEND, {}, status="indeterminate", message=at_rest,
                         diagnostics={"method": "driven"}, units=units)
