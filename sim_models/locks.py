@@ -10,8 +10,11 @@ analytic range holds them. The analytic side gives the range to compare with
 (:func:`mechcheck.analytic.theory.driver_ranges`) and nothing else: the run starts from the
 drawn pose, which the case file gives.
 
-Only revolute drivers: a prismatic one has no velocity servo in pymunk (MuJoCo's would
-work; one protocol for both keeps the simulators comparable).
+A prismatic driver runs the same protocol in units of the linkage's size
+(:func:`driver_length`): its travel counts as an angle of travel / size and its force as a
+moment of force × size, so the servo's speed, bound, lead, stall and budget keep their
+meaning (pymunk has no linear motor; its servo is a pin whose error correction is capped
+at the servo speed, :mod:`mechcheck.sim_models.pymunk.locks`).
 """
 
 from __future__ import annotations
@@ -27,8 +30,8 @@ from mechcheck.sim_models.turning import Ending, Turner, run_leg
 @dataclass(frozen=True)
 class DriverLocks:
     """What driving one driver showed, in one simulator: where it came to rest in each
-    sense (rad from the drawn pose; None where it turned a full revolution or the run
-    was undecided), and how each run ended."""
+    sense (rad, or m for a prismatic driver, from the drawn pose; None where it turned a
+    full revolution or the run was undecided), and how each run ended."""
 
     simulator: str
     joint: str
@@ -42,15 +45,18 @@ def drive_both_ways(simulator: str, case: Case, joint: str,
                     turner: Callable[[Case, str], Turner]) -> DriverLocks:
     """Run ``joint``'s driver of the linkage ``case`` down and then up from the drawn pose
     with the simulator's :class:`Turner` (``turner(case, joint)``)."""
-    kind = case.linkage.joint(joint).kind
-    if kind != "revolute":
-        raise ValueError(f"joint {joint!r} is {kind}: the lock measurement drives revolute "
-                         "drivers only")
     runner = turner(held_at_drawn(case), joint)
     legs = [run_leg(runner, sense, 1.0) for sense in (-1, 1)]
-    rests = [leg.rest if leg.ending == "jammed" else None for leg in legs]
+    length = driver_length(case, joint)
+    rests = [leg.rest * length if leg.ending == "jammed" else None for leg in legs]
     return DriverLocks(simulator, joint, rests[0], rests[1],
                        (legs[0].ending, legs[1].ending), sum(len(leg.samples) for leg in legs))
+
+
+def driver_length(case: Case, joint: str) -> float:
+    """What a driver's coordinate is divided by to run the turning protocol: 1 for a
+    revolute driver (rad), the linkage's size for a prismatic one (m)."""
+    return 1.0 if case.linkage.joint(joint).kind == "revolute" else case.linkage.scale
 
 
 def held_at_drawn(case: Case) -> Case:

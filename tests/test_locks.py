@@ -1,5 +1,5 @@
 """Lock positions of any linkage measured in both simulators (issue 12: the turning checks
-generalised): each revolute driver, let go of its lock, is turned by a bounded-torque servo
+generalised): each driver, let go of its lock, is turned by a bounded-torque servo
 from the drawn pose both ways, the other drivers held, and where it jams is its lock. The
 expected values are the analytic driver ranges (:func:`mechcheck.analytic.theory.driver_ranges`,
 continuation of the closed-form dyads), a different method from the simulators' forward
@@ -67,7 +67,33 @@ def test_a_change_point_is_not_a_lock(simulator: str) -> None:
     assert measured.endings == ("turned", "turned")
 
 
-def test_a_prismatic_driver_is_refused_with_the_reason() -> None:
+#: A prismatic driver's lock, m: the same 0.01°, as the travel of a point one size L out on
+#: a link turning that much (the boom: L = 2 m, 3.5e-4 m). Measured: MuJoCo 2.1e-8 m,
+#: pymunk 1.0e-11 m.
+def lock_tol_length(scale: float) -> float:
+    return math.radians(LOCK_TOL_DEG) * scale
+
+
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_a_cylinder_locks_where_it_lines_up_with_its_pivots(simulator: str) -> None:
+    """The boom's cylinder (a prismatic driver, pymunk's servo a capped pin) stops where the
+    cylinder lines up with the boom pivot: the analytic range ends there both ways."""
     case = builtin_cases()["boom-hold-drawn"]
-    with pytest.raises(ValueError, match="revolute drivers only"):
-        mujoco_locks.driver_locks(case, "cyl")
+    expected = driver_ranges(case.linkage)[0]
+    assert expected.low is not None and expected.high is not None
+    measured = SIMULATORS[simulator](case, "cyl")
+    assert measured.endings == ("jammed", "jammed")
+    assert measured.low is not None and measured.high is not None
+    tol = lock_tol_length(case.linkage.scale)
+    assert measured.low == pytest.approx(expected.low, abs=tol)
+    assert measured.high == pytest.approx(expected.high, abs=tol)
+
+
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_a_slider_that_never_locks_travels_on(simulator: str) -> None:
+    """Exam Q2's driven slide has no lock either way (analytic: none); its servo runs it a
+    full protocol's travel both ways."""
+    case = builtin_cases()["exam-q2-frictionless"]
+    assert all(r.low is None and r.high is None for r in driver_ranges(case.linkage))
+    measured = SIMULATORS[simulator](case, "slide")
+    assert measured.endings == ("turned", "turned")
