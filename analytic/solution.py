@@ -8,6 +8,7 @@ reports are drawn (:data:`QUANTITY_UNITS`).
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -44,6 +45,16 @@ QUANTITY_ORDER = list(QUANTITY_UNITS)
 #: The quantities of a linkage (LINKAGES.md "What comes out"); their units depend on the
 #: joint or spring they name, so a Solution states them (:attr:`Solution.units`).
 LINKAGE_QUANTITY = re.compile(r"F_\w+_[xy]|M_\w+|Q_\w+|S_\w+|[xy]_\w+|phi_\w+|q_\w+")
+
+
+@functools.lru_cache(maxsize=256)
+def unknown_quantities(names: tuple[str, ...], with_units: tuple[str, ...]) -> frozenset[str]:
+    """The ``names`` that are neither a four-bar/slider-crank quantity nor a linkage
+    quantity (LINKAGES.md) among ``with_units``. Cached: a sweep builds thousands of
+    Solutions with the same names."""
+    linkage = set(with_units)
+    return frozenset(q for q in names if q not in QUANTITY_UNITS
+                     and not (LINKAGE_QUANTITY.fullmatch(q) and q in linkage))
 #: Order of a linkage's quantities in tables: by family, then by name.
 LINKAGE_FAMILIES = ("Q_", "F_", "M_", "S_", "x_", "y_", "phi_", "q_")
 
@@ -136,9 +147,7 @@ class Solution:
     def __post_init__(self) -> None:
         for name in ("values", "diagnostics", "units"):
             object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
-        unknown = {q for q in self.values
-                   if q not in QUANTITY_UNITS and not (LINKAGE_QUANTITY.fullmatch(q)
-                                                       and q in self.units)}
+        unknown = unknown_quantities(tuple(self.values), tuple(self.units))
         if unknown:
             raise ValueError(f"unknown quantities, or linkage quantities without a unit: "
                              f"{sorted(unknown)}")

@@ -6,16 +6,20 @@ Errors are measured as the tolerance policy measures them
 reference value of its kind at that pose), and each pose is judged against its
 policy tolerance (static 1e-6; near-singular, condition number > 1e4, 1e-2).
 
-Targets: settled statics ≤ 2 ms/pose, mujoco_solve ≤ 0.2 ms/pose.
+Each backend's time is printed beside a reference measured in the same run, and their
+ratio (issue 13): for settled statics the C floor, the steps the sweep's poses settled in
+(summed over their passes) stepped by a single-threaded ``mujoco.rollout`` of the same
+model with nothing else done; for ``mujoco_solve`` one bare ``mj_forward`` per pose.
+Targets: settled ≤ 2× the C floor; ``mujoco_solve`` ≤ 20 µs/pose.
 
 A second table follows the near-toggle study (seed E1 at θ12 = 180° − δ): the
 settled backend's status, error, steps and passes as the change point nears.
 A third table times a linkage sweep (issue 12): the Watt II six-bar held statically
 (``watt-ii-demo`` with its driver at rest) at 360 crank angles over −170°…100° (where it
 assembles from the drawn pose), through both backends, with the analytic pose analysis
-done once beforehand (not timed). The settled sweep continues from pose to pose
-(:func:`mechcheck.sim_models.mujoco.linkage.sweep_linkage`); its simple reference is the
-same sweep with every pose settled from nothing carried. Target: ≤ 2 ms/pose settled.
+done once beforehand (not timed). The settled sweep is stepped in batches
+(:func:`mechcheck.sim_models.mujoco.linkage.settled_sweep`), continued from settled
+neighbours; a row gives it with every pose settled from nothing carried.
 Medians over ``LINKAGE_REPEATS`` repeats, with min and max.
 
 Run: /work/venv/bin/python benchmarks/bench_mujoco.py [--linkage]
@@ -33,6 +37,7 @@ import numpy as np
 from mechcheck.analytic.forces import solve
 from mechcheck.casefile import builtin_case_files, load_cases
 from mechcheck.sim_models.mujoco.backend import settle, sweep
+from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sweep import gated_poses
 from mechcheck.tables import comparison_rows
 
@@ -75,9 +80,11 @@ def main() -> None:
     theta = np.radians(np.arange(360.0))
     print(f"MuJoCo {mujoco.__version__}; {CASE}, 360 poses (1° steps), the pose gate included; "
           f"median of {LINKAGE_REPEATS}\n")
-    print("| backend | ms/pose | poses ok | gated (singular) | not settled | worst rel. error "
-          "(cond ≤ 1e4) | outside tolerance | median steps | max steps |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("| backend | ms/pose | reference ms/pose | ratio | poses ok | gated (singular) | "
+          "not settled | worst rel. error (cond ≤ 1e4) | outside tolerance | median steps | "
+          "max steps |")
+    print("|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    linkage = as_linkage(case)
     for backend in ("mujoco", "mujoco_solve"):
         times = []
         for _ in range(LINKAGE_REPEATS):
@@ -86,8 +93,11 @@ def main() -> None:
             times.append((time.perf_counter() - start) / theta.size * 1e3)
         status = [s.status for s in sols]
         steps = [s.diagnostics.get("steps", 0) for s in sols if s.status == "ok"]
+        reference = (c_floor(linkage, steps, LINKAGE_REPEATS) if backend == "mujoco"
+                     else forward_floor(linkage, LINKAGE_REPEATS))
         _, failing, worst_regular = pose_errors(case, kept, sols)
-        print(f"| {backend} | {spread(times)} | {status.count('ok')} | "
+        print(f"| {backend} | {spread(times)} | {spread(reference, '.4f')} | "
+              f"{ratio(times, reference)} | {status.count('ok')} | "
               f"{gated} | {status.count('not_settled')} | "
               f"{worst_regular:.2e} | {failing} | {np.median(steps):.0f} | {max(steps)} |")
 
@@ -131,6 +141,49 @@ def linkage_errors(case, results, solutions):
     return worst, failing
 
 
+def c_floor(case, steps, repeats):
+    """ms per pose of stepping a 360-pose sweep's ``steps`` (each pose's total) with nothing
+    but MuJoCo: one single-threaded rollout of the static model from the drawn pose at rest,
+    as many steps in all; times over ``repeats``."""
+    import copy
+
+    from mujoco import rollout
+
+    from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
+
+    rig = LinkageRig(case)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.zeros(mujoco.mj_stateSize(rig.model, spec))
+    mujoco.mj_getState(rig.model, rig.data, state, spec)
+    per = max(1, round(sum(steps) / 360))
+    models = [copy.copy(rig.model) for _ in range(360)]
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        rollout.rollout(models, [mujoco.MjData(rig.model)], np.tile(state, (360, 1)), nstep=per)
+        times.append((time.perf_counter() - start) / 360 * 1e3)
+    return times
+
+
+def forward_floor(case, repeats):
+    """ms per pose of one bare ``mj_forward`` (a Python loop of 360), over ``repeats``."""
+    from mechcheck.sim_models.mujoco.linkage import exact_linkage_rig
+
+    rig = exact_linkage_rig(case)
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for _ in range(360):
+            mujoco.mj_forward(rig.model, rig.data)
+        times.append((time.perf_counter() - start) / 360 * 1e3)
+    return times
+
+
+def ratio(figure, reference):
+    """Median, min and max of figure/reference over paired repeats."""
+    return spread([f / r for f, r in zip(figure, reference, strict=True)], ".2f")
+
+
 def spread(values, fmt=".3f"):
     return f"{statistics.median(values):{fmt}} (min {min(values):{fmt}}, max {max(values):{fmt}})"
 
@@ -143,25 +196,25 @@ def linkage_sweep_table(cases) -> None:
     first = np.radians(np.linspace(-170.0, 100.0, 360))
     results = analytic_results(case, first)
     print(f"\n{LINKAGE} held statically, 360 poses over −170°…100°; {LINKAGE_REPEATS} repeats\n")
-    print("| backend | ms/pose | poses ok | worst rel. error | outside tolerance | "
-          "median steps | max steps |")
-    print("|---|---|---:|---:|---:|---:|---:|")
+    print("| backend | ms/pose | reference ms/pose | ratio | poses ok | worst rel. error | "
+          "outside tolerance | median steps | max steps |")
+    print("|---|---|---|---|---:|---:|---:|---:|---:|")
     runs = {"mujoco (continued)": ("mujoco", True), "mujoco (each pose alone)": ("mujoco", False),
             "mujoco_solve": ("mujoco_solve", True)}
-    medians = {}
     for label, (backend, continuation) in runs.items():
         times = []
         for _ in range(LINKAGE_REPEATS):
             start = time.perf_counter()
             sols = sweep_linkage(case, first, backend, results, continuation=continuation)
             times.append((time.perf_counter() - start) / first.size * 1e3)
-        medians[label] = statistics.median(times)
         worst, failing = linkage_errors(case, results, sols)
         steps = [s.diagnostics.get("steps", 0) for s in sols if s.status == "ok"]
+        reference = (c_floor(case, steps, LINKAGE_REPEATS) if backend == "mujoco"
+                     else forward_floor(case, LINKAGE_REPEATS))
         ok = sum(s.status == "ok" for s in sols)
-        print(f"| {label} | {spread(times)} | {ok} | {worst:.2e} | {failing} | "
+        print(f"| {label} | {spread(times)} | {spread(reference, '.4f')} | "
+              f"{ratio(times, reference)} | {ok} | {worst:.2e} | {failing} | "
               f"{np.median(steps):.0f} | {max(steps)} |")
-    print(f"\ncontinued / alone: {medians['mujoco (continued)'] / medians['mujoco (each pose alone)']:.2f}")
 
 
 if __name__ == "__main__":

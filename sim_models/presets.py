@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechcheck.analytic.case import Case, Load
-from mechcheck.analytic.forces import solve_poses, verdict_at, wrap_angle
+from mechcheck.analytic.forces import solve_poses, verdict_at
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_forces import pose_quantities
 from mechcheck.analytic.linkage_kinematics import solve_pose
@@ -62,7 +62,8 @@ class Renaming:
         for quantity, drawn in self.drawn.items():
             if moved[quantity] in values:
                 at = drawn + float(values[moved[quantity]])
-                out[quantity] = at if quantity == "s14" else float(wrap_angle(np.array(at)))
+                # wrap_angle on a float: np.remainder is Python's %, bit for bit.
+                out[quantity] = at if quantity == "s14" else (at + math.pi) % math.tau - math.pi
         return out
 
     def solution(self, solution: Solution, name: str) -> Solution:
@@ -150,22 +151,26 @@ def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, bac
     A moving or friction case is driven pose by pose (``solve``): with a drive on the
     rocker, each pose has its own rocker rates."""
     grid = np.asarray(theta12, dtype=float)
-    poses = [dataclasses.replace(case, theta12=float(t)) for t in grid]
+
+    def pose(i: int) -> Case:
+        return dataclasses.replace(case, theta12=float(grid[i]))
+
     given = verdicts(case, grid, backend)
     out: list[Solution] = []
     i = 0
     while i < grid.size:
         verdict = given[i]
         if verdict is not None or through_drive(case):
-            out.append(verdict or through_linkage(poses[i], solve))
+            out.append(verdict or through_linkage(pose(i), solve))
             i += 1
             continue
         stop = i + 1
         while stop < grid.size and given[stop] is None:
             stop += 1
-        stop = i + max(1, follows_branch(poses[i], grid[i:stop]))
-        results = sweep(as_linkage(poses[i]), driver_offsets(poses[i], grid[i:stop]))
-        renaming = Renaming.of(poses[i])
+        first = pose(i)
+        stop = i + max(1, follows_branch(first, grid[i:stop]))
+        results = sweep(as_linkage(first), driver_offsets(first, grid[i:stop]))
+        renaming = Renaming.of(first)
         out += [renaming.solution(s, case.name) for s in results]
         i = stop
     return out

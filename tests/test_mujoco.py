@@ -14,10 +14,12 @@ import importlib
 import io
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings, strategies as st
 
 import mechcheck
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
@@ -27,6 +29,7 @@ from mechcheck.analytic.presets import linkage_of
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
 from mechcheck.sim_models.mujoco.backend import settle, solve_at_pose, sweep
+from mechcheck.sim_models.mujoco.batch_settle import CHUNK, RULES, first_stops
 from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
 from mechcheck.sim_models.mujoco.linkage_model import model_xml
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
@@ -207,11 +210,28 @@ def watch_until_settled(forces: np.ndarray) -> tuple[int, str]:
     return -1, ""
 
 
+def batch_until_settled(forces: np.ndarray) -> tuple[int, str]:
+    """The same from the batch settler's vectorised rule (:func:`.batch_settle.first_stops`),
+    fed chunk by chunk with the pass's history as the settler feeds it."""
+    history = np.full((1, FLOOR_WINDOW - 1, forces.shape[1]), np.nan)
+    for start in range(0, len(forces), CHUNK):
+        chunk = forces[start:start + CHUNK][None]
+        first, rule = first_stops(history, chunk, np.zeros(chunk.shape[:2]))
+        if first[0] >= 0:
+            return start + int(first[0]), RULES[rule[0]]
+        history = np.concatenate([history, chunk], axis=1)[:, -(FLOOR_WINDOW - 1):]
+    return -1, ""
+
+
+STOP_RULES = {"per step": watch_until_settled, "batch": batch_until_settled}
+
+
 #: Forces of the size of seed E1's next to its change point, N (F34 and the drive torque / scale).
 E1_FORCES = np.array([-1798.6, -5.87, 0.0, 40.15])
 
 
-def test_stop_rule_accepts_the_rounding_floor() -> None:
+@pytest.mark.parametrize("until_settled", STOP_RULES.values(), ids=STOP_RULES)
+def test_stop_rule_accepts_the_rounding_floor(until_settled: Any) -> None:
     """Forces cycling on their rounding floor are settled once a floor window has shown it.
 
     The cycle is the one measured on seed E1 0.332° from its change point (second pass):
@@ -223,19 +243,36 @@ def test_stop_rule_accepts_the_rounding_floor() -> None:
     wobble = np.tile(cycle, 40)
     forces = np.tile(E1_FORCES, (wobble.size, 1))
     forces[:, 0] *= 1.0 + wobble
-    at, rule = watch_until_settled(forces)
+    at, rule = until_settled(forces)
     assert (at, rule) == (FLOOR_WINDOW - 1, "floor")
 
 
+@pytest.mark.parametrize("until_settled", STOP_RULES.values(), ids=STOP_RULES)
 @pytest.mark.parametrize("half_period", [13, 18, 36])
-def test_stop_rule_does_not_take_a_slow_swing_for_the_floor(half_period: int) -> None:
+def test_stop_rule_does_not_take_a_slow_swing_for_the_floor(half_period: int,
+                                                            until_settled: Any) -> None:
     """A lightly damped mode (half-periods 13–36 steps at condition numbers 360–2100) is not
     judged settled at a turning point: when the rule fires, the forces are within the floor
     tolerance of where they end."""
     t = np.arange(20000)
     swing = 1e-5 * 0.98**t * np.cos(np.pi * t / half_period + 0.7)
-    at, _ = watch_until_settled(E1_FORCES * (1.0 + swing[:, None]))
+    at, _ = until_settled(E1_FORCES * (1.0 + swing[:, None]))
     assert at > 0 and abs(swing[at]) <= 3 * WOBBLE_RTOL
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(1e-9, 1e-3), st.floats(0.3, 0.999), st.integers(2, 60), st.floats(0.0, 6.3),
+       st.floats(0.0, 3e-8), st.integers(0, 2**32 - 1))
+def test_batch_stop_rule_is_the_per_step_rule(amplitude: float, decay: float, half_period: int,
+                                              phase: float, floor: float, seed: int) -> None:
+    """The batch settler's vectorised rule fires at the same reading, by the same rule, as
+    :class:`DecayWatch` reading one step at a time: damped swings of any rate and period on
+    a rounding floor of any size (seed E1's forces)."""
+    t = np.arange(3000)
+    noise = np.random.default_rng(seed).uniform(-floor, floor, t.size)
+    swing = amplitude * decay**t * np.cos(np.pi * t / half_period + phase) + noise
+    forces = E1_FORCES * (1.0 + swing[:, None])
+    assert batch_until_settled(forces) == watch_until_settled(forces)
 
 
 def test_refinement_counts_the_passes_still_to_come() -> None:

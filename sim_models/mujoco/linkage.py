@@ -29,6 +29,7 @@ from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
+from mechcheck.sim_models.mujoco.batch_settle import BatchSettler, sensing_rig
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_friction import (
@@ -43,6 +44,7 @@ from mechcheck.sim_models.mujoco.settle import settle_refined, settled_solution
 from mechcheck.sim_models.mujoco.solve import (
     FRICTION_MAX_PASSES,
     FRICTION_RTOL,
+    batch_rigid_forces,
     impose_rigid_forces,
 )
 
@@ -149,13 +151,19 @@ def senses_at(results: LinkageResults, index: int) -> dict[str, float]:
 def constraint_solve(rig: LinkageRig, qacc: np.ndarray) -> tuple[dict[str, float], float]:
     """The rigid constraint forces at the rig's state and the reading; the equations'
     residual."""
+    residual = constraint_forces_at(rig, qacc)
+    return rig.read(), residual
+
+
+def constraint_forces_at(rig: LinkageRig, qacc: np.ndarray) -> float:
+    """Impose the rigid constraint forces of the motion ``qacc`` at the rig's state, the
+    loads applied there; returns the equations' residual (:func:`.solve.impose_rigid_forces`)."""
     m, d = rig.model, rig.data
     mujoco.mj_kinematics(m, d)  # load points and centres of mass for the loads
     mujoco.mj_comPos(m, d)
     rig.apply_loads()
     mujoco.mj_forward(m, d)
-    residual = impose_rigid_forces(m, d, qacc)
-    return rig.read(), residual
+    return impose_rigid_forces(m, d, qacc)
 
 
 def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
@@ -188,29 +196,100 @@ def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
                     units=rig.units or {})
 
 
-def predicted(history: list[tuple[float, np.ndarray]], value: float) -> np.ndarray:
-    """The constraint forces to start a pose with: extrapolated linearly in the first
-    driver's value from the last two settled poses, or the last one's alone."""
-    if len(history) == 1 or history[1][0] == history[0][0]:
-        return history[-1][1]
-    (v0, f0), (v1, f1) = history
-    return f1 + (f1 - f0) * (value - v1) / (v1 - v0)
+def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults) -> list[Solution]:
+    """The exact solve (:func:`exact_solution`) at every pose of ``results``, without
+    Coulomb friction (nothing to iterate), in three passes over the poses so that the
+    linear algebra and the read-out run once for all of them: the load points (MuJoCo's
+    kinematics), the constraint equations (its forward pass: Jacobian and smooth forces),
+    then, with the batch's forces imposed, its kinematics (the whole forward pass again if
+    the linkage has springs: their tendons) and ``mj_rnePostConstraint``, captured and
+    read at once (:meth:`.linkage_rig.LinkageRig.values`). The wall time reported per
+    pose is the sweep's share."""
+    start = time.perf_counter()
+    qpos, qvel, qacc = rig.joint_states(results.pose)
+    clear_friction(rig)
+    loads = rig.wrenches(*load_points(rig, qpos), qvel)
+    jac, rhs, gaps = constraint_equations(rig, (qpos, qvel, qacc), results.pose.drivers,
+                                          loads)
+    forces, residual = batch_rigid_forces(jac, rhs)
+    snapshot = rig.snapshot(len(qpos))
+    m, d = rig.model, rig.data
+    for i in range(len(qpos)):
+        rig.set_state(qpos[i], qvel[i])
+        d.xfrc_applied[:] = loads[i]
+        if m.ntendon:  # the tendons' lengths and pull on their sites: the whole pass
+            mujoco.mj_forward(m, d)
+        else:  # what the RNE reads
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            mujoco.mj_comVel(m, d)
+        d.efc_force[:rig.nefc] = forces[i]
+        d.qacc[:] = qacc[i]
+        mujoco.mj_rnePostConstraint(m, d)
+        rig.capture(snapshot, i)
+    columns = rig.values(snapshot)
+    share = (time.perf_counter() - start) / max(len(qpos), 1)
+    common = RunDiagnostics("constraint_solve", 0, share, 0.0, 0.0, 0.0).as_dict()
+    rows = zip(*(c.tolist() for c in columns.values()), strict=True)
+    return [Solution(case.name, "mujoco_solve", dict(zip(columns, row, strict=True)),
+                     diagnostics={**common, "loop_violation": gap, "equation_residual": r},
+                     units=rig.units or {})
+            for row, gap, r in zip(rows, gaps.tolist(), residual.tolist(), strict=True)]
 
 
+def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets: np.ndarray,
+                         loads: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """MuJoCo's forward pass at each pose of ``state`` (qpos, qvel, qacc: (N, nv) each),
+    drivers at ``targets``, with ``loads`` as xfrc_applied: the constraint Jacobians J
+    (N, nefc, nv), the right-hand sides M·qacc − qfrc_smooth of Jᵀ f = rhs (armature
+    excluded, as :func:`.solve.impose_rigid_forces`) and the loop gaps (N,)."""
+    m, d = rig.model, rig.data
+    qpos, qvel, qacc = state
+    n, nefc = len(qpos), rig.nefc
+    jac = np.empty((n, nefc, m.nv))
+    rhs = np.empty((n, m.nv))
+    efc_pos = np.empty((n, nefc))
+    inertial = np.zeros(m.nv)
+    moving = bool(qacc.any())
+    for i in range(n):
+        rig.set_state(qpos[i], qvel[i])
+        rig.set_targets(targets[i])
+        d.xfrc_applied[:] = loads[i]
+        mujoco.mj_forward(m, d)
+        jac[i] = d.efc_J[:nefc * m.nv].reshape(nefc, m.nv)
+        efc_pos[i] = d.efc_pos[:nefc]
+        if moving:
+            mujoco.mj_mulM(m, d, inertial, qacc[i])
+            inertial -= m.dof_armature * qacc[i]
+        rhs[i] = inertial - d.qfrc_smooth
+    return jac, rhs, rig.loop_gaps(efc_pos)
+
+
+def load_points(rig: LinkageRig, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(site_xpos, xipos) of MuJoCo's kinematics at each pose of ``qpos`` (N, nq)."""
+    m, d = rig.model, rig.data
+    sites = np.empty((len(qpos), *d.site_xpos.shape))
+    centres = np.empty((len(qpos), *d.xipos.shape))
+    for i, q in enumerate(qpos):
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        sites[i], centres[i] = d.site_xpos, d.xipos
+    return sites, centres
 def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
                   results: LinkageResults | None = None, *,
                   continuation: bool = True) -> list[Solution]:
     """Either backend at every value of the linkage's first driver (rad or m, from the
     drawn pose; the other drivers at the case's values), in order.
 
-    One model serves every pose and the analytic pose analysis (``results``, computed here
-    unless given) is done once, vectorised; each pose is seeded from its analytic pose
-    (:func:`seed`). Settled statics continue from the last settled pose: its constraint
-    forces — MuJoCo's own — start the next pose as carried loads (:mod:`.rig`), so the
+    The analytic pose analysis (``results``, computed here unless given) is done once,
+    vectorised, and each pose is seeded from its analytic pose. Settled statics are
+    stepped in batches (:func:`settled_sweep`); poses continue from their settled
+    neighbours' constraint forces — MuJoCo's own — as carried loads (:mod:`.rig`), so the
     constraints hold only the change from pose to pose and settle sooner. The refinement
-    passes still end only when two passes agree (:func:`.settle.settle_refined`), so the
-    start changes the steps, not the equilibrium (``continuation=False``: every pose
-    from nothing carried, as when solved alone).
+    passes still end only when two passes agree, so the start changes the steps, not the
+    equilibrium (``continuation=False``: every pose from nothing carried, as when solved
+    alone). The exact solve runs as one batch (:func:`exact_sweep`), pose by pose with
+    Coulomb friction.
     """
     first = np.asarray(first, dtype=float)
     why = unbuildable(case)
@@ -222,22 +301,31 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
         return [refused(case, backend, why)] * len(first)
     if results is None:
         results = analytic_results(case, np.asarray(first, dtype=float))
-    rig = LinkageRig(case) if backend == "mujoco" else exact_linkage_rig(case)
+    if backend == "mujoco":
+        return settled_sweep(case, first, results, continuation)
+    rig = exact_linkage_rig(case)
+    if not coulomb_terms(results.pose):
+        return exact_sweep(case, rig, results)
     states = rig.joint_states(results.pose)
     targets = results.pose.drivers
-    history: list[tuple[float, np.ndarray]] = []  # the last settled poses' forces
     out = []
     for i in range(len(first)):
         start = time.perf_counter()
-        if backend == "mujoco":
-            qpos = seed(rig, states[0][i], targets[i])
-            if continuation and history:
-                rig.carried = predicted(history, float(first[i]))
-            result = settle_refined(rig, qpos)
-            out.append(settled_solution(rig, qpos, result, time.perf_counter() - start))
-            history = [*history[-1:], (float(first[i]), rig.total_constraint_forces())] \
-                if result.settled else []
-        else:
-            out.append(exact_solution(case, rig, tuple(a[i] for a in states), targets[i], start,
-                                      senses_at(results, i)))
+        out.append(exact_solution(case, rig, tuple(a[i] for a in states), targets[i], start,
+                                  senses_at(results, i)))
     return out
+
+
+def settled_sweep(case: Case, first: np.ndarray, results: LinkageResults,
+                  continuation: bool) -> list[Solution]:
+    """Settled statics at every pose of ``results``, stepped in batches by MuJoCo's rollout
+    (:class:`.batch_settle.BatchSettler`); ``continuation``: the poses between every
+    STRIDE-th start from the constraint forces those settled at. The wall time reported
+    per pose is the sweep's share."""
+    start = time.perf_counter()
+    rig = sensing_rig(case)
+    qpos = rig.joint_states(results.pose)[0]
+    settled = BatchSettler(rig).settle(qpos, results.pose.drivers,
+                                       first if continuation else None)
+    share = (time.perf_counter() - start) / max(len(first), 1)
+    return [settled_solution(rig, q, result, share) for q, result in zip(qpos, settled, strict=True)]

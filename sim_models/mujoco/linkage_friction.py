@@ -12,7 +12,7 @@ load through ``xfrc_applied``, its magnitude from the reactions MuJoCo reports
   force is part of the joint's reported reaction (:attr:`LinkageRig.sliding`).
 
 Viscous friction is MuJoCo's own joint damping (:mod:`.linkage_model`), or on a loop-closing joint
-a couple from MuJoCo's joint rates (:meth:`.linkage_rig.LinkageRig.apply_closure_damping`).
+a couple from MuJoCo's joint rates (:meth:`.linkage_rig.LinkageRig.wrenches`).
 """
 
 from __future__ import annotations

@@ -50,9 +50,59 @@ from mechcheck.sim_models.mujoco.linkage_model import (
     spanning_tree,
 )
 from mechcheck.sim_models.mujoco.model import STATIC, Settings, place_frames_exactly
-from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, parent_force, xfrc_of_loads
+from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, load_wrenches
 
 Array = NDArray[np.float64]
+
+
+#: What the read-out reads of MjData (:class:`Snapshot`).
+SNAPSHOT_FIELDS = ("efc_force", "efc_pos", "qacc", "qpos", "qvel", "cfrc_int", "subtree_com", "xpos",
+                   "xmat", "site_xpos", "ten_length", "ten_velocity")
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The MjData arrays the read-out needs, for N states (leading axis)."""
+
+    efc_force: Array
+    efc_pos: Array
+    qacc: Array
+    qpos: Array
+    qvel: Array
+    cfrc_int: Array
+    subtree_com: Array
+    xpos: Array
+    xmat: Array
+    site_xpos: Array
+    ten_length: Array
+    ten_velocity: Array
+
+
+def one_state(columns: dict[str, Array]) -> dict[str, float]:
+    """The (1,) columns of one state's read-out as floats."""
+    return dict(zip(columns, np.concatenate(list(columns.values())).tolist(), strict=True))
+
+
+@dataclass(frozen=True)
+class ReadPlan:
+    """Where each quantity of the read-out is in MuJoCo's arrays
+    (:meth:`LinkageRig.values`): index arrays, planned once per rig."""
+
+    order: tuple[str, ...]
+    effort_names: tuple[str, ...]
+    effort_rows: NDArray[np.int_]
+    effort_dofs: NDArray[np.int_]
+    effort_armature: Array
+    pin_names: tuple[str, ...]
+    pin_bodies: NDArray[np.int_]
+    pin_signs: Array
+    loop_names: tuple[str, ...]
+    loop_rows: NDArray[np.int_]
+    slides: tuple[Joint, ...]
+    point_names: tuple[str, ...]
+    point_sites: NDArray[np.int_]
+    joint_names: tuple[str, ...]
+    joint_rows: Array
 
 
 @dataclass(frozen=True)
@@ -84,6 +134,11 @@ class LinkageRig:
         self.model = spec.compile()
         place_frames_exactly(self.model)
         self.data = mujoco.MjData(self.model)
+        #: The arrays :meth:`capture` copies (views of ``data``, which lives as long as the
+        #: rig), but the constraint arrays.
+        self.sources = [(field, getattr(self.data, field)) for field in SNAPSHOT_FIELDS
+                        if not field.startswith("efc_")]
+        self.single = {field: source[None] for field, source in self.sources}
         self.scale = linkage.scale
         self.units: dict[str, str] | None = quantity_units(linkage)
         m = self.model
@@ -112,6 +167,7 @@ class LinkageRig:
                         for j in self.tree.closures}
         self.drive_eq = {d.joint: self._id(mujoco.mjtObj.mjOBJ_EQUALITY, f"drive_{d.joint}")
                          for d in linkage.drivers}
+        self.driver_eqs = np.array([self.drive_eq[d.joint] for d in linkage.drivers], dtype=int)
         self.loop_sites = {j.name: tuple(self._id(mujoco.mjtObj.mjOBJ_SITE, s)
                                          for s in closure_sites(j)) for j in self.tree.closures}
         self.point_sites = {p: self._id(mujoco.mjtObj.mjOBJ_SITE, f"point_{p}")
@@ -150,6 +206,8 @@ class LinkageRig:
         #: MuJoCo's own joint rates, applied with the loads.
         self.closure_damping = {j.name: c for j in self.tree.closures
                                 if (c := joint_damping(linkage, j)) > 0.0}
+        self.phi_names = tuple(f"phi_{link}" for link in linkage.moving_links)
+        self.plan = self._read_plan()
 
     def _id(self, kind: mujoco.mjtObj, name: str) -> int:
         found = int(mujoco.mj_name2id(self.model, kind, name))
@@ -234,30 +292,34 @@ class LinkageRig:
 
     def set_targets(self, values: Array) -> None:
         """Hold each driven joint at its value (rad or m, from the drawn pose)."""
-        for driver, value in zip(self.linkage.drivers, values, strict=True):
-            self.model.eq_data[self.drive_eq[driver.joint], 0] = value
+        self.model.eq_data[self.driver_eqs, 0] = values
 
     # -- loads ------------------------------------------------------------------------
     def apply_loads(self) -> None:
-        """xfrc_applied from the current pose (see :func:`.rig.xfrc_of_loads`)."""
-        xfrc_of_loads(self.data, self.loads, self.incidence, self.body_forces,
-                      np.zeros(self.model.nbody))
-        if self.extra.any():
-            self.data.xfrc_applied[:] += self.extra
-        if self.closure_damping and self.viscous:
-            self.apply_closure_damping()
+        """xfrc_applied from the current pose (:meth:`wrenches`), and the carried forces."""
+        d = self.data
+        d.xfrc_applied[:] = self.wrenches(d.site_xpos[None], d.xipos[None], d.qvel[None])[0]
         if self.carried.any():
             self.apply_carried()
 
-    def apply_closure_damping(self) -> None:
-        """The couple −c·q̇ of each damper on a loop-closing joint on its second link, and
-        its opposite on the first, from the current joint velocities."""
-        rates = self.joint_rates(self.data.qvel)
-        for name, c in self.closure_damping.items():
-            i, j = self.linkage.joint(name).links
-            for link, share in ((j, 1.0), (i, -1.0)):
-                if link != GROUND:
-                    self.data.xfrc_applied[self.body[link], 5] -= share * c * rates[name]
+    def wrenches(self, site_xpos: Array, xipos: Array, qvel: Array) -> Array:
+        """(N, nbody, 6): the xfrc_applied of N states: the loads
+        (:func:`.rig.load_wrenches`), the emulated friction (``extra``) and the couples −c·q̇
+        of the dampers on loop-closing joints, on the joint's second link and opposite on
+        its first, from the states' joint velocities."""
+        out = load_wrenches(site_xpos, xipos, self.loads, self.incidence, self.body_forces)
+        out += self.extra
+        if self.closure_damping and self.viscous:
+            omega = qvel @ self.rotation.T
+            spin = {link: omega[:, k] for k, link in enumerate(self.linkage.moving_links)}
+            still = np.zeros(qvel.shape[0])
+            for name, c in self.closure_damping.items():
+                i, j = self.linkage.joint(name).links
+                rate = spin.get(j, still) - spin.get(i, still)
+                for link, share in ((j, 1.0), (i, -1.0)):
+                    if link != GROUND:
+                        out[:, self.body[link], 5] -= share * c * rate
+        return out
 
     def reset_carried(self) -> None:
         self.carried = np.zeros(self.nefc)
@@ -288,54 +350,143 @@ class LinkageRig:
     # -- read-out ---------------------------------------------------------------------
     def point_on(self, link: str, drawn: tuple[float, float]) -> Array:
         """Current global (x, y) of a point fixed to ``link`` that was at ``drawn``."""
-        d, b = self.data, self.body[link]
+        d = self.data
+        return self._point_on(d.xpos[None], d.xmat[None], link, drawn)[0]
+
+    def _point_on(self, xpos: Array, xmat: Array, link: str,
+                  drawn: tuple[float, float]) -> Array:
+        """(N, 2): the point of ``link`` drawn at ``drawn`` in N states' body frames."""
+        b = self.body[link]
         o = origin_of(self.tree, self.linkage, link)
         r = np.array([drawn[0] - o[0], drawn[1] - o[1], 0.0])
-        return (d.xpos[b] + d.xmat[b].reshape(3, 3) @ r)[:2]
+        return (xpos[:, b] + xmat[:, b].reshape(-1, 3, 3) @ r)[:, :2]
 
     def spring_tensions(self) -> Array:
         """Each linear spring's tension from MuJoCo's tendon length and speed."""
-        m, d = self.model, self.data
-        return (m.tendon_stiffness * (d.ten_length - m.tendon_lengthspring[:, 0])
-                + m.tendon_damping * d.ten_velocity)
+        d = self.data
+        return self._tensions(d.ten_length[None], d.ten_velocity[None])[0]
+
+    def _tensions(self, length: Array, velocity: Array) -> Array:
+        m = self.model
+        return (m.tendon_stiffness * (length - m.tendon_lengthspring[:, 0])
+                + m.tendon_damping * velocity)
+
+    def snapshot(self, n: int = 1) -> Snapshot:
+        """Room for the read-out arrays of ``n`` states (:meth:`capture`, :meth:`values`)."""
+        d = self.data
+        return Snapshot(*(np.zeros((n, *getattr(d, field).shape)) for field in SNAPSHOT_FIELDS))
+
+    def capture(self, snapshot: Snapshot, i: int = 0) -> None:
+        """Copy what the read-out needs of the current data (after a forward pass and
+        ``mj_rnePostConstraint``) into row ``i`` of ``snapshot``; the equality forces with
+        the carried ones."""
+        d = self.data
+        for field, source in self.sources:
+            getattr(snapshot, field)[i] = source
+        # The constraint arrays live in MuJoCo's arena, laid out anew by each forward pass.
+        snapshot.efc_force[i] = d.efc_force
+        snapshot.efc_pos[i] = d.efc_pos
+        snapshot.efc_force[i, :self.nefc] += self.carried
 
     def read(self) -> dict[str, float]:
         """Every quantity from the current data (call after a forward pass)."""
-        m, d = self.model, self.data
-        mujoco.mj_rnePostConstraint(m, d)
-        total = self.total_constraint_forces()
-        efforts = {j: float(total[rows[0]] - self.drive_armature[j] * d.qacc[self.dof[j]])
-                   for j, rows in self.drive_rows.items()}
-        values = {f"Q_{j}": q for j, q in efforts.items()}
-        for joint in self.linkage.joints:
-            values.update(self._reaction(joint, total, efforts.get(joint.name, 0.0)))
-        values.update(self._springs())
-        values.update(self.pose_values())
-        return {k: float(v) for k, v in values.items()}
+        mujoco.mj_rnePostConstraint(self.model, self.data)
+        return one_state(self.values(self.current()))
 
-    def _reaction(self, joint: Joint, total: Array, effort: float) -> dict[str, float]:
+    def current(self) -> Snapshot:
+        """The current data as a Snapshot of one state: views, no copies (but the
+        equality forces, with the carried ones added)."""
+        return Snapshot(efc_force=self.total_constraint_forces()[None],
+                        efc_pos=self.data.efc_pos[None], **self.single)
+
+    def values(self, s: Snapshot) -> dict[str, Array]:
+        """Every quantity of the states in ``s``, each an (N,) array: the read-out of
+        LINKAGES.md from MuJoCo's own arrays, vectorised over states (a sweep captures
+        every pose and reads them at once), by gathers planned once (:class:`ReadPlan`)."""
+        plan = self.plan
+        total = s.efc_force[:, :self.nefc]
+        efforts = total[:, plan.effort_rows] - plan.effort_armature * s.qacc[:, plan.effort_dofs]
+        pins = s.cfrc_int[:, plan.pin_bodies, 3:5] * plan.pin_signs[:, None]
+        out = dict(zip(plan.effort_names, efforts.T, strict=True))
+        out.update(zip(plan.pin_names, pins.reshape(len(pins), -1).T, strict=True))
+        out.update(zip(plan.loop_names, total[:, plan.loop_rows].T, strict=True))
+        for joint in plan.slides:
+            effort = out.get(f"Q_{joint.name}")
+            out.update(self._slide_reaction(s, joint, effort))
+        out.update(self._springs(s))
+        out.update(self._pose_columns(s.qpos, s.site_xpos))
+        return {name: out[name] for name in plan.order}
+
+    def _slide_reaction(self, s: Snapshot, joint: Joint,
+                        effort: Array | None) -> dict[str, Array]:
+        """A prismatic tree joint's reaction: force and moment about ``at``, by links[0] on
+        links[1] (the tree joint's sign)."""
         name = joint.name
-        if name in self.loop_rows:
-            f = total[self.loop_rows[name]]
-            return {f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
         t = self.tree_joints[name]
-        if joint.kind == "revolute":  # a force at the pin: its moment is not needed
-            f = t.sign * self.data.cfrc_int[self.body[t.child], 3:5]
-            return {f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
-        point = self.point_on(joint.links[1], self.linkage.points[joint.at])
-        f, moment = parent_force(self.model, self.data, self.body[t.child], point)
-        f, moment = t.sign * f, t.sign * moment  # by links[0] on links[1]
-        u = self.axis_of(joint)
+        child = self.body[t.child]
+        point = self._point_on(s.xpos, s.xmat, joint.links[1], self.linkage.points[joint.at])
+        # cfrc_int's moment is about the centre of mass of the body's kinematic tree.
+        f = s.cfrc_int[:, child, 3:5]
+        c = s.subtree_com[:, self.model.body_rootid[child], :2]
+        moment = t.sign * (s.cfrc_int[:, child, 2] + cross_z(c - point, f))
+        u = self._axis_of(s.xmat, joint)
         # The driver's effort is reported as Q, not in F; emulated friction along the axis
         # is applied as a load, but it is part of the joint's reaction.
-        f = f + (self.sliding.get(name, 0.0) - effort) * u
-        return {f"M_{name}": moment, f"F_{name}_x": float(f[0]), f"F_{name}_y": float(f[1])}
+        along = self.sliding.get(name, 0.0) - (0.0 if effort is None else effort)
+        f = t.sign * f + np.asarray(along)[..., None] * u
+        return {f"M_{name}": moment, f"F_{name}_x": f[:, 0], f"F_{name}_y": f[:, 1]}
+
+    def _read_plan(self) -> ReadPlan:
+        linkage = self.linkage
+        drivers = list(self.drive_rows)
+        pins = [t for t in self.tree.tree if t.joint.kind == "revolute"]
+        loops = list(self.loop_rows)
+        slides = [t.joint for t in self.tree.tree if t.joint.kind == "prismatic"]
+        order = [f"Q_{j}" for j in drivers]
+        for joint in linkage.joints:
+            order += ([f"M_{joint.name}"] if joint.kind == "prismatic" else []) \
+                + [f"F_{joint.name}_x", f"F_{joint.name}_y"]
+        order += [f"S_{spring.name}" for spring in linkage.springs]
+        order += [f"{axis}_{p}" for p in self.point_sites for axis in "xy"]
+        order += [f"phi_{link}" for link in linkage.moving_links]
+        order += [f"q_{joint.name}" for joint in linkage.joints]
+        # q of every joint: a tree joint's coordinate, a closure's relative rotation.
+        rows = np.zeros((len(linkage.joints), self.model.nq))
+        index = {link: k for k, link in enumerate(linkage.moving_links)}
+        for k, joint in enumerate(linkage.joints):
+            if joint.name in self.dof:
+                rows[k, self.dof[joint.name]] = 1.0
+            else:
+                i, j = joint.links
+                rows[k] = (self.rotation[index[j]] if j in index else 0.0) \
+                    - (self.rotation[index[i]] if i in index else 0.0)
+        return ReadPlan(
+            order=tuple(order),
+            effort_names=tuple(f"Q_{j}" for j in drivers),
+            effort_rows=np.array([self.drive_rows[j][0] for j in drivers], dtype=int),
+            effort_dofs=np.array([self.dof[j] for j in drivers], dtype=int),
+            effort_armature=np.array([self.drive_armature[j] for j in drivers]),
+            pin_names=tuple(f"F_{t.joint.name}_{a}" for t in pins for a in "xy"),
+            pin_bodies=np.array([self.body[t.child] for t in pins], dtype=int),
+            pin_signs=np.array([float(t.sign) for t in pins]),
+            loop_names=tuple(f"F_{j}_{a}" for j in loops for a in "xy"),
+            loop_rows=np.array([self.loop_rows[j][k] for j in loops for k in (0, 1)],
+                               dtype=int),
+            slides=tuple(slides),
+            point_names=tuple(f"{a}_{p}" for p in self.point_sites for a in "xy"),
+            point_sites=np.array(list(self.point_sites.values()), dtype=int),
+            joint_names=tuple(f"q_{j.name}" for j in linkage.joints),
+            joint_rows=rows,
+        )
 
     def axis_of(self, joint: Joint) -> Array:
         """A prismatic joint's current sliding direction (fixed in links[0])."""
+        return self._axis_of(self.data.xmat[None], joint)[0]
+
+    def _axis_of(self, xmat: Array, joint: Joint) -> Array:
         assert joint.axis is not None
         b0 = self.body[joint.links[0]]
-        return (self.data.xmat[b0].reshape(3, 3) @ np.array([*joint.axis, 0.0]))[:2]
+        return (xmat[:, b0].reshape(-1, 3, 3) @ np.array([*joint.axis, 0.0]))[:, :2]
 
     def without_viscous(self) -> None:
         """No damper anywhere (a quasi-static run: the analytic motion has no speed, so
@@ -344,42 +495,42 @@ class LinkageRig:
         self.model.tendon_damping[:] = 0.0
         self.viscous = False
 
-    def _springs(self) -> dict[str, float]:
-        d = self.data
-        out: dict[str, float] = {}
-        tensions = self.spring_tensions()
+    def _springs(self, s: Snapshot) -> dict[str, Array]:
+        out: dict[str, Array] = {}
+        if not self.linkage.springs:
+            return out
+        tensions = self._tensions(s.ten_length, s.ten_velocity)
         for k, linear in enumerate(self.springs):
-            out[f"S_{linear.name}"] = float(tensions[k])
+            out[f"S_{linear.name}"] = tensions[:, k]
         for torsion in self.linkage.springs:
             if isinstance(torsion, TorsionSpring):
                 dof = self.dof[torsion.joint]  # = its qpos address (hinges and slides only)
-                out[f"S_{torsion.name}"] = float(
-                    torsion.stiffness * (d.qpos[dof] - torsion.free_rotation)
-                    + (torsion.damping * d.qvel[dof] if self.viscous else 0.0))
+                out[f"S_{torsion.name}"] = (
+                    torsion.stiffness * (s.qpos[:, dof] - torsion.free_rotation)
+                    + (torsion.damping * s.qvel[:, dof] if self.viscous else 0.0))
         return out
 
     def pose_values(self) -> dict[str, float]:
         d = self.data
-        out: dict[str, float] = {}
-        for p, site in self.point_sites.items():
-            out[f"x_{p}"], out[f"y_{p}"] = float(d.site_xpos[site, 0]), float(d.site_xpos[site, 1])
-        phi = dict(zip(self.linkage.moving_links, self.rotation @ d.qpos, strict=True))
-        phi[GROUND] = 0.0
-        for link in self.linkage.moving_links:
-            out[f"phi_{link}"] = float(phi[link])
-        for joint in self.linkage.joints:
-            if joint.name in self.dof:
-                out[f"q_{joint.name}"] = float(d.qpos[self.dof[joint.name]])
-            else:
-                out[f"q_{joint.name}"] = float(phi[joint.links[1]] - phi[joint.links[0]])
+        return one_state(self._pose_columns(d.qpos[None], d.site_xpos[None]))
+
+    def _pose_columns(self, qpos: Array, site_xpos: Array) -> dict[str, Array]:
+        plan = self.plan
+        points = site_xpos[:, plan.point_sites, :2].reshape(len(qpos), -1)
+        out = dict(zip(plan.point_names, points.T, strict=True))
+        out.update(zip(self.phi_names, (qpos @ self.rotation.T).T, strict=True))
+        out.update(zip(plan.joint_names, (qpos @ plan.joint_rows.T).T, strict=True))
         return out
 
     # -- how settled ------------------------------------------------------------------
     def loop_violation(self) -> float:
         """Largest gap of a loop-closing joint, metres."""
-        d = self.data
-        return max((float(np.linalg.norm(d.efc_pos[rows])) for rows in self.loop_rows.values()),
-                   default=0.0)
+        return float(self.loop_gaps(self.data.efc_pos[None])[0])
+
+    def loop_gaps(self, efc_pos: Array) -> Array:
+        """(N,): :meth:`loop_violation` of N states' ``efc_pos``."""
+        gaps = [np.sqrt((efc_pos[:, rows] ** 2).sum(axis=1)) for rows in self.loop_rows.values()]
+        return np.max(gaps, axis=0) if gaps else np.zeros(efc_pos.shape[0])
 
     def joint_velocity(self) -> float:
         """Largest joint speed as a point speed (hinges times the size), m/s."""

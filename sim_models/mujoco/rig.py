@@ -8,7 +8,8 @@ Forces are read from MuJoCo's own state only:
 - a loop-closing joint's reaction is the force of its ``connect``;
 - a tree joint's reaction comes from ``cfrc_int`` after ``mj_rnePostConstraint``: the
   spatial force of the parent body on the child, whose moment MuJoCo refers to the
-  subtree's centre of mass, shifted to the joint point (:func:`parent_force`).
+  subtree's centre of mass, shifted to the joint point
+  (:meth:`.linkage_rig.LinkageRig.values`).
 
 Carried constraint forces (settled statics, :mod:`.settle`). A soft constraint
 holds a force f only with a violation r ∝ R·f (R its regulariser), so the
@@ -32,7 +33,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
@@ -54,30 +54,19 @@ def cross_z(r: Array, f: Array) -> Array:
     return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
 
 
-def parent_force(m: mujoco.MjModel, d: mujoco.MjData, body: int,
-                 point: Array) -> tuple[Array, float]:
-    """(force, moment about ``point``) of the parent body on ``body`` from cfrc_int (after
-    mj_rnePostConstraint), whose moment MuJoCo refers to the centre of mass of the body's
-    kinematic tree."""
-    f = d.cfrc_int[body, 3:5]
-    c = d.subtree_com[m.body_rootid[body], :2]
-    return f.copy(), float(d.cfrc_int[body, 2] + cross_z(c - point, f))
-
-
-def xfrc_of_loads(d: mujoco.MjData, loads: LoadTable, incidence: Array, body_forces: Array,
-                  extra_torque: Array) -> None:
-    """Write ``xfrc_applied``: each body's loads (``body_forces``, summed through
-    ``incidence``) with their moments about its centre of mass from the current site
-    positions, the loads' own couples and ``extra_torque``.
+def load_wrenches(site_xpos: Array, xipos: Array, loads: LoadTable, incidence: Array,
+                  body_forces: Array) -> Array:
+    """(N, nbody, 6): each body's loads for N states (``site_xpos``, ``xipos`` of each):
+    ``body_forces`` (summed through ``incidence``) and, about z, their moments about the
+    body's centre of mass from the site positions plus the loads' own couples.
 
     MuJoCo applies xfrc_applied at the body's centre of mass, so a force at p carries
     the moment (p − x_com) × F. Loads given as qfrc_applied would be invisible to
     cfrc_int (SIMULATORS.md).
     """
-    xfrc = d.xfrc_applied
-    xfrc[:, 0:3] = body_forces
-    xfrc[:, 3:5] = 0.0  # planar: no moments about x or y
-    xfrc[:, 5] = extra_torque
+    out = np.zeros((site_xpos.shape[0], body_forces.shape[0], 6))
+    out[:, :, 0:3] = body_forces  # planar: no moments about x or y
     if loads.sites.size:
-        arm = d.site_xpos[loads.sites] - d.xipos[loads.bodies]
-        xfrc[:, 5] += incidence @ (cross_z(arm, loads.forces) + loads.torques)
+        arm = site_xpos[:, loads.sites] - xipos[:, loads.bodies]
+        out[:, :, 5] = (cross_z(arm, loads.forces) + loads.torques) @ incidence.T
+    return out

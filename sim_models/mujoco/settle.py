@@ -150,6 +150,9 @@ class Settled:
     passes: int = 1
     refinement: float = float("nan")
     rule: str = ""  # the stop rule that ended the last pass (DecayWatch.rule)
+    #: The reading's distance from the analytic pose, where the rig's data no longer holds
+    #: it (a batch, :mod:`.batch_settle`); NaN: read it from the rig.
+    pose_drift: float = float("nan")
 
 
 def run_until_settled(rig: SettlingRig, max_steps: int | None = None) -> Settled:
@@ -295,9 +298,9 @@ def refinement_left(differences: list[float]) -> float:
 def settled_solution(rig: SettlingRig, qpos: np.ndarray, result: Settled, elapsed: float) -> Solution:
     """A Solution from a settling run: forces only if it settled."""
     case = rig.case
+    drift = rig.pose_drift(qpos=qpos) if np.isnan(result.pose_drift) else result.pose_drift
     diagnostics = RunDiagnostics(
-        "settle", result.steps, elapsed, result.residual_velocity, result.loop_violation,
-        rig.pose_drift(qpos=qpos),
+        "settle", result.steps, elapsed, result.residual_velocity, result.loop_violation, drift,
     ).as_dict(passes=result.passes, pass_disagreement=result.refinement, stop_rule=result.rule)
     if not result.settled:
         units = rig.units or {}

@@ -6,8 +6,10 @@ With qpos, qvel, qacc set to the prescribed motion, the equations of motion
 M·qacc = qfrc_smooth + Jᵀ·f hold for the true constraint forces f, where J's
 rows are the loop-closing connects and the drivers' joint equalities. The rigid forces
 are the least-squares solution of Jᵀ f = M·qacc − qfrc_smooth (the connect's z row is empty in a planar model,
-so the minimum-norm solution leaves it zero). This is the inverse dynamics of
-the closed loop; ``mj_inverse`` cannot be used, its soft inverse splits the
+so the minimum-norm solution leaves it zero). Without the empty rows Jᵀ is square at a
+held pose, and solved directly (`lstsq` costs 30× more than the rest of the solve for
+these 3×3 to 9×9 systems); least squares only where it is not square or is singular.
+This is the inverse dynamics of the closed loop; ``mj_inverse`` cannot be used, its soft inverse splits the
 loop forces meaninglessly (SIMULATORS.md).
 
 The forces are written back into MuJoCo (efc_force, qfrc_constraint, qacc)
@@ -40,8 +42,43 @@ def impose_rigid_forces(m: mujoco.MjModel, d: mujoco.MjData, qacc: np.ndarray) -
     inertial -= m.dof_armature * qacc
     jac = d.efc_J[:d.nefc * m.nv].reshape(d.nefc, m.nv)
     rhs = inertial - d.qfrc_smooth
-    f = np.linalg.lstsq(jac.T, rhs, rcond=None)[0] if d.nefc else np.zeros(0)
+    f = rigid_forces(jac, rhs)
     d.efc_force[:d.nefc] = f
     d.qfrc_constraint[:] = jac.T @ f
     d.qacc[:] = qacc
     return float(np.abs(jac.T @ f - rhs).max(initial=0.0))
+
+
+def rigid_forces(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """The minimum-norm least-squares f of Jᵀ f = rhs: rows of J that are empty (a
+    connect's z row in a planar model) get 0, and the rest is solved directly when it is
+    square and regular."""
+    f = np.zeros(jac.shape[0])
+    rows = np.flatnonzero(np.any(jac, axis=1))
+    if rows.size == jac.shape[1]:
+        try:
+            f[rows] = np.linalg.solve(jac[rows].T, rhs)
+            return f
+        except np.linalg.LinAlgError:
+            pass
+    if rows.size:
+        f[rows] = np.linalg.lstsq(jac[rows].T, rhs, rcond=None)[0]
+    return f
+
+
+def batch_rigid_forces(jac: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`rigid_forces` of N systems at once (``jac`` (N, nefc, nv), ``rhs`` (N, nv)),
+    and each one's residual max|Jᵀ f − rhs|. The rows empty at every pose are left out;
+    when the rest is square the stack is solved in one call, otherwise (or if one pose is
+    singular) pose by pose."""
+    forces = np.zeros(jac.shape[:2])
+    rows = np.flatnonzero(np.any(jac, axis=(0, 2)))
+    square = jac[:, rows].transpose(0, 2, 1)
+    try:
+        if rows.size != jac.shape[2]:
+            raise np.linalg.LinAlgError("not square")
+        forces[:, rows] = np.linalg.solve(square, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        forces = np.array([rigid_forces(j, r) for j, r in zip(jac, rhs, strict=True)])
+    residual = np.abs(np.einsum("nij,ni->nj", jac, forces) - rhs).max(axis=1, initial=0.0)
+    return forces, residual
