@@ -32,7 +32,7 @@ import bisect
 import copy
 from collections import deque
 from collections.abc import Iterable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -41,8 +41,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Linkage
-from mechcheck.analytic.solution import FORCE_FLOOR_N
-from mechcheck.sim_models.convergence import disagreement
+from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
 from mechcheck.sim_models.mujoco.linkage_model import body_name, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.settle import (
@@ -91,17 +90,34 @@ class Pose:
     """One pose in flight: where it is in its passes and its pass's readings so far."""
 
     index: int
-    qpos: Array
     targets: Array
+    carried: Array
     state: Array = field(default_factory=lambda: np.zeros(0))
     control: Array = field(default_factory=lambda: np.zeros(0))
-    carried: Array = field(default_factory=lambda: np.zeros(0))
     passes: int = 1
     steps: int = 0  # all passes
     pass_steps: int = 0  # readings taken in this pass
     history: Array = field(default_factory=lambda: np.zeros((0, 0)))
-    previous: dict[str, float] | None = None
+    previous: Array | None = None  # the last pass's forces (:attr:`Readings.forces`)
     differences: list[float] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Readings:
+    """MuJoCo's readings of some poses' states, read at once."""
+
+    columns: dict[str, Array]  # every quantity, (n,) each
+    forces: Array  # (n, m): the forces the passes compare, torques over the size
+    totals: Array  # (n, nefc): the equality forces, carried ones included
+    speed: Array
+    gap: Array
+    drift: Array
+
+    def values(self, j: int) -> dict[str, float]:
+        return {q: float(v[j]) for q, v in self.columns.items()}
+
+    def finite(self) -> Array:
+        return np.all(np.isfinite(np.stack(list(self.columns.values()), axis=1)), axis=1)
 
 
 def sensing_rig(case: Case) -> LinkageRig:
@@ -110,69 +126,82 @@ def sensing_rig(case: Case) -> LinkageRig:
 
 
 class BatchSettler:
-    """Settles many poses of one linkage rig (:func:`sensing_rig`)."""
+    """Settles the poses ``qpos`` (N, nq) of one linkage rig (:func:`sensing_rig`)."""
 
-    def __init__(self, rig: LinkageRig) -> None:
+    def __init__(self, rig: LinkageRig, qpos: Array) -> None:
         self.rig = rig
-        m = rig.model
+        self.qpos = qpos
+        m, d = rig.model, rig.data
         self.pool = [copy.copy(m) for _ in range(POOL)]
         self.datas = [mujoco.MjData(m) for _ in range(THREADS)]
-        self.nstate = mujoco.mj_stateSize(m, STATE)
         # Sensor columns: (fx, fy, fz, tx, ty, tz) per tree joint; the stop rule reads the
         # planar ones, torques over the size.
         n = m.nsensordata // 6
         cols = np.arange(n)[:, None] * 6 + np.array([0, 1, 5])
         self.columns = cols.ravel()
         self.column_scale = np.tile([1.0, 1.0, 1.0 / rig.scale], n)
-        self.qvel_slice = self._state_slice(mujoco.mjtState.mjSTATE_QVEL)
+        # Rollout states at rest in each analytic pose; the loads there and the arms the
+        # carried connect forces act with (:meth:`.linkage_rig.LinkageRig.carried_loads`).
+        mujoco.mj_resetData(m, d)
+        template = np.empty(mujoco.mj_stateSize(m, STATE))
+        mujoco.mj_getState(m, d, template, STATE)
+        self.qpos_slice = state_slice(m, mujoco.mjtState.mjSTATE_QPOS)
+        self.qvel_slice = state_slice(m, mujoco.mjtState.mjSTATE_QVEL)
+        self.seeds = np.tile(template, (len(qpos), 1))
+        self.seeds[:, self.qpos_slice] = qpos
+        sites, centres = rig.load_points(qpos)
+        self.loads = rig.wrenches(sites, centres, np.zeros((len(qpos), m.nv)))
+        self.arms = sites[:, rig.pairs.sites] - centres[:, rig.pairs.bodies]
+        # The forces two passes compare, as :func:`mechcheck.sim_models.convergence.disagreement`
+        # takes them: every force and torque (over the size), no pose quantity.
+        units = rig.units or {}
+        kinds = {q: quantity_kind(q, units.get(q)) for q in rig.plan.order}
+        self.force_names = [q for q in rig.plan.order if kinds[q] != "pose"]
+        self.force_scale = np.array([1.0 / rig.scale if kinds[q] == "torque" else 1.0
+                                     for q in self.force_names])
 
-    def _state_slice(self, part: mujoco.mjtState) -> slice:
-        m = self.rig.model
-        before = sum(mujoco.mj_stateSize(m, bit) for bit in
-                     (mujoco.mjtState.mjSTATE_TIME, mujoco.mjtState.mjSTATE_QPOS)
-                     if int(bit) < int(part))
-        return slice(before, before + mujoco.mj_stateSize(m, part))
-
-    # -- the rig's own data: seeds, controls, readings ------------------------------------
+    # -- seeds and readings --------------------------------------------------------------
     def seeded(self, pose: Pose) -> None:
-        """``pose`` at rest in its analytic pose, its carried forces as loads (the rig's data
-        at that state; the pose's rollout state and controls from it)."""
-        rig = self.rig
-        m, d = rig.model, rig.data
-        rig.set_state(pose.qpos, np.zeros(m.nv))
-        rig.set_targets(pose.targets)
-        rig.carried = pose.carried
-        d.qfrc_applied[:] = 0.0  # set only while forces are carried
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        rig.apply_loads()
-        pose.state = self.state_of(d)
-        pose.control = np.concatenate([d.qfrc_applied, d.xfrc_applied.ravel()])
+        """``pose`` at rest in its analytic pose, its carried forces as loads: its rollout
+        state and controls."""
+        i = pose.index
+        xfrc, drives = self.rig.carried_loads(pose.carried, self.arms[i])
+        qfrc = np.zeros(self.rig.model.nv)
+        qfrc[self.rig.drive_dofs] = drives
+        pose.state = self.seeds[i]
+        pose.control = np.concatenate([qfrc, (self.loads[i] + xfrc).ravel()])
         pose.pass_steps = 0
         pose.history = np.full((FLOOR_WINDOW - 1, self.columns.size), np.nan)
 
-    def state_of(self, d: mujoco.MjData) -> Array:
-        out = np.empty(self.nstate)
-        mujoco.mj_getState(self.rig.model, d, out, STATE)
-        return out
-
-    def reading(self, pose: Pose, state: Array, step: int, settled: bool, rule: str) -> Settled:
-        """MuJoCo's reading at ``state`` of ``pose``: the loads at that state's own pose."""
+    def read(self, poses: list[Pose], states: list[Array]) -> Readings:
+        """MuJoCo's reading of each pose at its state: the loads applied at that state's
+        own pose, a forward pass, the read-out of all at once (:meth:`.linkage_rig.LinkageRig.values`)."""
         rig = self.rig
         m, d = rig.model, rig.data
-        mujoco.mj_setState(m, d, state, STATE)
-        rig.set_targets(pose.targets)
-        rig.carried = pose.carried
-        d.qfrc_applied[:] = 0.0
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        rig.apply_loads()
-        mujoco.mj_forward(m, d)
-        return Settled(rig.read(), step, settled, rig.joint_velocity(), rig.loop_violation(),
-                       rule=rule, pose_drift=rig.pose_drift(qpos=pose.qpos))
+        snapshot = rig.snapshot(len(poses))
+        for k, (pose, state) in enumerate(zip(poses, states, strict=True)):
+            mujoco.mj_setState(m, d, state, STATE)
+            rig.set_targets(pose.targets)
+            rig.carried = pose.carried
+            d.qfrc_applied[:] = 0.0  # set only while forces are carried
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            rig.apply_loads()
+            mujoco.mj_forward(m, d)
+            mujoco.mj_rnePostConstraint(m, d)
+            rig.capture(snapshot, k)
+        columns = rig.values(snapshot)
+        analytic = self.qpos[[p.index for p in poses]]
+        return Readings(
+            columns=columns,
+            forces=np.stack([columns[q] for q in self.force_names], axis=1) * self.force_scale,
+            totals=snapshot.efc_force[:, :rig.nefc].copy(),
+            speed=np.abs(snapshot.qvel * rig.weight).max(axis=1, initial=0.0),
+            gap=rig.loop_gaps(snapshot.efc_pos),
+            drift=np.abs((snapshot.qpos - analytic) * rig.weight).max(axis=1, initial=0.0))
 
     # -- the run -------------------------------------------------------------------------
-    def settle(self, qpos: Array, targets: Array, first: Array | None = None) -> list[Settled]:
+    def settle(self, targets: Array, first: Array | None = None) -> list[Settled]:
         """Every pose ``qpos[i]`` (drivers at ``targets[i]``) settled in passes, as
         :func:`.settle.settle_refined` settles one.
 
@@ -180,30 +209,29 @@ class BatchSettler:
         Every :data:`STRIDE`-th pose (and the last) then settles first, from nothing
         carried; each pose between starts with the constraint forces those two settled
         at, MuJoCo's own, interpolated in the driver's value (a sequential sweep would
-        start each pose from the last ones). The start changes the
-        steps, not the equilibrium: the passes still end only when two agree."""
-        n = len(qpos)
+        start each pose from the last ones). The start changes the steps, not the
+        equilibrium: the passes still end only when two agree."""
+        n = len(self.qpos)
         if first is None:
-            return complete(self.settle_poses(qpos, targets, range(n), {})[0])
+            return complete(self.settle_poses(targets, range(n), {})[0])
         coarse = sorted({*range(0, n, STRIDE), n - 1})
-        out, forces = self.settle_poses(qpos, targets, coarse, {})
-        fine = [i for i in range(n) if i not in forces and out[i] is None]
+        out, forces = self.settle_poses(targets, coarse, {})
+        fine = [i for i in range(n) if out[i] is None]
         starts = {i: start for i in fine
                   if (start := interpolated(i, coarse, forces, first)) is not None}
-        rest, _ = self.settle_poses(qpos, targets, fine, starts)
+        rest, _ = self.settle_poses(targets, fine, starts)
         return complete([o if o is not None else r for o, r in zip(out, rest, strict=True)])
 
-    def settle_poses(self, qpos: Array, targets: Array, which: Iterable[int],
-                     starts: dict[int, Array]) -> tuple[list[Settled | None], dict[int, Array]]:
+    def settle_poses(self, targets: Array, which: Iterable[int], starts: dict[int, Array]
+                     ) -> tuple[list[Settled | None], dict[int, Array]]:
         """The poses ``which``, each starting with ``starts[i]`` carried (else nothing):
         their Settled (None for the others) and the constraint forces each settled pose
         ended with."""
         nefc = self.rig.nefc
-        queue = deque(Pose(i, qpos[i], targets[i], carried=starts.get(i, np.zeros(nefc)))
-                      for i in which)
+        queue = deque(Pose(i, targets[i], starts.get(i, np.zeros(nefc))) for i in which)
         for pose in queue:
             self.seeded(pose)
-        out: list[Settled | None] = [None] * len(qpos)
+        out: list[Settled | None] = [None] * len(self.qpos)
         forces: dict[int, Array] = {}
         while queue:
             wave = [queue.popleft() for _ in range(min(POOL, len(queue)))]
@@ -234,51 +262,61 @@ class BatchSettler:
         left = np.array([MAX_STEPS + 1 - p.pass_steps for p in wave])
         speed[np.arange(CHUNK)[None, :] >= left[:, None]] = np.inf
         first, rule = first_stops(np.array([p.history for p in wave]), readings, speed)
-        return [self.advance(pose, int(first[k]), RULES[rule[k]], readings[k], before[k],
-                             states[k, -1], int(left[k]))
-                for k, pose in enumerate(wave)]
+        ended: list[tuple[int, int, str]] = []  # (pose in wave, step in chunk, rule or "")
+        for k, pose in enumerate(wave):
+            if first[k] >= 0:
+                ended.append((k, int(first[k]), RULES[rule[k]]))
+            elif left[k] <= CHUNK or not np.all(np.isfinite(readings[k])):
+                ended.append((k, min(int(left[k]), CHUNK) - 1, ""))
+            else:
+                pose.pass_steps += CHUNK
+                pose.history = np.concatenate([pose.history, readings[k]])[-(FLOOR_WINDOW - 1):]
+                pose.state = states[k, -1]
+        out: list[Settled | None] = [None] * len(wave)
+        if ended:
+            read = self.read([wave[k] for k, _, _ in ended],
+                             [before[k, step] for k, step, _ in ended])
+            finite = read.finite()
+            for j, (k, step, stop) in enumerate(ended):
+                out[k] = self.end_pass(wave[k], read, j, step, stop, bool(finite[j]))
+        return out
 
-    def advance(self, pose: Pose, step: int, rule: str, readings: Array, before: Array,
-                last: Array, left: int) -> Settled | None:
-        """Finish ``pose``'s pass (and maybe the pose) where the rule fired at ``step`` of the
-        chunk, or carry on (``step`` −1); out of budget after ``left`` readings."""
-        if step >= 0:
-            result = self.reading(pose, before[step], pose.steps + pose.pass_steps + step,
-                                  True, rule)
-            pose.steps += pose.pass_steps + step
-            return self.end_pass(pose, result)
-        if left <= CHUNK or not np.all(np.isfinite(readings)):
-            taken = min(left, CHUNK)
-            return self.unsettled(pose, before[taken - 1], pose.pass_steps + taken - 1)
-        pose.pass_steps += CHUNK
-        pose.history = np.concatenate([pose.history, readings])[-(FLOOR_WINDOW - 1):]
-        pose.state = last
-        return None
-
-    def unsettled(self, pose: Pose, state: Array, step: int) -> Settled:
-        result = self.reading(pose, state, pose.steps + step, False, "")
-        return replace(result, passes=pose.passes, refinement=last_difference(pose))
-
-    def end_pass(self, pose: Pose, result: Settled) -> Settled | None:
-        """As :func:`.settle.settle_refined` after a settled pass."""
-        rig = self.rig
-        if not np.all(np.isfinite(list(result.values.values()))):
-            return replace(result, settled=False, passes=pose.passes,
-                           refinement=last_difference(pose))
+    def end_pass(self, pose: Pose, read: Readings, j: int, step: int, rule: str,
+                 finite: bool) -> Settled | None:
+        """After ``pose``'s pass ended at ``step`` of the chunk (reading ``j`` of ``read``;
+        ``rule`` "": out of budget), as :func:`.settle.settle_refined` goes on."""
+        pose.steps += pose.pass_steps + step
+        if not rule or not finite:
+            return self.result(pose, read, j, "", settled=False)
+        forces = read.forces[j]
         if pose.previous is not None:
-            pose.differences.append(disagreement(result.values, pose.previous, rig.scale,
-                                                 rig.units))
+            pose.differences.append(float(np.abs(forces - pose.previous).max())
+                                    / max(float(np.abs(pose.previous).max()), FORCE_FLOOR_N))
             if refinement_left(pose.differences) <= REFINE_RTOL:
-                pose.carried = rig.total_constraint_forces().copy()  # what it ended with
-                return replace(result, passes=pose.passes, refinement=last_difference(pose))
+                pose.carried = read.totals[j]  # what it ended with
+                return self.result(pose, read, j, rule, settled=True)
         if pose.passes == MAX_PASSES:
-            return replace(result, settled=False, passes=MAX_PASSES,
-                           refinement=last_difference(pose))
-        pose.previous = result.values
-        pose.carried = rig.total_constraint_forces().copy()
+            return self.result(pose, read, j, rule, settled=False)
+        pose.previous = forces
+        pose.carried = read.totals[j]
         pose.passes += 1
         self.seeded(pose)
         return None
+
+    @staticmethod
+    def result(pose: Pose, read: Readings, j: int, rule: str, settled: bool) -> Settled:
+        return Settled(read.values(j), pose.steps, settled, float(read.speed[j]),
+                       float(read.gap[j]), passes=pose.passes,
+                       refinement=pose.differences[-1] if pose.differences else float("nan"),
+                       rule=rule if settled else "", pose_drift=float(read.drift[j]))
+
+
+def state_slice(m: mujoco.MjModel, part: mujoco.mjtState) -> slice:
+    """Where ``part`` (QPOS or QVEL) lies in a FULLPHYSICS state (time, qpos, qvel, …)."""
+    before = sum(mujoco.mj_stateSize(m, bit) for bit in
+                 (mujoco.mjtState.mjSTATE_TIME, mujoco.mjtState.mjSTATE_QPOS)
+                 if int(bit) < int(part))
+    return slice(before, before + mujoco.mj_stateSize(m, part))
 
 
 RULES = ("decay", "quiet", "floor")
@@ -289,10 +327,6 @@ def complete(results: list[Settled | None]) -> list[Settled]:
     out = [r for r in results if r is not None]
     assert len(out) == len(results)
     return out
-
-
-def last_difference(pose: Pose) -> float:
-    return pose.differences[-1] if pose.differences else float("nan")
 
 
 def interpolated(i: int, coarse: list[int], forces: dict[int, Array],
@@ -331,14 +365,15 @@ def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, A
         left = np.where(ratio < 1.0, largest * ratio / (1.0 - ratio), np.inf)
     decay = (largest == 0.0) | (left <= SETTLE_RTOL)
     quiet = largest <= QUIET_RTOL
-    # The floor's spread only where the rest of its rule holds (a few readings): a window of
-    # 32 readings at every one of them costs more than the rollout.
+    # The floor's spread only where the rest of its rule holds: a window of 32 readings at
+    # every reading costs more than the rollout.
     floor = np.zeros_like(decay)
-    for p, t in zip(*np.nonzero((largest <= WOBBLE_RTOL) & ~decay & ~quiet), strict=True):
-        end = back + t + 1
-        recent = x[p, end - FLOOR_WINDOW:end]
-        floor[p, t] = (recent.max(axis=0) - recent.min(axis=0)).max() / size[p, end - 1] \
-            <= WOBBLE_RTOL
+    p, t = np.nonzero((largest <= WOBBLE_RTOL) & ~decay & ~quiet)
+    if p.size:
+        rows = (back + t + 1 - FLOOR_WINDOW)[:, None] + np.arange(FLOOR_WINDOW)
+        recent = x[p[:, None], rows]  # (candidates, FLOOR_WINDOW, m)
+        spread = (recent.max(axis=1) - recent.min(axis=1)).max(axis=1)
+        floor[p, t] = spread / size[p, back + t] <= WOBBLE_RTOL
     rule = np.where(decay, 0, np.where(quiet, 1, np.where(floor, 2, -1)))
     fired = (rule >= 0) & (speed <= VELOCITY_TOL)
     first = np.where(fired.any(axis=1), fired.argmax(axis=1), -1)

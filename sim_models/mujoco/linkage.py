@@ -208,7 +208,7 @@ def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults) -> list[So
     start = time.perf_counter()
     qpos, qvel, qacc = rig.joint_states(results.pose)
     clear_friction(rig)
-    loads = rig.wrenches(*load_points(rig, qpos), qvel)
+    loads = rig.wrenches(*rig.load_points(qpos), qvel)
     jac, rhs, gaps = constraint_equations(rig, (qpos, qvel, qacc), results.pose.drivers,
                                           loads)
     forces, residual = batch_rigid_forces(jac, rhs)
@@ -265,16 +265,6 @@ def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets
     return jac, rhs, rig.loop_gaps(efc_pos)
 
 
-def load_points(rig: LinkageRig, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(site_xpos, xipos) of MuJoCo's kinematics at each pose of ``qpos`` (N, nq)."""
-    m, d = rig.model, rig.data
-    sites = np.empty((len(qpos), *d.site_xpos.shape))
-    centres = np.empty((len(qpos), *d.xipos.shape))
-    for i, q in enumerate(qpos):
-        d.qpos[:] = q
-        mujoco.mj_kinematics(m, d)
-        sites[i], centres[i] = d.site_xpos, d.xipos
-    return sites, centres
 def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
                   results: LinkageResults | None = None, *,
                   continuation: bool = True) -> list[Solution]:
@@ -325,7 +315,7 @@ def settled_sweep(case: Case, first: np.ndarray, results: LinkageResults,
     start = time.perf_counter()
     rig = sensing_rig(case)
     qpos = rig.joint_states(results.pose)[0]
-    settled = BatchSettler(rig).settle(qpos, results.pose.drivers,
-                                       first if continuation else None)
+    settled = BatchSettler(rig, qpos).settle(results.pose.drivers,
+                                             first if continuation else None)
     share = (time.perf_counter() - start) / max(len(first), 1)
     return [settled_solution(rig, q, result, share) for q, result in zip(qpos, settled, strict=True)]

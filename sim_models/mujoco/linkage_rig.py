@@ -329,16 +329,38 @@ class LinkageRig:
         self.carried = self.carried + self.data.efc_force[:self.nefc]
 
     def apply_carried(self) -> None:
-        """Each connect's carried force as a pair at its sites, each driver's as a
-        generalised force on its joint (arrays from :meth:`_carried_layout`)."""
+        """The carried forces added to the loads (:meth:`carried_loads` at the current
+        pose)."""
         d = self.data
         pairs = self.pairs
+        arm = d.site_xpos[pairs.sites] - d.xipos[pairs.bodies]
+        xfrc, qfrc = self.carried_loads(self.carried, arm)
+        d.xfrc_applied[:] += xfrc
+        d.qfrc_applied[self.drive_dofs] = qfrc
+
+    def carried_loads(self, carried: Array, arm: Array) -> tuple[Array, Array]:
+        """Each connect's carried force as a pair at its sites (xfrc_applied to add, with
+        ``arm`` = each pair site's position from its body's centre of mass), each driver's
+        as a generalised force on its joint (qfrc_applied of ``drive_dofs``); arrays from
+        :meth:`_carried_layout`."""
+        pairs = self.pairs
+        xfrc = np.zeros((self.model.nbody, 6))
         if pairs.sites.size:
-            f = self.carried[pairs.rows] * pairs.signs[:, None]
-            arm = d.site_xpos[pairs.sites] - d.xipos[pairs.bodies]
-            d.xfrc_applied[:, 0:3] += pairs.incidence @ f
-            d.xfrc_applied[:, 5] += pairs.incidence @ cross_z(arm, f)
-        d.qfrc_applied[self.drive_dofs] = self.carried[self.drive_first_rows]
+            f = carried[pairs.rows] * pairs.signs[:, None]
+            xfrc[:, 0:3] = pairs.incidence @ f
+            xfrc[:, 5] = pairs.incidence @ cross_z(arm, f)
+        return xfrc, carried[self.drive_first_rows]
+
+    def load_points(self, qpos: Array) -> tuple[Array, Array]:
+        """(site_xpos, xipos) of MuJoCo's kinematics at each pose of ``qpos`` (N, nq)."""
+        m, d = self.model, self.data
+        sites = np.empty((len(qpos), *d.site_xpos.shape))
+        centres = np.empty((len(qpos), *d.xipos.shape))
+        for i, q in enumerate(qpos):
+            d.qpos[:] = q
+            mujoco.mj_kinematics(m, d)
+            sites[i], centres[i] = d.site_xpos, d.xipos
+        return sites, centres
 
     def total_constraint_forces(self) -> Array:
         return self.carried + self.data.efc_force[:self.nefc]
@@ -373,8 +395,9 @@ class LinkageRig:
 
     def snapshot(self, n: int = 1) -> Snapshot:
         """Room for the read-out arrays of ``n`` states (:meth:`capture`, :meth:`values`)."""
-        d = self.data
-        return Snapshot(*(np.zeros((n, *getattr(d, field).shape)) for field in SNAPSHOT_FIELDS))
+        shapes = {field: source.shape for field, source in self.sources}
+        shapes |= {"efc_force": (self.nefc,), "efc_pos": (self.nefc,)}
+        return Snapshot(*(np.zeros((n, *shapes[field])) for field in SNAPSHOT_FIELDS))
 
     def capture(self, snapshot: Snapshot, i: int = 0) -> None:
         """Copy what the read-out needs of the current data (after a forward pass and
