@@ -11,7 +11,7 @@ only looks at what it recorded:
   measured at the joint; torques divided by the size, as the single-pose rule divides the
   drivers'), recorded by the rollout at every step. With the loads fixed they change
   exactly when the equality forces :func:`.settle.run_until_settled` watches change, by
-  the same modes; :func:`stop_steps` applies :class:`.settle.DecayWatch`'s three rules
+  the same modes; :func:`first_stops` applies :class:`.settle.DecayWatch`'s three rules
   and the velocity bound to them, step by step, vectorised over the poses and steps.
 - **The loads** of a rollout are its controls: the xfrc_applied and qfrc_applied of the
   pose it starts the chunk from (loads, carried forces), held for the chunk. The single-
@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import bisect
 import copy
+import os
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -61,16 +62,17 @@ from mechcheck.sim_models.mujoco.settle import (
 Array = np.ndarray
 
 #: Steps per rollout. A pass started from its neighbours' forces settles in 5–20 steps;
-#: the steps stepped past the stop are wasted (measured on the Watt sweep: 8, 16 and 32
-#: steps took 0.94, 0.84 and 1.07 ms/pose: shorter chunks cost more calls and rule checks).
+#: the steps stepped past the stop are wasted, and shorter chunks cost more calls and rule
+#: checks (measured on the Watt sweep, CPU time: 8, 16 and 32 steps took 0.94, 0.84 and
+#: 1.07 ms/pose, and 0.61, 0.55 and 0.63 once the readings were batched).
 CHUNK = 16
 #: Poses in flight at once, each with its own copy of the model (178 µs a copy, measured).
 POOL = 32
 #: A sweep settles every STRIDE-th pose first, and starts the others from them
 #: (:meth:`BatchSettler.settle`).
 STRIDE = 8
-#: Rollout threads: this machine's cores.
-THREADS = 2
+#: Rollout threads: the machine's cores.
+THREADS = os.cpu_count() or 1
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 CONTROLS = mujoco.mjtState.mjSTATE_XFRC_APPLIED | mujoco.mjtState.mjSTATE_QFRC_APPLIED
 
