@@ -16,21 +16,21 @@ terms, which depend on |F| and make the problem nonlinear. Without Coulomb
 friction x = −K⁻¹ b.
 
 The fixed loads (external loads and weights) on a link are folded into one resultant
-(:class:`Resultant`) before any pose is touched, so a static case builds one right-hand
-side from positions alone (:func:`fixed_wrenches`), and :func:`solve_members` solves it
-on flat coordinate arrays without forming b or x.
+(:class:`~mechcheck.analytic.resultant.Resultant`) before any pose is touched, so a static
+case builds one right-hand side from positions alone (:func:`fixed_wrenches`), and
+:func:`solve_members` solves it on flat coordinate arrays without forming b or x.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
 
 import numpy as np
 
 from mechcheck.analytic.case import Case, FourBarGeometry, Mass
 from mechcheck.analytic.kinematics import Array, Pose, cross, unit
 from mechcheck.analytic.pose import Coordinates, Placement, coordinates
+from mechcheck.analytic.resultant import Wrench, resultants
 from mechcheck.analytic.values import Vec2
 
 N_UNKNOWNS = 9
@@ -90,40 +90,6 @@ def coefficient_matrix(case: Case, pose: Pose) -> Array:
     return k
 
 
-#: A link's known loads at each pose: (Fx, Fy, moment about the link frame's origin, CCW).
-#: A part that is the same at every pose is a plain float.
-Wrench = tuple[Array | float, Array | float, Array | float]
-
-
-@dataclass(frozen=True)
-class Resultant:
-    """Fixed loads on one link folded into one, independent of the pose.
-
-    A load f at the body-fixed point c (link frame) sits at R(θ)·c from the frame's
-    origin, so its moment about the origin is (R(θ)·c) × f = cos θ·(c × f) − sin θ·(c · f):
-    the loads' force sum ``fx, fy``, ``p`` = Σ c × f, ``q`` = Σ c · f and the pure moments'
-    sum ``torque`` give every pose's wrench with one multiply-add.
-    """
-
-    fx: float = 0.0
-    fy: float = 0.0
-    p: float = 0.0
-    q: float = 0.0
-    torque: float = 0.0
-
-    def plus(self, at: Vec2, force: Vec2, torque: float = 0.0) -> Resultant:
-        (cx, cy), (fx, fy) = at, force
-        return Resultant(self.fx + fx, self.fy + fy, self.p + cx * fy - cy * fx,
-                         self.q + cx * fx + cy * fy, self.torque + torque)
-
-    def wrench(self, direction: Coordinates) -> Wrench:
-        """The wrench at each pose, from the frame's x axis (cos θ, sin θ) there."""
-        if self.p == 0.0 and self.q == 0.0:  # forces at the origin: no pose dependence
-            return self.fx, self.fy, self.torque
-        cos, sin = direction
-        return self.fx, self.fy, self.p * cos - self.q * sin + self.torque
-
-
 #: One fixed load: (link, body-fixed point, global force, pure moment).
 FixedLoad = tuple[int, Vec2, Vec2, float]
 
@@ -136,14 +102,6 @@ def fixed_loads(case: Case) -> list[tuple[str, FixedLoad]]:
         gx, gy = case.gravity
         out += [(f"weight{m.link}", (m.link, m.com, (m.mass * gx, m.mass * gy), 0.0))
                 for m in case.masses]
-    return out
-
-
-def resultants(loads: Iterable[FixedLoad]) -> dict[int, Resultant]:
-    """The loads folded per link."""
-    out: dict[int, Resultant] = {}
-    for link, at, force, torque in loads:
-        out[link] = out.get(link, Resultant()).plus(at, force, torque)
     return out
 
 
