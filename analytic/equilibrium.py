@@ -117,7 +117,8 @@ def link_origins(case: Case) -> dict[int, str]:
 
 
 def wrench_vector(case: Case, pose: Pose, loads: Iterable[FixedLoad]) -> Array:
-    """b contribution (N, 9) of fixed loads, folded per link (moments about the origin)."""
+    """b contribution (N, 9) of fixed loads, folded per link (moments about the global
+    origin, as K's rows take them)."""
     b = np.zeros((pose.theta12.shape[0], N_UNKNOWNS))
     origins = link_origins(case)
     for link, res in resultants(loads).items():
