@@ -15,7 +15,9 @@ It is written from the free-body diagrams, not from the library's elimination, s
   body-fixed point c (link frame) sits at R(θ)·c from the frame origin, the moment about
   that origin ``cos θ·P − sin θ·Q + T`` with P = Σ c × f and Q = Σ c · f;
 * four-bar: the rocker's moments about B0 and the coupler's about A fix F34 (2×2, by
-  Cramer's rule); force balances give F23, F12, F14; the crank's moment about A0 gives T12;
+  Cramer's rule); force balances give F23, F12, F14; the crank's moment about A0 gives T12
+  (driven on the rocker: the crank's moment about A0 and the coupler's fix F34, and the
+  rocker's about B0 gives T14);
 * slider-crank: the slider's force balance along the slide and the rod's moments about A
   fix F34; the slide's normal reaction and the guide's moment M14 follow from the slider.
 
