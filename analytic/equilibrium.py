@@ -14,14 +14,24 @@ The system is written K x + b + φ(x) = 0 with b the known loads (external
 loads, weights, inertia forces, viscous friction) and φ the Coulomb friction
 terms, which depend on |F| and make the problem nonlinear. Without Coulomb
 friction x = −K⁻¹ b.
+
+The fixed loads (external loads and weights) on a link are folded into one resultant
+(:class:`~mechcheck.analytic.resultant.Resultant`) before any pose is touched, so a static
+case builds one right-hand side from positions alone (:func:`fixed_wrenches`), and
+:func:`solve_members` solves it on flat coordinate arrays without forming b or x.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
-from mechcheck.analytic.case import Case, FourBarGeometry, Load, Mass
+from mechcheck.analytic.case import Case, FourBarGeometry, Mass
 from mechcheck.analytic.kinematics import Array, Pose, cross, unit
+from mechcheck.analytic.pose import Coordinates, Placement, coordinates
+from mechcheck.analytic.resultant import Wrench, resultants
+from mechcheck.analytic.values import Vec2
 
 N_UNKNOWNS = 9
 #: Columns of the pin forces F_ij in x, by joint name.
@@ -80,25 +90,44 @@ def coefficient_matrix(case: Case, pose: Pose) -> Array:
     return k
 
 
-def load_vector(pose: Pose, load: Load) -> Array:
-    """b contribution (N, 9) of one external load."""
-    b = np.zeros((pose.theta12.shape[0], N_UNKNOWNS))
-    p, _, _ = pose.point(load.link, load.at)
-    f = np.broadcast_to(np.asarray(load.force), p.shape)
-    r = row(load.link)
-    b[:, r:r + 2] += f
-    b[:, r + 2] += cross(p, f) + load.torque
-    return b
+#: One fixed load: (link, body-fixed point, global force, pure moment).
+FixedLoad = tuple[int, Vec2, Vec2, float]
 
 
-def weight_vector(pose: Pose, mass: Mass, gravity: tuple[float, float]) -> Array:
-    """b contribution of a link's weight m·g at its centre of mass."""
+def fixed_loads(case: Case) -> list[tuple[str, FixedLoad]]:
+    """The external loads and the weights m·g at the centres of mass, labelled."""
+    out: list[tuple[str, FixedLoad]] = [(f"load[{i}]", (ld.link, ld.at, ld.force, ld.torque))
+                                        for i, ld in enumerate(case.loads)]
+    if case.gravity != (0.0, 0.0):
+        gx, gy = case.gravity
+        out += [(f"weight{m.link}", (m.link, m.com, (m.mass * gx, m.mass * gy), 0.0))
+                for m in case.masses]
+    return out
+
+
+def fixed_wrenches(case: Case, place: Placement) -> dict[int, Wrench]:
+    """Every link's wrench of the fixed loads at each pose: statics' one right-hand side."""
+    return {link: r.wrench(place.directions[link])
+            for link, r in resultants(ld for _, ld in fixed_loads(case)).items()}
+
+
+def link_origins(case: Case) -> dict[int, str]:
+    """The joint at each moving link's frame origin (CONVENTIONS.md)."""
+    return {2: "A0", 3: "A", 4: "B0" if case.mechanism == "four_bar" else "B"}
+
+
+def wrench_vector(case: Case, pose: Pose, loads: Iterable[FixedLoad]) -> Array:
+    """b contribution (N, 9) of fixed loads, folded per link (moments about the global
+    origin, as K's rows take them)."""
     b = np.zeros((pose.theta12.shape[0], N_UNKNOWNS))
-    p, _, _ = pose.point(mass.link, mass.com)
-    w = np.broadcast_to(mass.mass * np.asarray(gravity), p.shape)
-    r = row(mass.link)
-    b[:, r:r + 2] += w
-    b[:, r + 2] += cross(p, w)
+    origins = link_origins(case)
+    for link, res in resultants(loads).items():
+        angle = pose.links[link].angle
+        fx, fy, moment = res.wrench((np.cos(angle), np.sin(angle)))
+        origin = pose.joints[origins[link]]
+        r = row(link)
+        b[:, r], b[:, r + 1] = fx, fy
+        b[:, r + 2] = origin[:, 0] * fy - origin[:, 1] * fx + moment
     return b
 
 
@@ -158,138 +187,149 @@ def viscous_vectors(case: Case, pose: Pose) -> list[Array]:
 
 def known_vectors(case: Case, pose: Pose) -> list[tuple[str, Array]]:
     """Every known contribution to b, labelled, one per 'load' (superposition sums these)."""
-    parts: list[tuple[str, Array]] = [(f"load[{i}]", load_vector(pose, ld))
-                                      for i, ld in enumerate(case.loads)]
-    for m in case.masses:
-        if case.gravity != (0.0, 0.0):
-            parts.append((f"weight{m.link}", weight_vector(pose, m, case.gravity)))
-        if not case.motion.is_static:
-            parts.append((f"inertia{m.link}", inertia_vector(pose, m)))
+    parts = [(label, wrench_vector(case, pose, [ld])) for label, ld in fixed_loads(case)]
+    if not case.motion.is_static:
+        parts += [(f"inertia{m.link}", inertia_vector(pose, m)) for m in case.masses]
     parts += [(f"viscous[{i}]", v) for i, v in enumerate(viscous_vectors(case, pose))]
     return parts
 
 
 def known_vector(case: Case, pose: Pose) -> Array:
-    """b: the sum of every known load contribution, shape (N, 9)."""
-    b = np.zeros((pose.theta12.shape[0], N_UNKNOWNS))
-    for _, part in known_vectors(case, pose):
-        b += part
+    """b: every known load in one right-hand side, shape (N, 9): the fixed loads folded per
+    link, then the pose-dependent inertia and viscous terms."""
+    b = wrench_vector(case, pose, (ld for _, ld in fixed_loads(case)))
+    if not case.motion.is_static:
+        for m in case.masses:
+            b += inertia_vector(pose, m)
+    for v in viscous_vectors(case, pose):
+        b += v
     return b
 
 
-def _rows(case: Case, pose: Pose) -> tuple[Array, Array]:
-    """The two equations that fix F34 once F23, F14 (or N14) are eliminated.
+def levers(case: Case, joints: dict[str, Coordinates]) -> tuple[Coordinates, Coordinates]:
+    """The two equations that fix F34 once F23, F14 (or N14) are eliminated, each as
+    the vector v of v × F34 = rhs.
 
-    Each row r stands for the equation r · F34 = rhs. Always: link 3's moment
-    about A, (A − B)⊥ · F34. Then link 4's moment about B0 (four-bar, drive on
-    2: (B − B0)⊥), link 2's moment about A0 (four-bar, drive on 4:
-    (A0 − A)⊥), or the slider's force along the slide (slider-crank: u).
+    Always: link 3's moment about A, v = A − B. Then link 4's moment about B0 (four-bar,
+    drive on 2: B − B0), link 2's moment about A0 (four-bar, drive on 4: A0 − A), or the
+    slider's force along the slide (slider-crank: u · F = (−n) × F, v = −n).
     """
-    j = pose.joints
-    first = perp_of(j["A"] - j["B"])
+    (ax, ay), (bx, by) = joints["A"], joints["B"]
+    first = (ax - bx, ay - by)
     if case.mechanism == "slider_crank":
         u, _ = slide_frame(case)
-        second = np.broadcast_to(u, first.shape)
-    elif case.drive_link == 2:
-        second = perp_of(j["B"] - j["B0"])
-    else:
-        second = perp_of(j["A0"] - j["A"])
-    return first, second
+        return first, (float(u[1]), -float(u[0]))
+    if case.drive_link == 2:
+        b0x, b0y = joints["B0"]
+        return first, (bx - b0x, by - b0y)
+    a0x, a0y = joints["A0"]
+    return first, (a0x - ax, a0y - ay)
 
 
-def perp_of(v: Array) -> Array:
-    """The row of cross(v, F) = v_x F_y − v_y F_x as a vector acting on F: (−v_y, v_x)."""
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
-
-
-def row_condition(r1: Array, r2: Array) -> Array:
-    """2-norm condition number of 2×2 matrices [r1; r2] with rows scaled to unit length.
+def row_condition(v1: Coordinates, v2: Coordinates) -> Array:
+    """2-norm condition number of 2×2 matrices with rows along v1 and v2 (or along both
+    turned by 90°: the angle between them is the same), scaled to unit length.
 
     With unit rows at angle γ the singular values are √(1 ± |cos γ|), so the
     condition number is √((1 + |cos γ|)/(1 − |cos γ|)) ≈ 2/γ near γ = 0.
     """
+    (x1, y1), (x2, y2) = v1, v2
     with np.errstate(divide="ignore", invalid="ignore"):
-        cos = np.abs(np.einsum("ij,ij->i", r1, r2)) / (
-            np.linalg.norm(r1, axis=1) * np.linalg.norm(r2, axis=1))
+        cos = np.abs(x1 * x2 + y1 * y2) / np.sqrt((x1 * x1 + y1 * y1) * (x2 * x2 + y2 * y2))
         cond = np.sqrt((1.0 + cos) / (1.0 - cos))
     return np.where(np.isfinite(cond), cond, np.inf)
 
 
-def core_condition(case: Case, pose: Pose) -> Array:
-    """Condition number of the force core (:func:`_rows`): large exactly at toggle,
+def core_condition(case: Case, joints: dict[str, Coordinates]) -> Array:
+    """Condition number of the force core (:func:`levers`): large exactly at toggle,
     change and dead points (coupler and rocker, crank and coupler, or rod and
     slide normal aligned), where it bounds how much the forces are amplified."""
-    return row_condition(*_rows(case, pose))
+    return row_condition(*levers(case, joints))
 
 
 def kinematic_condition(case: Case, pose: Pose) -> Array:
     """Condition number of the velocity equations, which fix ω3, ω4 (or ṡ) from ω2.
 
     Their columns are e3⊥ and e4⊥ (four-bar) or e3⊥ and the slide direction u
-    (slider-crank): singular when coupler and rocker align, or the rod stands
-    perpendicular to the slide. (A 2×2 matrix and its transpose share their
-    condition number, so the columns are passed as rows.) With the drive on
-    link 4 the force core stays regular there, but the velocities, and with
+    (slider-crank), at the angle of e3 and e4 (or of e3 and n): singular when coupler and
+    rocker align, or the rod stands perpendicular to the slide. (A 2×2 matrix and its
+    transpose share their condition number, so the columns are passed as rows.) With the
+    drive on link 4 the force core stays regular there, but the velocities, and with
     them inertia forces and friction senses, do not.
     """
     e3 = unit(pose.theta13)
     if case.mechanism == "four_bar":
-        return row_condition(perp_of(e3), perp_of(unit(pose.theta14)))
-    u, _ = slide_frame(case)
-    return row_condition(perp_of(e3), np.broadcast_to(u, e3.shape))
+        e4 = unit(pose.theta14)
+        return row_condition((e3[:, 0], e3[:, 1]), (e4[:, 0], e4[:, 1]))
+    _, nrm = slide_frame(case)
+    return row_condition((e3[:, 0], e3[:, 1]), (float(nrm[0]), float(nrm[1])))
 
 
 def condition(case: Case, pose: Pose) -> Array:
     """The condition number a force analysis reports: the force core's, and the
     velocity equations' too when velocities enter (motion or friction)."""
-    cond = core_condition(case, pose)
+    cond = core_condition(case, coordinates(pose.joints))
     if not case.motion.is_static or case.has_friction:
         cond = np.maximum(cond, kinematic_condition(case, pose))
     return cond
 
 
-def eliminate(case: Case, pose: Pose, b: Array) -> Array:
-    """Solve K x + b = 0 without friction by block elimination, elementwise over poses.
+def solve_members(case: Case, joints: dict[str, Coordinates],
+                  wrenches: dict[int, Wrench]) -> list[Array]:
+    """Solve the member equations without friction by block elimination, elementwise over
+    poses, on flat coordinates: the nine unknowns of x, in order.
 
-    This is the member-equilibrium matrix method solved in the seed's order:
-    link 3's force balance gives F23 = F34 − b3, link 4's gives F14 (or the
-    slide's normal N14), two moment (or slide) equations form a 2×2 system
-    for F34 (:func:`_rows`), and the remaining rows give F12, M14 and the
-    drive torque explicitly. It costs O(1) array operations per pose instead
-    of a 9×9 factorisation; :func:`coefficient_matrix` gives the same
-    equations whole (used with friction, and in tests to cross-check).
+    ``wrenches`` are the known loads on each link (moments about its frame's origin; a
+    link without loads may be missing). This is the member-equilibrium matrix method
+    solved in the seed's order: link 3's force balance gives F23 = F34 − F3, link 4's gives
+    F14 (or the slide's normal N14), two moment (or slide) equations form a 2×2 system for
+    F34 (:func:`levers`), and the remaining rows give F12, M14 and the drive torque
+    explicitly. It costs O(1) array operations per pose instead of a 9×9 factorisation;
+    :func:`coefficient_matrix` gives the same equations whole (used with friction, and in
+    tests to cross-check).
     """
-    j = pose.joints
-    b2f, b2m = b[:, 0:2], b[:, 2]
-    b3f, b3m = b[:, 3:5], b[:, 5]
-    b4f, b4m = b[:, 6:8], b[:, 8]
-    r1, r2 = _rows(case, pose)
-    rhs1 = cross(j["A"], b3f) - b3m
+    f2x, f2y, m2 = wrenches.get(2, (0.0, 0.0, 0.0))
+    f3x, f3y, m3 = wrenches.get(3, (0.0, 0.0, 0.0))
+    f4x, f4y, m4 = wrenches.get(4, (0.0, 0.0, 0.0))
+    (ax, ay), (bx, by) = joints["A"], joints["B"]
+    (v1x, v1y), (v2x, v2y) = levers(case, joints)
     if case.mechanism == "slider_crank":
-        u, _ = slide_frame(case)
-        rhs2 = -(b4f @ u)
+        u, nrm = slide_frame(case)
+        rhs2: Array | float = -(f4x * u[0] + f4y * u[1])
     elif case.drive_link == 2:
-        rhs2 = cross(j["B0"], b4f) - b4m
+        rhs2 = -m4
     else:
-        rhs2 = cross(j["A0"], b2f) - b2m + cross(j["A0"] - j["A"], b3f)
-    det = r1[:, 0] * r2[:, 1] - r1[:, 1] * r2[:, 0]
+        rhs2 = (v2x * f3y - v2y * f3x) - m2
     with np.errstate(divide="ignore", invalid="ignore"):
-        f34 = np.stack([(rhs1 * r2[:, 1] - rhs2 * r1[:, 1]) / det,
-                        (r1[:, 0] * rhs2 - r2[:, 0] * rhs1) / det], axis=-1)
-    f23 = f34 - b3f
-    f12 = f23 - b2f
-    x = np.empty((b.shape[0], N_UNKNOWNS))
-    x[:, 0:2], x[:, 2:4], x[:, 4:6] = f12, f23, f34
+        det = v1x * v2y - v1y * v2x
+        f34x = (v2x * -m3 - v1x * rhs2) / det
+        f34y = (v2y * -m3 - v1y * rhs2) / det
+    f23x, f23y = f34x - f3x, f34y - f3y
+    f12x, f12y = f23x - f2x, f23y - f2y
+    j2: Array | float
     if case.mechanism == "slider_crank":
-        _, nrm = slide_frame(case)
-        normal = -((f34 + b4f) @ nrm)
-        x[:, 6] = normal
-        x[:, 7] = -cross(j["B"], f34) - normal * cross(j["B"], np.broadcast_to(nrm, f34.shape)) \
-            - b4m
+        # N14 balances the slider across the slide; F34 and F14 act through B, the
+        # slider's origin, so the guide's moment M14 balances the loads' alone.
+        j1 = -((f34x + f4x) * nrm[0] + (f34y + f4y) * nrm[1])
+        j2 = -m4 if isinstance(m4, np.ndarray) else np.full(np.shape(f34x), -m4)
     else:
-        x[:, 6:8] = -f34 - b4f
-    if case.drive_link == 2:
-        x[:, 8] = -(cross(j["A0"], f12) - cross(j["A"], f23) + b2m)
-    else:
-        x[:, 8] = -(cross(j["B"], f34) + cross(j["B0"], x[:, 6:8]) + b4m)
-    return x
+        j1, j2 = -f34x - f4x, -f34y - f4y
+    if case.drive_link == 2:  # crank about A0, the ground frame's origin
+        torque = ax * f23y - ay * f23x - m2
+    else:  # rocker about B0: (B − B0) × F34 + m4 + T = 0
+        b0x, b0y = joints["B0"]
+        torque = -((bx - b0x) * f34y - (by - b0y) * f34x) - m4
+    return [f12x, f12y, f23x, f23y, f34x, f34y, j1, j2, torque]
+
+
+def eliminate(case: Case, pose: Pose, b: Array) -> Array:
+    """:func:`solve_members` for a right-hand side b (N, 9) whose moments are about the
+    global origin (the matrix form's): x, shape (N, 9)."""
+    joints = coordinates(pose.joints)
+    wrenches: dict[int, Wrench] = {}
+    for link, origin in link_origins(case).items():
+        r = row(link)
+        ox, oy = joints[origin]
+        fx, fy = b[:, r], b[:, r + 1]
+        wrenches[link] = (fx, fy, b[:, r + 2] - (ox * fy - oy * fx))
+    return np.stack(solve_members(case, joints, wrenches), axis=1)

@@ -21,9 +21,12 @@ from mechcheck.analytic.equilibrium import (
     Array,
     coefficient_matrix,
     condition,
+    core_condition,
     eliminate,
+    fixed_wrenches,
     known_vector,
     slide_frame,
+    solve_members,
 )
 from mechcheck.analytic.friction import (
     coulomb_terms,
@@ -31,7 +34,7 @@ from mechcheck.analytic.friction import (
     slide_friction_force,
     solve_with_friction,
 )
-from mechcheck.analytic.kinematics import Pose, as_angles, pose_of
+from mechcheck.analytic.kinematics import Placement, Pose, as_angles, placement_of, pose_of
 from mechcheck.analytic.solution import Solution, Status
 
 FORCE_QUANTITIES = ("F12_x", "F12_y", "F23_x", "F23_y", "F34_x", "F34_y", "F14_x", "F14_y")
@@ -81,7 +84,7 @@ def wrap_angle(angle: Array) -> Array:
     return np.remainder(angle + np.pi, 2.0 * np.pi) - np.pi
 
 
-def pose_values(case: Case, pose: Pose) -> dict[str, Array]:
+def pose_values(case: Case, pose: Pose | Placement) -> dict[str, Array]:
     """theta13 and theta14 (four-bar) or s14 (slider-crank)."""
     out = {"theta13": wrap_angle(pose.theta13)}
     if isinstance(case.geometry, FourBarGeometry):
@@ -92,25 +95,52 @@ def pose_values(case: Case, pose: Pose) -> dict[str, Array]:
     return out
 
 
-def unknowns_to_values(case: Case, pose: Pose, x: Array) -> dict[str, Array]:
-    """Name the solved unknowns in CONVENTIONS terms (F14 is assembled for a slider)."""
-    out = {q: x[:, i] for i, q in enumerate(FORCE_QUANTITIES[:6])}
+def slide_friction_along(case: Case, pose: Pose, normal: Array) -> Array | float:
+    """The friction force on the slider along u (Coulomb and viscous); 0 without friction."""
+    along: Array | float = 0.0
+    for t in coulomb_terms(case, pose.theta12):
+        if t.joint == "slide":
+            along = along + slide_friction_force(t, normal)
+    if case.friction is not None and case.friction.viscous.get("slide", 0.0) > 0.0:
+        assert pose.s14_dot is not None
+        along = along - case.friction.viscous["slide"] * pose.s14_dot
+    return along
+
+
+def unknowns_to_values(case: Case, x: list[Array], along: Array | float = 0.0) -> dict[str, Array]:
+    """Name the solved unknowns (x's columns) in CONVENTIONS terms: F14 is assembled for a
+    slider from the normal N14 and the friction ``along`` the slide."""
+    out = dict(zip(FORCE_QUANTITIES[:6], x[:6], strict=True))
     if isinstance(case.geometry, FourBarGeometry):
-        out["F14_x"], out["F14_y"] = x[:, 6], x[:, 7]
+        out["F14_x"], out["F14_y"] = x[6], x[7]
     else:
         u, nrm = slide_frame(case)
-        along = np.zeros(x.shape[0])
-        for t in coulomb_terms(case, pose.theta12):
-            if t.joint == "slide":
-                along = along + slide_friction_force(t, x[:, 6])
-        if case.friction is not None and case.friction.viscous.get("slide", 0.0) > 0.0:
-            assert pose.s14_dot is not None
-            along = along - case.friction.viscous["slide"] * pose.s14_dot
-        out["F14_x"] = x[:, 6] * nrm[0] + along * u[0]
-        out["F14_y"] = x[:, 6] * nrm[1] + along * u[1]
-        out["M14"] = x[:, 7]
-    out[drive_quantity(case)] = x[:, 8]
+        out["F14_x"] = x[6] * nrm[0] + along * u[0]
+        out["F14_y"] = x[6] * nrm[1] + along * u[1]
+        out["M14"] = x[7]
+    out[drive_quantity(case)] = x[8]
     return out
+
+
+def named_values(case: Case, pose: Pose, x: Array) -> dict[str, Array]:
+    """The pose's values and the unknowns x (N, 9), named."""
+    return pose_values(case, pose) | unknowns_to_values(
+        case, list(x.T), slide_friction_along(case, pose, x[:, 6]))
+
+
+def static_results(case: Case, angles: Array) -> PoseResults:
+    """:func:`solve_poses` for a static case without friction, from positions alone: the
+    fixed loads in one right-hand side, the members solved on flat coordinates."""
+    place = placement_of(case, angles)
+    cond = core_condition(case, place.joints)
+    x = solve_members(case, place.joints, fixed_wrenches(case, place))
+    withheld = ~(cond <= SINGULAR_CONDITION)
+    if withheld.any():
+        for column in x:
+            column[withheld] = np.nan
+    n = angles.shape[0]
+    return PoseResults(angles, pose_values(case, place) | unknowns_to_values(case, x), cond,
+                       np.zeros(n, dtype=int), np.ones(n, dtype=bool))
 
 
 def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults:
@@ -123,24 +153,28 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
     # the arithmetic on it must not warn.
     with np.errstate(invalid="ignore", divide="ignore"):
         angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
+        if case.kind == "static":
+            return static_results(case, angles)
         pose = pose_of(case, angles)
         cond = condition(case, pose)
         b = known_vector(case, pose)
         x = eliminate(case, pose, b)
         iterations = np.zeros(angles.shape[0], dtype=int)
         converged = np.ones(angles.shape[0], dtype=bool)
-        reversing = np.full(angles.shape[0], "", dtype=object)
+        reversing = None
+        withheld = ~(cond <= SINGULAR_CONDITION)
         if case.has_coulomb_friction:
             k = coefficient_matrix(case, pose)
             x, iterations, converged = solve_with_friction(case, pose, k, b, x)
+            reversing = np.full(angles.shape[0], "", dtype=object)
             for joint, where in reversing_joints(coulomb_terms(case, angles)):
                 reversing[where] = np.where(reversing[where] == "", joint,
                                             reversing[where] + ", " + joint)
-        reversing = reversing.astype(str)
-        withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "")
+            reversing = reversing.astype(str)
+            withheld |= ~converged | (reversing != "")
         x[withheld] = np.nan
-        values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
-        return PoseResults(angles, values, cond, iterations, converged, reversing)
+        return PoseResults(angles, named_values(case, pose, x), cond, iterations, converged,
+                           reversing)
 
 
 @dataclass(frozen=True)

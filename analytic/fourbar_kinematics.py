@@ -15,14 +15,15 @@ from __future__ import annotations
 import numpy as np
 
 from mechcheck.analytic.case import FourBarGeometry
-from mechcheck.analytic.pose import Array, LinkState, Pose, perp, unit
+from mechcheck.analytic.pose import Array, LinkState, Placement, Pose, perp, stacked
 
 
-def rocker_angle(g: FourBarGeometry, phi12: Array, branch: str) -> Array:
-    """φ14 (from the ground line) by the seed's closed form; NaN where it cannot assemble."""
-    c = g.a1**2 + g.a2**2 + g.a4**2 - g.a3**2 - 2.0 * g.a1 * g.a2 * np.cos(phi12)
-    a = -2.0 * g.a1 * g.a4 + 2.0 * g.a2 * g.a4 * np.cos(phi12)
-    b = 2.0 * g.a2 * g.a4 * np.sin(phi12)
+def rocker_angle(g: FourBarGeometry, cos12: Array, sin12: Array, branch: str) -> Array:
+    """φ14 (from the ground line) by the seed's closed form, from cos φ12 and sin φ12; NaN
+    where it cannot assemble."""
+    c = g.a1**2 + g.a2**2 + g.a4**2 - g.a3**2 - 2.0 * g.a1 * g.a2 * cos12
+    a = -2.0 * g.a1 * g.a4 + 2.0 * g.a2 * g.a4 * cos12
+    b = 2.0 * g.a2 * g.a4 * sin12
     f = np.arctan2(b, a)
     with np.errstate(divide="ignore", invalid="ignore"):  # a2 = a1 at φ12 = 0: no pose
         ratio = c / np.hypot(a, b)
@@ -33,18 +34,32 @@ def rocker_angle(g: FourBarGeometry, phi12: Array, branch: str) -> Array:
     return f + sign * np.arccos(ratio)
 
 
+def positions(g: FourBarGeometry, theta12: Array, *, branch: str,
+              ground_angle: float) -> Placement:
+    """Where the links of a four-bar are at each θ12: the closed form, and nothing that
+    statics would throw away."""
+    cg, sg = float(np.cos(ground_angle)), float(np.sin(ground_angle))
+    c2, s2 = np.cos(theta12), np.sin(theta12)
+    theta14 = rocker_angle(g, c2 * cg + s2 * sg, s2 * cg - c2 * sg, branch) + ground_angle
+    c4, s4 = np.cos(theta14), np.sin(theta14)
+    ax, ay = g.a2 * c2, g.a2 * s2
+    b0x, b0y = g.a1 * cg, g.a1 * sg
+    bx, by = b0x + g.a4 * c4, b0y + g.a4 * s4
+    # The coupler's direction is B − A over its length: no trigonometry needed.
+    vx, vy = bx - ax, by - ay
+    return Placement(theta12=theta12, angles={2: theta12, 3: np.arctan2(vy, vx), 4: theta14},
+                     directions={2: (c2, s2), 3: (vx / g.a3, vy / g.a3), 4: (c4, s4)},
+                     joints={"A0": (0.0, 0.0), "A": (ax, ay), "B": (bx, by), "B0": (b0x, b0y)})
+
+
 def pose(g: FourBarGeometry, theta12: Array, omega: float, alpha: float, *,
          branch: str, ground_angle: float) -> Pose:
     """Positions, velocities and accelerations of a four-bar at each θ12."""
     n = theta12.shape[0]
-    theta14 = rocker_angle(g, theta12 - ground_angle, branch) + ground_angle
-    a0 = np.zeros((n, 2))
-    b0 = np.broadcast_to(g.a1 * unit(np.array(ground_angle)), (n, 2)).copy()
-    e2, e4 = unit(theta12), unit(theta14)
-    a = g.a2 * e2
-    b = b0 + g.a4 * e4
-    theta13 = np.arctan2(b[:, 1] - a[:, 1], b[:, 0] - a[:, 0])
-    e3 = unit(theta13)
+    place = positions(g, theta12, branch=branch, ground_angle=ground_angle)
+    theta13, theta14 = place.angles[3], place.angles[4]
+    a0, a, b, b0 = (stacked(place.joints[k], n) for k in ("A0", "A", "B", "B0"))
+    e2, e3, e4 = (stacked(place.directions[k], n) for k in (2, 3, 4))
 
     w2 = np.full(n, float(omega))
     al2 = np.full(n, float(alpha))

@@ -11,9 +11,10 @@ from numpy.typing import ArrayLike
 
 from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
 from mechcheck.analytic.case import Case, FourBarGeometry, preset_geometry
-from mechcheck.analytic.pose import Array, LinkState, Pose, cross, perp, unit
+from mechcheck.analytic.pose import Array, LinkState, Placement, Pose, cross, perp, unit
 
-__all__ = ["Array", "LinkState", "Pose", "as_angles", "cross", "perp", "pose_of", "unit"]
+__all__ = ["Array", "LinkState", "Placement", "Pose", "as_angles", "cross", "perp", "placement_of",
+           "pose_of", "unit"]
 
 
 def as_angles(theta12: ArrayLike) -> Array:
@@ -40,3 +41,10 @@ def pose_of(case: Case, theta12_rad: ArrayLike | None = None, *,
                                            branch=case.branch, ground_angle=case.ground_angle)
         return slidercrank_kinematics.pose(g, angles, w, a,
                                            branch=case.branch, ground_angle=case.ground_angle)
+
+
+def placement_of(case: Case, theta12: Array) -> Placement:
+    """Where the links of ``case`` are at each θ12 (rad): positions only, for statics."""
+    g = preset_geometry(case)
+    module = fourbar_kinematics if isinstance(g, FourBarGeometry) else slidercrank_kinematics
+    return module.positions(g, theta12, branch=case.branch, ground_angle=case.ground_angle)

@@ -12,9 +12,9 @@ that order (a group's links feel only its own joints and those of later groups).
 
 What a solved group's joints exert on the bodies it hangs from is added to their known
 forces. A static case needs no velocities or accelerations, and every constant load and
-weight on a link folds into four numbers (force and its moment's cos/sin parts), so the
-right-hand side costs a few operations per link. Poses are processed in chunks that keep
-the temporaries in cache.
+weight on a link folds into one resultant (:mod:`.resultant`: its force and its moment's
+cos/sin parts), so the right-hand side costs a few operations per link. Poses are
+processed in chunks that keep the temporaries in cache.
 
 **The singular verdict** is that of :func:`.linkage_forces.condition`, the 2-norm condition
 number of the scaled K, without its SVD where a cheap bound decides it (in
@@ -47,39 +47,20 @@ from mechcheck.analytic.linkage_assur import (
     reachable,
 )
 from mechcheck.analytic.linkage_kinematics import Array, LinkagePose
+from mechcheck.analytic.resultant import Resultant, resultants
 from mechcheck.analytic.values import GROUND
 
 #: Poses per chunk: ~30 live arrays of this many doubles stay within a core's L2 cache.
 CHUNK = 8192
 
 
-@dataclass(frozen=True)
-class LinkConstants:
-    """Every constant force on a link (loads, weights) as F and the parts of its moment
-    about the origin: Σ p0 × f (turns with cos φ), Σ p0 · f (with −sin φ), and couples."""
-
-    fx: float
-    fy: float
-    cross: float
-    dot: float
-    torque: float
-
-
-def link_constants(linkage: Linkage) -> dict[str, LinkConstants]:
-    forces: dict[str, list[tuple[tuple[float, float], tuple[float, float], float]]] = {
-        link: [] for link in linkage.moving_links}
-    for load in linkage.loads:
-        if load.link in forces:
-            forces[load.link].append((load.at, load.force, load.torque))
+def link_constants(linkage: Linkage) -> dict[str, Resultant]:
+    """Every constant force on each moving link (loads, weights) folded into one."""
     g = linkage.gravity
-    for m in linkage.masses:
-        if m.link in forces:
-            forces[m.link].append((m.com, (m.mass * g[0], m.mass * g[1]), 0.0))
-    return {link: LinkConstants(
-        sum(f[0] for _, f, _ in items), sum(f[1] for _, f, _ in items),
-        sum(p[0] * f[1] - p[1] * f[0] for p, f, _ in items),
-        sum(p[0] * f[0] + p[1] * f[1] for p, f, _ in items),
-        sum(t for _, _, t in items)) for link, items in forces.items()}
+    loads = [(ld.link, ld.at, ld.force, ld.torque) for ld in linkage.loads]
+    loads += [(m.link, m.com, (m.mass * g[0], m.mass * g[1]), 0.0) for m in linkage.masses]
+    folded = resultants(loads)
+    return {link: folded.get(link, Resultant()) for link in linkage.moving_links}
 
 
 @dataclass(frozen=True)
@@ -131,7 +112,7 @@ class _Chunk:
     """One chunk of poses: placed, loaded, solved, bounded."""
 
     def __init__(self, plan: AssurPlan, route: Path, value: Array,
-                 constants: dict[str, LinkConstants]) -> None:
+                 constants: dict[str, Resultant]) -> None:
         self.plan = plan
         self.linkage = plan.linkage
         self.value = value
@@ -201,9 +182,9 @@ class _Chunk:
         """b per moving link: [Fx, Fy, M about the origin], every known force."""
         b: dict[str, list[Array | float]] = {}
         for link in self.linkage.moving_links:
-            k = self.constants[link]
             c, s, tx, ty = self.frame(link)
-            b[link] = [k.fx, k.fy, c * k.cross - s * k.dot + tx * k.fy - ty * k.fx + k.torque]
+            fx, fy, moment = self.constants[link].wrench((c, s))
+            b[link] = [fx, fy, moment + tx * fy - ty * fx]   # about the global origin
         for spring in self.linkage.springs:
             tension = springs[spring.name]
             if isinstance(spring, TorsionSpring):

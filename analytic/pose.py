@@ -4,7 +4,9 @@ vectorised over θ12 (the types the closed forms fill in).
 The mechanism-specific closed forms live in :mod:`mechcheck.analytic.fourbar_kinematics`
 and :mod:`mechcheck.analytic.slidercrank_kinematics`; both return a :class:`Pose`, whose
 link frames (CONVENTIONS.md) let any body-fixed point be located, and
-differentiated, the same way for either mechanism.
+differentiated, the same way for either mechanism. Statics needs positions only: the
+closed forms give those first, as a :class:`Placement` of flat coordinate arrays, and
+build the :class:`Pose` on it.
 """
 
 from __future__ import annotations
@@ -32,6 +34,47 @@ def perp(v: Array) -> Array:
 def cross(r: Array, f: Array) -> Array:
     """z-component of r × f for arrays of planar vectors."""
     return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+
+
+#: A planar vector per pose as its (x, y) coordinate arrays; a coordinate that is the same
+#: at every pose (a ground pin, the slide's direction) is a plain float.
+Coordinates = tuple[Array | float, Array | float]
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Where the links are at N input angles, and nothing else (what statics needs).
+
+    ``angles`` maps each turning link (2, 3, and a rocker 4) to its frame's angle,
+    ``directions`` every moving link to its frame's x axis (cos θ, sin θ), ``joints`` the
+    CONVENTIONS joint names to their positions; ``s14`` is the slider coordinate
+    (slider-crank only, else None).
+    """
+
+    theta12: Array
+    angles: dict[int, Array]
+    directions: dict[int, Coordinates]
+    joints: dict[str, Coordinates]
+    s14: Array | None = None
+
+    @property
+    def theta13(self) -> Array:
+        return self.angles[3]
+
+    @property
+    def theta14(self) -> Array:
+        return self.angles[4]
+
+
+def coordinates(joints: dict[str, Array]) -> dict[str, Coordinates]:
+    """A Pose's (N, 2) joint positions as coordinate arrays (views, not copies)."""
+    return {name: (p[:, 0], p[:, 1]) for name, p in joints.items()}
+
+
+def stacked(v: Coordinates, n: int) -> Array:
+    """Coordinates as an (n, 2) array (a Pose's layout)."""
+    zeros = np.zeros(n)
+    return np.stack([v[0] + zeros, v[1] + zeros], axis=-1)
 
 
 @dataclass(frozen=True)

@@ -11,26 +11,45 @@ from __future__ import annotations
 import numpy as np
 
 from mechcheck.analytic.case import SliderCrankGeometry
-from mechcheck.analytic.pose import Array, LinkState, Pose, unit
+from mechcheck.analytic.pose import Array, LinkState, Placement, Pose, stacked
 
 
-def rod_angle(g: SliderCrankGeometry, phi12: Array, branch: str) -> Array:
-    """φ13 (from the slide axis); NaN where the pose cannot assemble."""
-    s = (g.offset - g.a2 * np.sin(phi12)) / g.a3
+def rod_angle(g: SliderCrankGeometry, sin12: Array, branch: str) -> tuple[Array, Array]:
+    """(cos φ13, sin φ13) of the rod (from the slide axis), from sin φ12; NaN where the
+    pose cannot assemble."""
+    s = (g.offset - g.a2 * sin12) / g.a3
     s = np.where(np.abs(s) <= 1.0 + 1e-12, np.clip(s, -1.0, 1.0), np.nan)
     c = np.sqrt(1.0 - s**2) * (1.0 if branch == "right" else -1.0)
-    return np.arctan2(s, c)
+    return c, s
+
+
+def positions(g: SliderCrankGeometry, theta12: Array, *, branch: str,
+              ground_angle: float) -> Placement:
+    """Where the links of a slider-crank are at each θ12: the closed form, and nothing that
+    statics would throw away."""
+    cg, sg = float(np.cos(ground_angle)), float(np.sin(ground_angle))  # u; n = (−sg, cg)
+    c2, s2 = np.cos(theta12), np.sin(theta12)
+    cos2 = c2 * cg + s2 * sg
+    c3, s3 = rod_angle(g, s2 * cg - c2 * sg, branch)
+    s14 = g.a2 * cos2 + g.a3 * c3
+    return Placement(theta12=theta12, angles={2: theta12, 3: np.arctan2(s3, c3) + ground_angle},
+                     directions={2: (c2, s2), 3: (c3 * cg - s3 * sg, s3 * cg + c3 * sg),
+                                 4: (cg, sg)},
+                     joints={"A0": (0.0, 0.0), "A": (g.a2 * c2, g.a2 * s2),
+                             "B": (s14 * cg - g.offset * sg, s14 * sg + g.offset * cg)},
+                     s14=s14)
 
 
 def pose(g: SliderCrankGeometry, theta12: Array, omega: float, alpha: float, *,
          branch: str, ground_angle: float) -> Pose:
     """Positions, velocities and accelerations of a slider-crank at each θ12."""
     n = theta12.shape[0]
+    place = positions(g, theta12, branch=branch, ground_angle=ground_angle)
+    assert place.s14 is not None
     phi2 = theta12 - ground_angle
-    phi3 = rod_angle(g, phi2, branch)
-    u = unit(np.array(ground_angle))
-    nrm = np.array([-u[1], u[0]])
-    s14 = g.a2 * np.cos(phi2) + g.a3 * np.cos(phi3)
+    phi3 = place.angles[3] - ground_angle
+    u = np.array(place.directions[4])
+    a0, a, b = (stacked(place.joints[k], n) for k in ("A0", "A", "B"))
 
     w2 = np.full(n, float(omega))
     al2 = np.full(n, float(alpha))
@@ -41,10 +60,7 @@ def pose(g: SliderCrankGeometry, theta12: Array, omega: float, alpha: float, *,
     s_ddot = (g.a2 * (-al2 * np.sin(phi2) - w2**2 * np.cos(phi2))
               + g.a3 * (-al3 * np.sin(phi3) - w3**2 * np.cos(phi3)))
 
-    e2 = unit(theta12)
-    a0 = np.zeros((n, 2))
-    a = g.a2 * e2
-    b = s14[:, None] * u + g.offset * nrm
+    e2 = stacked(place.directions[2], n)
     zero2 = np.zeros((n, 2))
     perp_e2 = np.stack([-e2[:, 1], e2[:, 0]], axis=-1)
     v_a = g.a2 * w2[:, None] * perp_e2
@@ -52,12 +68,12 @@ def pose(g: SliderCrankGeometry, theta12: Array, omega: float, alpha: float, *,
     zeros = np.zeros(n)
     links = {
         2: LinkState(a0, zero2, zero2, theta12.copy(), w2, al2),
-        3: LinkState(a, v_a, acc_a, phi3 + ground_angle, w3, al3),
+        3: LinkState(a, v_a, acc_a, place.angles[3], w3, al3),
         4: LinkState(b, s_dot[:, None] * u, s_ddot[:, None] * u,
                      np.full(n, float(ground_angle)), zeros, zeros.copy()),
     }
     return Pose(theta12=theta12, joints={"A0": a0, "A": a, "B": b}, links=links,
-                s14=s14, s14_dot=s_dot, s14_ddot=s_ddot)
+                s14=place.s14, s14_dot=s_dot, s14_ddot=s_ddot)
 
 
 def assembly_interval(g: SliderCrankGeometry) -> tuple[float, float] | None:

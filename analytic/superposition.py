@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.equilibrium import condition, eliminate, known_vectors
-from mechcheck.analytic.forces import PoseResults, pose_values, solution_from, unknowns_to_values
+from mechcheck.analytic.forces import PoseResults, named_values, solution_from
 from mechcheck.analytic.kinematics import as_angles, pose_of
 from mechcheck.analytic.solution import Solution
 
@@ -38,7 +38,7 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
         results = PoseResults(angles, {}, condition(case, pose),
                               np.zeros(angles.shape[0], dtype=int), np.ones(angles.shape[0], bool))
         x[results.singular] = np.nan
-        values = pose_values(case, pose) | unknowns_to_values(case, pose, x)
+        values = named_values(case, pose, x)
         return PoseResults(angles, values, results.condition, results.iterations, results.converged)
 
 
