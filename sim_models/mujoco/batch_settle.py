@@ -136,6 +136,7 @@ class BatchSettler:
         m, d = rig.model, rig.data
         self.pool = [copy.copy(m) for _ in range(POOL)]
         self.datas = [mujoco.MjData(m) for _ in range(THREADS)]
+        self.runner: rollout.Rollout | None = None  # during :meth:`settle`
         # Sensor columns: (fx, fy, fz, tx, ty, tz) per tree joint; the stop rule reads the
         # planar ones, torques over the size.
         n = m.nsensordata // 6
@@ -214,14 +215,18 @@ class BatchSettler:
         start each pose from the last ones). The start changes the steps, not the
         equilibrium: the passes still end only when two agree."""
         n = len(self.qpos)
-        if first is None:
-            return complete(self.settle_poses(targets, range(n), {})[0])
-        coarse = sorted({*range(0, n, STRIDE), n - 1})
-        out, forces = self.settle_poses(targets, coarse, {})
-        fine = [i for i in range(n) if out[i] is None]
-        starts = {i: start for i in fine
-                  if (start := interpolated(i, coarse, forces, first)) is not None}
-        rest, _ = self.settle_poses(targets, fine, starts)
+        # A thread pool of this run's own: a pool kept in the process would be inherited,
+        # without its threads, by a process forked from it (a sweep's workers), whose
+        # rollouts then wait for ever (measured: the test suite hung).
+        with rollout.Rollout(nthread=THREADS if THREADS > 1 else 0) as self.runner:
+            if first is None:
+                return complete(self.settle_poses(targets, range(n), {})[0])
+            coarse = sorted({*range(0, n, STRIDE), n - 1})
+            out, forces = self.settle_poses(targets, coarse, {})
+            fine = [i for i in range(n) if out[i] is None]
+            starts = {i: start for i in fine
+                      if (start := interpolated(i, coarse, forces, first)) is not None}
+            rest, _ = self.settle_poses(targets, fine, starts)
         return complete([o if o is not None else r for o, r in zip(out, rest, strict=True)])
 
     def settle_poses(self, targets: Array, which: Iterable[int], starts: dict[int, Array]
@@ -253,9 +258,9 @@ class BatchSettler:
             model.eq_data[self.rig.driver_eqs, 0] = pose.targets
         initial = np.array([p.state for p in wave])
         control = np.array([p.control for p in wave])[:, None, :]
-        states, sensors = rollout.rollout(self.pool[:len(wave)], self.datas, initial, control,
-                                          control_spec=CONTROLS, nstep=CHUNK,
-                                          persistent_pool=True)
+        assert self.runner is not None, "within settle()"
+        states, sensors = self.runner.rollout(self.pool[:len(wave)], self.datas, initial,
+                                              control, control_spec=CONTROLS, nstep=CHUNK)
         readings = sensors[:, :, self.columns] * self.column_scale
         # The state each reading was taken at: the chunk's start, then each step's end.
         before = np.concatenate([initial[:, None], states[:, :-1]], axis=1)
