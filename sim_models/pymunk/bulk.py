@@ -17,6 +17,7 @@ bodies in the order given, and after every read that it wrote where it was told.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Sequence
 
 import numpy as np
@@ -73,7 +74,7 @@ class _Channel:
 
 class Bodies:
     """The bodies of ``space``: :attr:`state` (n, 6) of ``bodies`` in their order after
-    :meth:`read`; velocities and loads set by :meth:`write_flat`; :attr:`angle` (n, 1) and
+    :meth:`read`; velocities and loads set by :meth:`advance`; :attr:`angle` (n, 1) and
     :attr:`pose` (n, 8), written in that order by :meth:`repose`.
 
     The iterator also visits the space's static body, after the dynamic ones: its rows
@@ -89,6 +90,7 @@ class Bodies:
             raise BatchLayoutError("pymunk's body iterator does not visit the model's bodies "
                                    "in their order, then at most the static body")
         rows = len(visited)
+        self._space = space
         self._get = _Channel(space, STATE, rows, STATE_COLUMNS, setter=False)
         self._set = _Channel(space, PUSH, rows, 6, setter=True)
         self._angle = _Channel(space, Fields.ANGLE, rows, 1, setter=True)
@@ -98,26 +100,36 @@ class Bodies:
         self._pose.array[n:, POSED_ORIGIN] = tuple(static.position)
         self.state = self._get.array[:n]
         self.angle, self.pose = self._angle.array[:n], self._pose.array[:n]
+        self._state_format = struct.Struct(f"{self.state.size}d")  # the model's bodies' rows
+        self._push_format = struct.Struct(f"{6 * n}d")
         self.read()
 
     def read(self) -> np.ndarray:
         """The bodies' origin, angle, velocity and angular velocity now, (n, 6)."""
         self._get.run()
-        if self._get.floats.num != self._get.size or self._get.floats.arr != self._get.start:
-            raise BatchLayoutError("pymunk's body iterator wrote outside the preallocated array")
+        self.verify()
         return self.state
 
-    def read_flat(self) -> list[float]:
-        """:meth:`read` as one list, body after body (a loop over a few bodies in Python is
-        cheaper than numpy's per-call overhead on arrays this small)."""
-        self.read()
-        return ffi.unpack(self._get.start, self.state.size)  # type: ignore[no-any-return]
+    def verify(self) -> None:
+        """Raise unless the last read filled exactly the preallocated array (a read that
+        outgrew it would have moved the data elsewhere)."""
+        if self._get.floats.num != self._get.size or self._get.floats.arr != self._get.start:
+            raise BatchLayoutError("pymunk's body iterator wrote outside the preallocated array")
 
-    def write_flat(self, push: list[float]) -> None:
+    def read_flat(self) -> tuple[float, ...]:
+        """:meth:`read` as one tuple, body after body, for a loop that reads every step: it
+        does not :meth:`verify` (call that once the loop ends), and a loop over a few bodies
+        in Python is cheaper than numpy's per-call overhead on arrays this small."""
+        self._get.run()
+        return self._state_format.unpack_from(self._get.memory)
+
+    def advance(self, push: list[float], dt: float) -> tuple[float, ...]:
         """Set every body's velocities, force and torque (vx, vy, ω, fx, fy, torque, body
-        after body)."""
-        self._set.start[0:len(push)] = push
+        after body), step the space by ``dt`` and :meth:`read_flat`."""
+        self._push_format.pack_into(self._set.memory, 0, *push)
         self._set.run()
+        self._space.step(dt)
+        return self.read_flat()
 
     def repose(self) -> None:
         """Set every body's angle from :attr:`angle`, then its origin, velocities, force and

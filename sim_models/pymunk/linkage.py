@@ -24,8 +24,10 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from math import hypot
+from operator import add, mul
 
 import numpy as np
 
@@ -42,7 +44,6 @@ from mechcheck.analytic.linkage_kinematics import (
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.linkage_motion import is_driven
-from mechcheck.sim_models.pymunk.bulk import STATE_COLUMNS
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
     build_linkage_model,
@@ -125,49 +126,59 @@ def rounding_floor(model: LinkageModel) -> float:
     return max(FORCE_FLOOR_N, noise / s.settle_force_change)
 
 
-def damped_and_loaded(model: LinkageModel) -> Callable[[list[float]], tuple[list[float], float]]:
+def damped_and_loaded(model: LinkageModel) -> Callable[[Sequence[float]], list[float]]:
     """From the bodies' state (:meth:`~.bulk.Bodies.read_flat`), what the next step starts
-    from, body after body (:meth:`~.bulk.Bodies.write_flat`): the velocities × damping^dt
+    from, body after body (:meth:`~.bulk.Bodies.advance`): the velocities × damping^dt
     (:func:`~.linkage_model.damp`) and the loads' force and torque at the bodies' angles
-    (:func:`~.linkage_model.apply_loads`, :class:`~.loads.LoadTerms`); and the residual
-    velocity, the largest point speed |v| + |ω|·(radius) of any body, m/s."""
-    s, loads = model.settings, model.loads
-    keep = s.damping ** s.dt
-    terms = list(zip(loads.force[:, 0].tolist(), loads.force[:, 1].tolist(), loads.a.tolist(),
-                     loads.b.tolist(), loads.couple.tolist(), model.radii.tolist(), strict=True))
-    cos, sin, sqrt = math.cos, math.sin, math.sqrt
+    (:func:`~.linkage_model.apply_loads`, :class:`~.loads.LoadTerms`).
 
-    def prepare(state: list[float]) -> tuple[list[float], float]:
-        push: list[float] = []
-        speed = 0.0
-        for (_, _, angle, vx, vy, w), (fx, fy, a, b, couple, radius) in zip(
-                zip(*[iter(state)] * STATE_COLUMNS, strict=True), terms, strict=True):
-            speed = max(speed, sqrt(vx**2 + vy**2) + abs(w) * radius)
-            push += (vx * keep, vy * keep, w * keep, fx, fy,
-                     a * cos(angle) - b * sin(angle) + couple)
-        return push, speed
+    Plain Python on lists: with a handful of bodies, numpy's per-call overhead costs more
+    than the arithmetic."""
+    s, loads = model.settings, model.loads
+    damp = (s.damping ** s.dt).__mul__
+    blank = [0.0] * (6 * len(model.bodies))  # vx, vy, ω, fx, fy, torque per body
+    blank[3::6], blank[4::6] = loads.force[:, 0].tolist(), loads.force[:, 1].tolist()
+    # A·cos φ − B·sin φ + T as R·cos(φ + δ) + T, one cosine per body.
+    turning = [(6 * k + 2, 6 * k + 5, math.hypot(a, b), math.atan2(b, a), float(couple))
+               for k, (a, b, couple) in enumerate(zip(loads.a, loads.b, loads.couple, strict=True))
+               if a or b or couple]
+    cos = math.cos
+
+    def prepare(state: Sequence[float]) -> list[float]:
+        push = blank.copy()
+        push[0::6], push[1::6], push[2::6] = map(damp, state[3::6]), map(damp, state[4::6]), \
+            map(damp, state[5::6])
+        for angle, torque, r, phase, couple in turning:
+            push[torque] = r * cos(state[angle] + phase) + couple
+        return push
 
     return prepare
+
+
+def residual_velocity(radii: list[float], state: Sequence[float]) -> float:
+    """The largest point speed |v| + |ω|·(radius) of any body in a state
+    (:meth:`~.bulk.Bodies.read_flat`), m/s."""
+    return max(map(add, map(hypot, state[3::6], state[4::6]), map(mul, map(abs, state[5::6]), radii)))
 
 
 def settle_run(model: LinkageModel) -> Run:
     """Step the damped, loaded model until it is at rest and its forces stop changing.
 
     The bodies are read and written in bulk (:mod:`.bulk`), and each step reads only what
-    the stop rule needs: the impulses and the residual velocity.
+    the stop rule needs: the impulses, and the residual velocity when the rule asks.
     """
     s, bodies, readout = model.settings, model.bulk, model.readout
-    prepare = damped_and_loaded(model)
-    push, _ = prepare(bodies.read_flat())
+    prepare, radii = damped_and_loaded(model), model.radii.tolist()
+    state = bodies.read_flat()
 
     def step() -> Reading:
-        nonlocal push
-        bodies.write_flat(push)
-        model.space.step(s.dt)
-        push, velocity = prepare(bodies.read_flat())
-        return readout.impulses(), velocity
+        nonlocal state
+        state = now = bodies.advance(prepare(state), s.dt)
+        return readout.impulses(), lambda: residual_velocity(radii, now)
 
-    return run_until_settled(step, s, model.scale, readout.values, rounding_floor(model))
+    run = run_until_settled(step, s, model.scale, readout.values, rounding_floor(model))
+    bodies.verify()
+    return run
 
 
 def primed_settle_run(model: LinkageModel, seed: Array) -> Run:
@@ -200,6 +211,11 @@ def hold_without_correction(model: LinkageModel) -> None:
         constraint.max_bias = 0.0
 
 
+def at_rest() -> float:
+    """The residual velocity of a re-posed step: none."""
+    return 0.0
+
+
 def solve_run(model: LinkageModel, q: Array) -> Run:
     """Re-pose at q, with the loads there, and step until the impulses stop changing."""
     s = model.settings
@@ -208,7 +224,7 @@ def solve_run(model: LinkageModel, q: Array) -> Run:
     def step() -> Reading:
         model.bulk.repose()
         model.space.step(s.dt)
-        return model.readout.impulses(), 0.0
+        return model.readout.impulses(), at_rest
 
     run = run_until_settled(step, s, model.scale, model.readout.values)
     place(model, q)  # report the pose the forces belong to
@@ -260,6 +276,7 @@ def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Out
     gaps = loop_violations(linkage, q)
     drifts = pose_drifts(model.radii, q, results.pose.q[at])
     held = not has_free_coordinates(model.case)
+    pose_lists = {k: v.tolist() for k, v in poses.items()}
     out = []
     for m, o in enumerate(outcomes):
         diag = RunDiagnostics(
@@ -271,7 +288,7 @@ def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Out
                   gruebler=gruebler)
         if drivers is not None:
             diag["driver"] = float(drivers[o.index])
-        pose = {k: float(v[m]) for k, v in poses.items()}
+        pose = {k: v[m] for k, v in pose_lists.items()}
         if not o.run.settled:
             out.append(not_settled(model.case.name, backend, pose, diag, units))
         elif held and drifts[m] > ASSEMBLY_DRIFT * model.scale:

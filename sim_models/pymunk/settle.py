@@ -35,9 +35,9 @@ def relative_change(new: list[float], old: list[float], floor: float) -> float:
     return max(map(abs, map(sub, new, old)), default=0.0) / scale
 
 
-#: One step of a run: (the impulses it read, :meth:`~.readout.Readout.impulses`, and the
-#: residual velocity after it, m/s).
-Reading = tuple[list[float], float]
+#: One step of a run: (the impulses it read, :meth:`~.readout.Readout.impulses`, and how
+#: to get the residual velocity after it, m/s: computed only when the rule needs it).
+Reading = tuple[list[float], Callable[[], float]]
 
 
 def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, length: float,
@@ -47,7 +47,8 @@ def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, len
     Settled means: residual velocity below ``settle_speed`` × ``length`` *and*
     relative force change below ``settle_force_change`` for ``settle_patience``
     consecutive steps. Never a fixed step count; ``max_steps`` is only a budget.
-    A step that re-poses the model (the constraint solve) reports velocity 0.
+    A step that re-poses the model (the constraint solve) reports velocity 0. The
+    velocity is computed only where the force change passes (and for the last step).
     The force change is that of every reported force, and couple / ``length``, as a
     fraction of the largest of them, at least ``floor`` (N); it is measured on the
     impulses a step reads, which are those forces × dt. ``report`` reads the named
@@ -58,12 +59,14 @@ def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, len
     previous: list[float] | None = None
     calm = 0
     velocity = change = float("inf")
+    speed: Callable[[], float] = lambda: velocity  # noqa: E731 (before the first step)
     for n in range(1, s.max_steps + 1):
-        impulses, velocity = step()
+        impulses, speed = step()
         change = relative_change(impulses, previous, impulse_floor) if previous is not None \
             else float("inf")
         previous = impulses
-        calm = calm + 1 if velocity <= s.settle_speed * length and change <= s.settle_force_change else 0
+        calm = calm + 1 if change <= s.settle_force_change and speed() <= s.settle_speed * length \
+            else 0
         if calm >= s.settle_patience:
-            return Run(report(), n, True, velocity, change)
-    return Run(report(), s.max_steps, False, velocity, change)
+            return Run(report(), n, True, speed(), change)
+    return Run(report(), s.max_steps, False, speed(), change)
