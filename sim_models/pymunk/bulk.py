@@ -54,6 +54,7 @@ class _Channel:
         # Headroom: the C array grows (reallocates) only when it is full; this one never is.
         self.memory = np.zeros(2 * rows * columns + 8)
         self.array = self.memory[:rows * columns].reshape(rows, columns)
+        self.view = memoryview(self.memory)  # for struct packing
         self.buffer = batch.Buffer()
         self.buffer.set_float_buf(self.memory)
         self.floats = self.buffer._float_arr
@@ -121,12 +122,12 @@ class Bodies:
         does not :meth:`verify` (call that once the loop ends), and a loop over a few bodies
         in Python is cheaper than numpy's per-call overhead on arrays this small."""
         self._get.run()
-        return self._state_format.unpack_from(self._get.memory)
+        return self._state_format.unpack_from(self._get.view)
 
     def advance(self, push: list[float], dt: float) -> tuple[float, ...]:
         """Set every body's velocities, force and torque (vx, vy, ω, fx, fy, torque, body
         after body), step the space by ``dt`` and :meth:`read_flat`."""
-        self._push_format.pack_into(self._set.memory, 0, *push)
+        self._push_format.pack_into(self._set.view, 0, *push)
         self._set.run()
         self._space.step(dt)
         return self.read_flat()
