@@ -54,7 +54,7 @@ class _Channel:
         # Headroom: the C array grows (reallocates) only when it is full; this one never is.
         self.memory = np.zeros(2 * rows * columns + 8)
         self.array = self.memory[:rows * columns].reshape(rows, columns)
-        self.view = memoryview(self.memory)  # for struct packing
+        self.view = self.memory.data  # a memoryview, for struct packing
         self.buffer = batch.Buffer()
         self.buffer.set_float_buf(self.memory)
         self.floats = self.buffer._float_arr
