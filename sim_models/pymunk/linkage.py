@@ -138,10 +138,7 @@ def damped_and_loaded(model: LinkageModel) -> Callable[[Sequence[float]], list[f
     damp = (s.damping ** s.dt).__mul__
     blank = [0.0] * (6 * len(model.bodies))  # vx, vy, ω, fx, fy, torque per body
     blank[3::6], blank[4::6] = loads.force[:, 0].tolist(), loads.force[:, 1].tolist()
-    # A·cos φ − B·sin φ + T as R·cos(φ + δ) + T, one cosine per body.
-    turning = [(6 * k + 2, 6 * k + 5, math.hypot(a, b), math.atan2(b, a), float(couple))
-               for k, (a, b, couple) in enumerate(zip(loads.a, loads.b, loads.couple, strict=True))
-               if a or b or couple]
+    turning = [(6 * k + 2, 6 * k + 5, r, phase, couple) for k, r, phase, couple in loads.turning]
     cos = math.cos
 
     def prepare(state: Sequence[float]) -> list[float]:

@@ -68,8 +68,10 @@ class LoadTerms:
     A load keeps its global direction while its point turns with the body, so the force
     on a body is constant and its torque about the centre of gravity, Σ (R(φ)·d) × F with
     d = point − cog in the body's frame, is A·cos φ − B·sin φ + T with A = Σ d × F,
-    B = Σ d·F and T the couples: what :func:`apply_forces` adds, computed for all bodies
-    at once (rounding apart).
+    B = Σ d·F and T the couples, i.e. R·cos(φ + δ) + T with R = |(A, B)|, tan δ = B/A:
+    what :func:`apply_forces` adds, computed for all bodies at once (rounding apart).
+    ``turning`` lists (body index, R, δ, T) of the bodies with any torque, as plain floats
+    for a loop that runs every step.
     """
 
     def __init__(self, loads: Iterable[LoadLike], masses: Iterable[MassLike], gravity: Vec,
@@ -77,7 +79,7 @@ class LoadTerms:
         index = {link: k for k, link in enumerate(bodies)}
         cogs = [tuple(b.center_of_gravity) for b in bodies.values()]
         self.force = np.zeros((len(index), 2))
-        self.a, self.b, self.couple = (np.zeros(len(index)) for _ in range(3))
+        a, b, self.couple = (np.zeros(len(index)) for _ in range(3))
         gx, gy = gravity
         loads = list(loads)
         points = [(ld.link, ld.at, ld.force) for ld in loads]
@@ -86,11 +88,14 @@ class LoadTerms:
             k = index[link]
             dx, dy = px - cogs[k][0], py - cogs[k][1]
             self.force[k] += (fx, fy)
-            self.a[k] += dx * fy - dy * fx
-            self.b[k] += dx * fx + dy * fy
+            a[k] += dx * fy - dy * fx
+            b[k] += dx * fx + dy * fy
         for ld in loads:
             self.couple[index[ld.link]] += ld.torque
+        self.amplitude, self.phase = np.hypot(a, b), np.arctan2(b, a)
+        self.turning = [(k, float(self.amplitude[k]), float(self.phase[k]), float(self.couple[k]))
+                        for k in range(len(index)) if self.amplitude[k] or self.couple[k]]
 
     def torque(self, angle: np.ndarray) -> np.ndarray:
         """Each body's load torque about its centre of gravity at angles ``angle`` (n,), N·m."""
-        return self.a * np.cos(angle) - self.b * np.sin(angle) + self.couple
+        return self.amplitude * np.cos(angle + self.phase) + self.couple
