@@ -192,7 +192,7 @@ def test_load_terms_equal_the_applied_loads(name: str) -> None:
         q[2::3] = rng.uniform(-math.pi, math.pi, q[2::3].size)
         place(model, q)
         apply_loads(model)
-        torque = model.loads.torque(q[2::3])
+        torque = model.loads.torques(q[2::3].tolist())
         size = max(float(np.abs(model.loads.force).max()), 1.0)
         for k, body in enumerate(model.bodies.values()):
             assert tuple(body.force) == pytest.approx(tuple(model.loads.force[k]),

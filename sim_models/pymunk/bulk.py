@@ -32,13 +32,11 @@ STATE = Fields.POSITION | Fields.ANGLE | Fields.VELOCITY | Fields.ANGULAR_VELOCI
 STATE_COLUMNS = 6
 #: Written every step of a settling run: per body vx, vy, ω, fx, fy, torque.
 PUSH = Fields.VELOCITY | Fields.ANGULAR_VELOCITY | Fields.FORCE | Fields.TORQUE
-#: Written every step of a re-posing run, after the angle (a body turns about its centre
-#: of gravity, so setting the angle second would move its origin): per body x, y of the
+#: Written to place the bodies, after the angle (a body turns about its centre of
+#: gravity, so setting the angle second would move its origin): per body x, y of the
 #: origin, vx, vy, ω, fx, fy, torque.
 POSE = (Fields.POSITION | Fields.VELOCITY | Fields.ANGULAR_VELOCITY | Fields.FORCE
         | Fields.TORQUE)
-POSED_ORIGIN, POSED_VELOCITY, POSED_FORCE, POSED_TORQUE = (slice(0, 2), slice(2, 5),
-                                                           slice(5, 7), 7)
 
 
 class BatchLayoutError(RuntimeError):
@@ -75,8 +73,8 @@ class _Channel:
 
 class Bodies:
     """The bodies of ``space``: :attr:`state` (n, 6) of ``bodies`` in their order after
-    :meth:`read`; velocities and loads set by :meth:`advance`; :attr:`angle` (n, 1) and
-    :attr:`pose` (n, 8), written in that order by :meth:`repose`.
+    :meth:`read`; velocities and loads set by :meth:`advance`; a pose set by :meth:`stage`
+    and :meth:`repose`.
 
     The iterator also visits the space's static body, after the dynamic ones: its rows
     follow, and every write gives it back the values it has (at rest, unloaded).
@@ -98,11 +96,13 @@ class Bodies:
         self._pose = _Channel(space, POSE, rows, 8, setter=True)
         static = space.static_body
         self._angle.array[n:] = static.angle
-        self._pose.array[n:, POSED_ORIGIN] = tuple(static.position)
+        self._pose.array[n:, :2] = tuple(static.position)
         self.state = self._get.array[:n]
-        self.angle, self.pose = self._angle.array[:n], self._pose.array[:n]
-        self._state_format = struct.Struct(f"{self.state.size}d")  # the model's bodies' rows
+        # The model's bodies' rows (the static body's stay as set above).
+        self._state_format = struct.Struct(f"{self.state.size}d")
         self._push_format = struct.Struct(f"{6 * n}d")
+        self._angle_format = struct.Struct(f"{n}d")
+        self._pose_format = struct.Struct(f"{8 * n}d")
         self.read()
 
     def read(self) -> np.ndarray:
@@ -132,8 +132,18 @@ class Bodies:
         self._space.step(dt)
         return self.read_flat()
 
+    def stage(self, q: Sequence[float], forces: Sequence[float], torques: Sequence[float]) -> None:
+        """Ready :meth:`repose` to put every body at its coordinates q (x, y of the origin
+        and angle, body after body), at rest, under ``forces`` (fx, fy body after body) and
+        ``torques``."""
+        pose = [0.0] * (8 * len(torques))
+        pose[0::8], pose[1::8] = q[0::3], q[1::3]
+        pose[5::8], pose[6::8], pose[7::8] = forces[0::2], forces[1::2], torques
+        self._angle_format.pack_into(self._angle.view, 0, *q[2::3])
+        self._pose_format.pack_into(self._pose.view, 0, *pose)
+
     def repose(self) -> None:
-        """Set every body's angle from :attr:`angle`, then its origin, velocities, force and
-        torque from :attr:`pose`."""
+        """Set every body's angle, then its origin, velocities, force and torque, as the last
+        :meth:`stage` said."""
         self._angle.run()
         self._pose.run()

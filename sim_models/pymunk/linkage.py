@@ -22,7 +22,6 @@ friction are driven (:mod:`.linkage_dynamics`); here they are ``not_applicable``
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -137,16 +136,14 @@ def damped_and_loaded(model: LinkageModel) -> Callable[[Sequence[float]], list[f
     s, loads = model.settings, model.loads
     damp = (s.damping ** s.dt).__mul__
     blank = [0.0] * (6 * len(model.bodies))  # vx, vy, ω, fx, fy, torque per body
-    blank[3::6], blank[4::6] = loads.force[:, 0].tolist(), loads.force[:, 1].tolist()
-    turning = [(6 * k + 2, 6 * k + 5, r, phase, couple) for k, r, phase, couple in loads.turning]
-    cos = math.cos
+    blank[3::6], blank[4::6] = loads.forces[0::2], loads.forces[1::2]
+    torques = loads.torques
 
     def prepare(state: Sequence[float]) -> list[float]:
         push = blank.copy()
         push[0::6], push[1::6], push[2::6] = map(damp, state[3::6]), map(damp, state[4::6]), \
             map(damp, state[5::6])
-        for angle, torque, r, phase, couple in turning:
-            push[torque] = r * cos(state[angle] + phase) + couple
+        push[5::6] = torques(state[2::6])
         return push
 
     return prepare

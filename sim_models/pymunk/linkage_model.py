@@ -49,13 +49,7 @@ from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, real_inertial
-from mechcheck.sim_models.pymunk.bulk import (
-    POSED_FORCE,
-    POSED_ORIGIN,
-    POSED_TORQUE,
-    POSED_VELOCITY,
-    Bodies,
-)
+from mechcheck.sim_models.pymunk.bulk import Bodies
 from mechcheck.sim_models.pymunk.forces import Cell, impulse_cells
 from mechcheck.sim_models.pymunk.loads import LoadTerms, apply_forces
 from mechcheck.sim_models.pymunk.readout import HeldSlide, Readout
@@ -342,15 +336,11 @@ def place(model: LinkageModel, q: Array) -> None:
 
 def stage(model: LinkageModel, q: Array, loaded: bool = False) -> None:
     """Ready the bodies' coordinates q (3n,), at rest, for :meth:`~.bulk.Bodies.repose`,
-    with the loads at that pose (``loaded``) or none. The angle is set first: pymunk
-    rotates a body about its centre of gravity, so setting the angle after the position
-    would move the body's origin."""
-    coords, bodies = np.asarray(q, dtype=float).reshape(-1, 3), model.bulk
-    bodies.angle[:, 0] = coords[:, 2]
-    bodies.pose[:, POSED_ORIGIN] = coords[:, :2]
-    bodies.pose[:, POSED_VELOCITY] = 0.0
-    bodies.pose[:, POSED_FORCE] = model.loads.force if loaded else 0.0
-    bodies.pose[:, POSED_TORQUE] = model.loads.torque(coords[:, 2]) if loaded else 0.0
+    with the loads at that pose (``loaded``) or none."""
+    coords, loads = np.asarray(q, dtype=float).tolist(), model.loads
+    none = [0.0] * len(model.bodies)
+    model.bulk.stage(coords, loads.forces if loaded else none * 2,
+                     loads.torques(coords[2::3]) if loaded else none)
 
 
 def coordinates(model: LinkageModel) -> Array:

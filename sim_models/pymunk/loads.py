@@ -7,7 +7,8 @@ the body, the force keeps its global direction.
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Iterable, Mapping
+import math
+from collections.abc import Hashable, Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
 import numpy as np
@@ -70,8 +71,8 @@ class LoadTerms:
     d = point − cog in the body's frame, is A·cos φ − B·sin φ + T with A = Σ d × F,
     B = Σ d·F and T the couples, i.e. R·cos(φ + δ) + T with R = |(A, B)|, tan δ = B/A:
     what :func:`apply_forces` adds, computed for all bodies at once (rounding apart).
-    ``turning`` lists (body index, R, δ, T) of the bodies with any torque, as plain floats
-    for a loop that runs every step.
+    In plain floats, for loops that run every step: ``forces`` (fx, fy body after body)
+    and ``turning``, (body index, R, δ, T) of the bodies with any torque.
     """
 
     def __init__(self, loads: Iterable[LoadLike], masses: Iterable[MassLike], gravity: Vec,
@@ -92,10 +93,16 @@ class LoadTerms:
             b[k] += dx * fx + dy * fy
         for ld in loads:
             self.couple[index[ld.link]] += ld.torque
-        self.amplitude, self.phase = np.hypot(a, b), np.arctan2(b, a)
-        self.turning = [(k, float(self.amplitude[k]), float(self.phase[k]), float(self.couple[k]))
-                        for k in range(len(index)) if self.amplitude[k] or self.couple[k]]
+        amplitude, phase = np.hypot(a, b), np.arctan2(b, a)
+        self.forces: list[float] = self.force.ravel().tolist()
+        self.turning = [(k, float(amplitude[k]), float(phase[k]), float(self.couple[k]))
+                        for k in range(len(index)) if amplitude[k] or self.couple[k]]
+        self._none = [0.0] * len(index)
 
-    def torque(self, angle: np.ndarray) -> np.ndarray:
-        """Each body's load torque about its centre of gravity at angles ``angle`` (n,), N·m."""
-        return self.amplitude * np.cos(angle + self.phase) + self.couple
+    def torques(self, angles: Sequence[float]) -> list[float]:
+        """Each body's load torque about its centre of gravity at ``angles`` (one per body),
+        N·m."""
+        out = self._none.copy()
+        for k, r, phase, couple in self.turning:
+            out[k] = r * math.cos(angles[k] + phase) + couple
+        return out
