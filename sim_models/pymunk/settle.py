@@ -55,18 +55,17 @@ def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, len
     reactions once, when the run ends.
     """
     s = settings
-    impulse_floor = floor * s.dt
+    impulse_floor, still, calm_change = floor * s.dt, s.settle_speed * length, s.settle_force_change
     previous: list[float] | None = None
     calm = 0
-    velocity = change = float("inf")
-    speed: Callable[[], float] = lambda: velocity  # noqa: E731 (before the first step)
+    change = float("inf")
+    speed: Callable[[], float] = lambda: float("inf")  # noqa: E731 (no step taken yet)
     for n in range(1, s.max_steps + 1):
         impulses, speed = step()
         change = relative_change(impulses, previous, impulse_floor) if previous is not None \
             else float("inf")
         previous = impulses
-        calm = calm + 1 if change <= s.settle_force_change and speed() <= s.settle_speed * length \
-            else 0
+        calm = calm + 1 if change <= calm_change and speed() <= still else 0
         if calm >= s.settle_patience:
             return Run(report(), n, True, speed(), change)
     return Run(report(), s.max_steps, False, speed(), change)
