@@ -161,16 +161,16 @@ def settle_run(model: LinkageModel) -> Run:
     The bodies are read and written in bulk (:mod:`.bulk`), and each step reads only what
     the stop rule needs: the impulses, and the residual velocity when the rule asks.
     """
-    s, bodies, readout = model.settings, model.bulk, model.readout
-    prepare, radii = damped_and_loaded(model), model.radii.tolist()
+    s, bodies, impulses = model.settings, model.bulk, model.readout.impulses
+    prepare, radii, dt = damped_and_loaded(model), model.radii.tolist(), s.dt
     state = bodies.read_flat()
 
     def step() -> Reading:
         nonlocal state
-        state = now = bodies.advance(prepare(state), s.dt)
-        return readout.impulses(), lambda: residual_velocity(radii, now)
+        state = now = bodies.advance(prepare(state), dt)
+        return impulses(), lambda: residual_velocity(radii, now)
 
-    run = run_until_settled(step, s, model.scale, readout.values, rounding_floor(model))
+    run = run_until_settled(step, s, model.scale, model.readout.values, rounding_floor(model))
     bodies.verify()
     return run
 

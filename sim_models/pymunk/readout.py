@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import pymunk
 
@@ -68,14 +69,23 @@ class Readout:
     springs: tuple[tuple[str, pymunk.Constraint, bool], ...]
     held: tuple[HeldSlide, ...]
 
+    @cached_property
+    def _cells(self) -> tuple[tuple[Cell, ...], tuple[Cell, ...]]:
+        """The force and the couple cells alone, for :meth:`impulses`."""
+        return tuple(c for _, c in self.forces), tuple(c for _, c in self.couples)
+
     def impulses(self) -> list[float]:
         """What the stop rule compares from step to step: every reaction's impulse, a
         couple's divided by ``length`` (N·s, in no particular order; a spring's sign
         flipped, which no comparison of sizes or changes sees)."""
-        out = [d[k] for _, (d, k) in self.forces]  # type: ignore[index]
-        out += [d[k] / self.length for _, (d, k) in self.couples]  # type: ignore[index]
-        out += [s.impulse / self.length if torsional else s.impulse
-                for _, s, torsional in self.springs]
+        forces, couples = self._cells
+        out = [d[k] for d, k in forces]  # type: ignore[index]
+        if couples:
+            length = self.length
+            out += [d[k] / length for d, k in couples]  # type: ignore[index]
+        if self.springs:
+            out += [s.impulse / self.length if torsional else s.impulse
+                    for _, s, torsional in self.springs]
         for slide in self.held:
             out += slide.split(1.0)  # the impulse itself
         return out
