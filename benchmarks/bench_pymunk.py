@@ -11,7 +11,11 @@
 
 Prints Markdown: ms per pose (median over ``--repeats`` with min and max), steps per
 pose and the worst relative force error against the analytic backend, for ``pymunk``
-(settle) and ``pymunk_solve``. Target: ≤ 2 ms/pose for the settled sweep.
+(settle) and ``pymunk_solve``; and, measured in the same repeat right after the sweep,
+its **C floor**: the same pymunk Space stepped, pose after pose, as many steps as the
+sweep's run at that pose took, with no Python work between ``space.step`` calls
+(:func:`c_floor`), and the ratio sweep / floor (median, min, max over the repeats).
+Target (issue 13): ratio ≤ 2 for the settled sweeps.
 
 Run: /work/venv/bin/python benchmarks/bench_pymunk.py [--repeats 3] [--stride 10]
 """
@@ -34,9 +38,16 @@ from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
+from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sim_models.pymunk import backend as backends
 from mechcheck.sim_models.pymunk.backend import sweep
+from mechcheck.sim_models.pymunk.linkage import hold_without_correction
+from mechcheck.sim_models.pymunk.linkage_model import build_linkage_model
+from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE
 from mechcheck.sweep import gated_poses
+
+#: (median, min, max) of a measurement over the repeats.
+Stats = tuple[float, float, float]
 
 
 def worst_error(solutions: list[Solution], reference: dict[str, np.ndarray]) -> float:
@@ -65,20 +76,24 @@ def four_bar_sweep(repeats: int) -> None:
     case = next(c for c in load_cases(*builtin_case_files()) if c.name == "seed-E1-as-stated")
     theta = np.radians(np.arange(360.0))
     reference = solve_poses(case, theta).values
-    print(f"Seed E1, as its linkage, 360 poses, the pose gate included; median of {repeats}\n")
-    print("| backend | poses | ok | gated (singular) | ms/pose (min, max) | steps/pose | "
-          "worst rel. error |")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+    verdicts, _ = gated_poses(case, theta)
+    kept = {k: v[[x == "" for x in verdicts]] for k, v in reference.items()}
+    linkage = as_linkage(case)
+    print(f"Seed E1, as its linkage, 360 poses, the pose gate included; median of {repeats} "
+          "(min, max); C floor: the same Space stepped as many steps per pose, nothing else\n")
+    print("| backend | poses | ok | gated (singular) | ms/pose (min, max) | C floor ms/pose "
+          "(min, max) | ratio to floor (min, max) | steps/pose | worst rel. error |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for backend in ("pymunk", "pymunk_solve"):
         sweep(case, theta[:10], backend)  # warm-up (imports, layout check)
         sols, gated = harness_sweep(case, theta, backend)
-        time_ms = per_pose(lambda b=backend: harness_sweep(case, theta, b), len(theta), repeats)  # type: ignore[misc]
-        verdicts, _ = gated_poses(case, theta)
-        kept = {k: v[[x == "" for x in verdicts]] for k, v in reference.items()}
+        time_ms, floor_ms, ratio = against_floor(
+            lambda b=backend: harness_sweep(case, theta, b)[0],  # type: ignore[misc]
+            linkage, backend, len(theta), repeats)
         ok = sum(s.status == "ok" for s in sols)
         steps = np.mean([s.diagnostics.get("steps", 0) for s in sols if s.status == "ok"])
-        print(f"| {backend} | {len(theta)} | {ok} | {gated} | {time_ms[0]:.2f} ({time_ms[1]:.2f}, "
-              f"{time_ms[2]:.2f}) | {steps:.1f} | {worst_error(sols, kept):.1e} |")
+        print(f"| {backend} | {len(theta)} | {ok} | {gated} | {cell(time_ms)} | {cell(floor_ms)} | "
+              f"{cell(ratio, '×')} | {steps:.1f} | {worst_error(sols, kept):.1e} |")
 
 
 def watt_at_rest() -> Case:
@@ -111,14 +126,58 @@ def linkage_error(case: Case, sols: list[Solution], values: np.ndarray) -> float
     return worst
 
 
-def per_pose(fn: Callable[[], object], poses: int, repeats: int) -> tuple[float, float, float]:
+def spread(values: list[float]) -> Stats:
+    return statistics.median(values), min(values), max(values)
+
+
+def per_pose(fn: Callable[[], object], poses: int, repeats: int) -> Stats:
     """(median, min, max) ms per pose over the repeats."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
         fn()
         times.append((time.perf_counter() - start) / poses * 1e3)
-    return statistics.median(times), min(times), max(times)
+    return spread(times)
+
+
+def c_floor(case: Case, backend: str, steps: list[int]) -> float:
+    """Seconds to step the backend's Space of the linkage ``case`` ``steps[k]`` times for
+    every pose k, with nothing but ``space.step`` in the loop: what the sweep would cost
+    if all its Python work (loads, damping, readings, stop rule, verdicts) were free."""
+    settings = LINKAGE_SETTLE if backend == "pymunk" else LINKAGE_SOLVE
+    model = build_linkage_model(case, settings, analytic_results(case).pose.q[0])
+    if backend == "pymunk_solve":
+        hold_without_correction(model)
+    step, dt = model.space.step, settings.dt
+    start = time.perf_counter()
+    for n in steps:
+        for _ in range(n):
+            step(dt)
+    return time.perf_counter() - start
+
+
+def against_floor(run: Callable[[], list[Solution]], case: Case, backend: str, poses: int,
+                  repeats: int) -> tuple[Stats, Stats, Stats]:
+    """ms per pose of ``run`` and of its C floor (:func:`c_floor`, with the steps the run
+    took at each pose), each repeat measuring both, and their ratio: (median, min, max)
+    of each over the repeats."""
+    sweep_ms, floor_ms, ratio = [], [], []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        sols = run()
+        took = time.perf_counter() - start
+        steps = [int(s.diagnostics["steps"]) for s in sols if "steps" in s.diagnostics]
+        floor = c_floor(case, backend, steps)
+        sweep_ms.append(took / poses * 1e3)
+        floor_ms.append(floor / poses * 1e3)
+        ratio.append(took / floor)
+    return spread(sweep_ms), spread(floor_ms), spread(ratio)
+
+
+def cell(stats: Stats, unit: str = "", digits: int = 2) -> str:
+    """A table cell: the median, and (min, max)."""
+    median, low, high = stats
+    return f"{median:.{digits}f}{unit} ({low:.{digits}f}, {high:.{digits}f})"
 
 
 def one_by_one(case: Case, values: np.ndarray, backend: str) -> list[Solution]:
@@ -137,21 +196,23 @@ def watt_sweep(repeats: int, stride: int) -> None:
     print(f"\nWatt II six-bar held, linkage builder, 360 poses lock to lock "
           f"({math.degrees(values[0]):.2f}° … {math.degrees(values[-1]):.2f}° from the drawn pose); "
           f"analytic gate alone {gate[0]:.2f} ms/pose (min {gate[1]:.2f}, max {gate[2]:.2f})\n")
-    print("| backend | ok | other verdicts | sweep ms/pose (min, max) | one by one ms/pose "
-          "(min, max) | ratio | steps/pose | worst rel. error |")
-    print("|---|---:|---|---:|---:|---:|---:|---:|")
+    print("| backend | ok | other verdicts | sweep ms/pose (min, max) | C floor ms/pose (min, max) "
+          "| ratio to floor (min, max) | one by one ms/pose (min, max) | sweep speed-up | "
+          "steps/pose | worst rel. error |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")
     for backend in ("pymunk", "pymunk_solve"):
         sweep(case, values[:5], backend)  # warm-up
         sols = sweep(case, values, backend)
-        fast = per_pose(lambda b=backend: sweep(case, values, b), len(values), repeats)  # type: ignore[misc]
+        fast, floor_ms, ratio = against_floor(
+            lambda b=backend: sweep(case, values, b), case, backend, len(values), repeats)  # type: ignore[misc]
         slow = per_pose(lambda b=backend: one_by_one(case, sparse, b), len(sparse), repeats)  # type: ignore[misc]
         ok = [s for s in sols if s.status == "ok"]
         others = {s.status for s in sols} - {"ok"}
         other = ", ".join(f"{sum(s.status == v for s in sols)} {v}" for v in sorted(others)) or "-"
         steps = np.mean([s.diagnostics["steps"] for s in ok])
-        print(f"| {backend} | {len(ok)} | {other} | {fast[0]:.2f} ({fast[1]:.2f}, {fast[2]:.2f}) | "
-              f"{slow[0]:.2f} ({slow[1]:.2f}, {slow[2]:.2f}) | {slow[0] / fast[0]:.1f}× | "
-              f"{steps:.1f} | {linkage_error(case, sols, values):.1e} |")
+        print(f"| {backend} | {len(ok)} | {other} | {cell(fast)} | {cell(floor_ms)} | "
+              f"{cell(ratio, '×')} | {cell(slow)} | {slow[0] / fast[0]:.1f}× | {steps:.1f} | "
+              f"{linkage_error(case, sols, values):.1e} |")
 
 
 def main() -> None:

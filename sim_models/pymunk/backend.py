@@ -9,7 +9,8 @@ as its linkage (:mod:`mechcheck.sim_models.presets`).
 - :func:`sweep` — either backend over the first driver (:mod:`.linkage_sweep`).
 
 Modules: ``linkage_model`` (linkage → Space), ``forces`` (reading force vectors),
-``loads``, ``readout``, ``settle`` (the stop rule), ``linkage_friction``, ``settings``;
+``loads``, ``readout``, ``bulk`` (the bodies read and written in bulk every step),
+``settle`` (the stop rule), ``linkage_friction``, ``settings``;
 ``model`` and ``turning``: the four-bar's own model for the turning experiments.
 """
 

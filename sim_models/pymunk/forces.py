@@ -79,22 +79,35 @@ def read_vect(constraint: pymunk.Constraint, offset: int) -> Vec:
     return float(d[k]), float(d[k + 1])  # type: ignore[index]
 
 
+#: Where one double of a constraint's jAcc lives: (its struct as doubles, index).
+Cell = tuple[object, int]
+
+
+def impulse_cells(constraint: pymunk.Constraint) -> list[Cell]:
+    """Where the constraint's jAcc lives: two cells (pivot, groove) or one (gear, motor).
+
+    A cell points into the constraint's C struct and stays valid while the constraint
+    exists; reading it costs one cffi index, which is what a loop reading every step needs.
+    """
+    if not _checked:
+        check_layout()
+    for kind, fields, size in ((pymunk.PivotJoint, PIVOT_FIELDS, 2),
+                               (pymunk.GrooveJoint, GROOVE_FIELDS, 2),
+                               (pymunk.GearJoint, GEAR_FIELDS, 1),
+                               (pymunk.SimpleMotor, MOTOR_FIELDS, 1)):
+        if isinstance(constraint, kind):
+            d, k = _doubles(constraint), fields["jAcc"] // _DOUBLE
+            return [(d, k + i) for i in range(size)]
+    raise TypeError(f"no impulse layout known for {type(constraint).__name__}")
+
+
 def accumulated_impulse(constraint: pymunk.Constraint) -> Vec | float:
     """jAcc of the last step: a vector (pivot, groove) or a signed scalar (gear, motor).
 
     It is the impulse the constraint applied to its body b (−jAcc to body a).
     """
-    if not _checked:
-        check_layout()
-    if isinstance(constraint, pymunk.PivotJoint):
-        return read_vect(constraint, PIVOT_FIELDS["jAcc"])
-    if isinstance(constraint, pymunk.GrooveJoint):
-        return read_vect(constraint, GROOVE_FIELDS["jAcc"])
-    if isinstance(constraint, pymunk.GearJoint):
-        return read_double(constraint, GEAR_FIELDS["jAcc"])
-    if isinstance(constraint, pymunk.SimpleMotor):
-        return read_double(constraint, MOTOR_FIELDS["jAcc"])
-    raise TypeError(f"no impulse layout known for {type(constraint).__name__}")
+    j = [float(d[k]) for d, k in impulse_cells(constraint)]  # type: ignore[index]
+    return (j[0], j[1]) if len(j) == 2 else j[0]
 
 
 def force_on_b(constraint: pymunk.Constraint, dt: float) -> Vec:

@@ -22,10 +22,11 @@ friction are driven (:mod:`.linkage_dynamics`); here they are ``not_applicable``
 
 from __future__ import annotations
 
-import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from math import hypot
+from operator import add, mul
 
 import numpy as np
 
@@ -42,16 +43,14 @@ from mechcheck.analytic.linkage_kinematics import (
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.linkage_motion import is_driven
-from mechcheck.sim_models.pymunk.forces import force_on_b, torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
-    apply_loads,
     build_linkage_model,
     coordinates,
-    damp,
     place,
+    stage,
 )
-from mechcheck.sim_models.pymunk.readout import Values
+from mechcheck.sim_models.pymunk.readout import Values, turned
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
 
@@ -73,49 +72,13 @@ DRIFT_EFFECT = 1.0e-6
 def axis_now(model: LinkageModel, joint: Joint) -> tuple[float, float]:
     """A prismatic joint's sliding direction at the current pose (fixed in links[0])."""
     assert joint.axis is not None
-    phi = model.body(joint.links[0]).angle
-    c, s = math.cos(phi), math.sin(phi)
-    return c * joint.axis[0] - s * joint.axis[1], s * joint.axis[0] + c * joint.axis[1]
-
-
-def prismatic_reaction(model: LinkageModel, joint: Joint, dt: float) -> Values:
-    """F (the normal reaction at ``at``), M and, if driven, Q of a prismatic joint.
-
-    A held slide's pivot carries the whole force at ``at``: its component along the
-    axis is the driver's effort Q, the rest the reaction (LINKAGES.md: F excludes any
-    driver effort).
-    """
-    name = joint.name
-    out: Values = {}
-    if name in model.held:
-        fx, fy = force_on_b(model.held[name], dt)
-        ux, uy = axis_now(model, joint)
-        along = fx * ux + fy * uy
-        out[f"Q_{name}"] = along
-        fx, fy = fx - along * ux, fy - along * uy
-    else:
-        fx, fy = force_on_b(model.grooves[name], dt)
-    out[f"F_{name}_x"], out[f"F_{name}_y"] = fx, fy
-    out[f"M_{name}"] = torque_on_b(model.locks[name], dt)
-    return out
+    return turned(joint.axis, model.body(joint.links[0]).angle)
 
 
 def reactions(model: LinkageModel) -> Values:
-    """Every F_, M_, Q_ and S_ quantity of the linkage, from the last step's impulses."""
-    dt = model.settings.dt
-    out: Values = {}
-    for joint in model.linkage.joints:
-        if joint.kind == "revolute":
-            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = force_on_b(model.pins[joint.name], dt)
-        else:
-            out |= prismatic_reaction(model, joint, dt)
-    for name, gear in model.drives.items():
-        out[f"Q_{name}"] = torque_on_b(gear, dt)
-    for name, spring in model.springs.items():
-        # The signed impulse on body b along b − a (or CCW): −S for tension (or for the
-        # torsional spring's −S on links[1]).
-        out[f"S_{name}"] = -spring.impulse / dt
-    return out
+    """Every F_, M_, Q_ and S_ quantity of the linkage, from the last step's impulses
+    (:func:`~.linkage_model.compile_readout`)."""
+    return model.readout.values()
 
 
 def pose_table(linkage: Linkage, q: Array) -> dict[str, Array]:
@@ -125,12 +88,6 @@ def pose_table(linkage: Linkage, q: Array) -> dict[str, Array]:
     pose = LinkagePose(linkage, np.zeros((q.shape[0], len(linkage.drivers))), q, zeros, zeros,
                        np.full(q.shape[0], np.nan))
     return pose_quantities(pose)
-
-
-def residual_velocity(model: LinkageModel) -> float:
-    """Largest point speed of any body, m/s: |v| + |ω|·(its radius)."""
-    return max((abs(b.velocity) + abs(b.angular_velocity) * model.radius[k]
-                for k, b in model.bodies.items()), default=0.0)
 
 
 def loop_violations(linkage: Linkage, q: Array) -> Array:
@@ -155,12 +112,6 @@ def pose_drifts(radius: Array, q: Array, reference: Array) -> Array:
 
 # -- the runs ---------------------------------------------------------------------------
 
-def is_torque(case: Case) -> Callable[[str], bool]:
-    """Which quantities are couples (N·m), for the force-change criterion."""
-    couples = frozenset(q for q, unit in quantity_units(case.linkage).items() if unit == "N*m")
-    return couples.__contains__
-
-
 def rounding_floor(model: LinkageModel) -> float:
     """The force scale below which a settling run's force changes are rounding noise (N).
 
@@ -170,22 +121,58 @@ def rounding_floor(model: LinkageModel) -> float:
     ``settle_force_change`` and an unloaded linkage would never count as settled.
     """
     s = model.settings
-    noise = s.fictitious_mass * float(np.finfo(float).eps) * model.linkage.scale / s.dt**2
+    noise = s.fictitious_mass * float(np.finfo(float).eps) * model.scale / s.dt**2
     return max(FORCE_FLOOR_N, noise / s.settle_force_change)
 
 
+def damped_and_loaded(model: LinkageModel) -> Callable[[Sequence[float]], list[float]]:
+    """From the bodies' state (:meth:`~.bulk.Bodies.read_flat`), what the next step starts
+    from, body after body (:meth:`~.bulk.Bodies.advance`): the velocities × damping^dt
+    (:func:`~.linkage_model.damp`) and the loads' force and torque at the bodies' angles
+    (:func:`~.linkage_model.apply_loads`, :class:`~.loads.LoadTerms`).
+
+    Plain Python on lists: with a handful of bodies, numpy's per-call overhead costs more
+    than the arithmetic."""
+    s, loads = model.settings, model.loads
+    damp = (s.damping ** s.dt).__mul__
+    blank = [0.0] * (6 * len(model.bodies))  # vx, vy, ω, fx, fy, torque per body
+    blank[3::6], blank[4::6] = loads.forces[0::2], loads.forces[1::2]
+    torques = loads.torques
+
+    def prepare(state: Sequence[float]) -> list[float]:
+        push = blank.copy()
+        push[0::6], push[1::6], push[2::6] = map(damp, state[3::6]), map(damp, state[4::6]), \
+            map(damp, state[5::6])
+        push[5::6] = torques(state[2::6])
+        return push
+
+    return prepare
+
+
+def residual_velocity(radii: list[float], state: Sequence[float]) -> float:
+    """The largest point speed |v| + |ω|·(radius) of any body in a state
+    (:meth:`~.bulk.Bodies.read_flat`), m/s."""
+    return max(map(add, map(hypot, state[3::6], state[4::6]), map(mul, map(abs, state[5::6]), radii)))
+
+
 def settle_run(model: LinkageModel) -> Run:
-    """Step the damped, loaded model until it is at rest and its forces stop changing."""
-    s = model.settings
+    """Step the damped, loaded model until it is at rest and its forces stop changing.
+
+    The bodies are read and written in bulk (:mod:`.bulk`), and each step reads only what
+    the stop rule needs: the impulses, and the residual velocity when the rule asks.
+    """
+    s, bodies, impulses = model.settings, model.bulk, model.readout.impulses
+    prepare, radii, dt = damped_and_loaded(model), model.radii.tolist(), s.dt
+    state = bodies.read_flat()
 
     def step() -> Reading:
-        damp(model)
-        apply_loads(model)
-        model.space.step(s.dt)
-        return reactions(model), residual_velocity(model)
+        nonlocal state
+        state = now = bodies.advance(prepare(state), dt)
+        return impulses(), lambda: residual_velocity(radii, now)
 
-    return run_until_settled(step, s, model.linkage.scale, is_torque(model.case),
-                             rounding_floor(model))
+    run = run_until_settled(step, s, model.scale, model.readout.values, rounding_floor(model))
+    bodies.verify()
+    return run
 
 
 def primed_settle_run(model: LinkageModel, seed: Array) -> Run:
@@ -218,17 +205,22 @@ def hold_without_correction(model: LinkageModel) -> None:
         constraint.max_bias = 0.0
 
 
+def at_rest() -> float:
+    """The residual velocity of a re-posed step: none."""
+    return 0.0
+
+
 def solve_run(model: LinkageModel, q: Array) -> Run:
-    """Re-pose at q and step until the impulses stop changing."""
+    """Re-pose at q, with the loads there, and step until the impulses stop changing."""
     s = model.settings
+    stage(model, q, loaded=True)
 
     def step() -> Reading:
-        place(model, q)
-        apply_loads(model)
+        model.bulk.repose()
         model.space.step(s.dt)
-        return reactions(model), 0.0
+        return model.readout.impulses(), at_rest
 
-    run = run_until_settled(step, s, model.linkage.scale, is_torque(model.case))
+    run = run_until_settled(step, s, model.scale, model.readout.values)
     place(model, q)  # report the pose the forces belong to
     return run
 
@@ -259,14 +251,16 @@ def outcome(model: LinkageModel, run: Run, start: float, index: int = 0) -> Outc
 
 
 def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Outcome],
-              results: LinkageResults) -> list[Solution]:
+              results: LinkageResults, drivers: Array | None = None) -> list[Solution]:
     """The Solutions of finished runs, with the pymunk diagnostics (the four-bar's keys)
     and the linkage's dof and condition: forces only where the run settled, and (held
-    linkages) stayed on the assembly it was held at.
+    linkages) stayed on the assembly it was held at. ``drivers``: a sweep's first driver
+    per pose of ``results``, recorded as the diagnostic ``driver``.
 
     The pose quantities, loop closures and drifts of all runs are computed at once.
     """
     linkage = model.linkage
+    dof, gruebler = linkage.dof, linkage.gruebler
     units = quantity_units(linkage)
     if not outcomes:
         return []
@@ -274,8 +268,9 @@ def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Out
     at = [o.index for o in outcomes]
     poses = pose_table(linkage, q)
     gaps = loop_violations(linkage, q)
-    drifts = pose_drifts(np.array(list(model.radius.values())), q, results.pose.q[at])
+    drifts = pose_drifts(model.radii, q, results.pose.q[at])
     held = not has_free_coordinates(model.case)
+    pose_lists = {k: v.tolist() for k, v in poses.items()}
     out = []
     for m, o in enumerate(outcomes):
         diag = RunDiagnostics(
@@ -283,19 +278,21 @@ def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Out
             float(drifts[m]),
         ).as_dict(force_change=o.run.force_change, dt=model.settings.dt,
                   iterations=model.settings.iterations,
-                  condition_number=float(results.condition[o.index]), dof=linkage.dof,
-                  gruebler=linkage.gruebler)
-        pose = {k: float(v[m]) for k, v in poses.items()}
+                  condition_number=float(results.condition[o.index]), dof=dof,
+                  gruebler=gruebler)
+        if drivers is not None:
+            diag["driver"] = float(drivers[o.index])
+        pose = {k: v[m] for k, v in pose_lists.items()}
         if not o.run.settled:
             out.append(not_settled(model.case.name, backend, pose, diag, units))
-        elif held and drifts[m] > ASSEMBLY_DRIFT * linkage.scale:
+        elif held and drifts[m] > ASSEMBLY_DRIFT * model.scale:
             out.append(Solution(
                 model.case.name, backend, pose, status="not_settled", diagnostics=diag, units=units,
                 message=f"came to rest {drifts[m]:.3g} m away from the held assembly (next to a "
                         "lock another assembly is that close, and the load made the joints' "
                         "soft correction give way to it); forces withheld"))
         elif held and (effect := drift_effect(float(results.condition[o.index]), float(drifts[m]),
-                                              linkage.scale)) > DRIFT_EFFECT:
+                                              model.scale)) > DRIFT_EFFECT:
             out.append(Solution(
                 model.case.name, backend, pose, status="not_settled", diagnostics=diag, units=units,
                 message=f"came to rest {drifts[m]:.3g} m from the held pose, which at condition "

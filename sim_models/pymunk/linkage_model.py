@@ -38,17 +38,21 @@ No collision shapes are added, so nothing collides.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pymunk
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Joint, LinearSpring, Link, Linkage
+from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, real_inertial
-from mechcheck.sim_models.pymunk.loads import apply_forces
+from mechcheck.sim_models.pymunk.bulk import Bodies
+from mechcheck.sim_models.pymunk.forces import Cell, impulse_cells
+from mechcheck.sim_models.pymunk.loads import LoadTerms, apply_forces
+from mechcheck.sim_models.pymunk.readout import HeldSlide, Readout
 from mechcheck.sim_models.pymunk.settings import SolverSettings
 
 Vec = tuple[float, float]
@@ -81,6 +85,10 @@ class LinkageModel:
     ``pins`` (revolute joints), ``grooves`` (free prismatic joints), ``held`` (driven
     prismatic joints: a pivot), ``locks`` (the prismatic joints' angle locks),
     ``drives`` (driven revolute joints), ``springs``; ``radius`` per body for speeds.
+    For loops that read or write every step: ``scale`` (the linkage's, which
+    :attr:`Linkage.scale` computes anew each time), ``radii`` (``radius`` as an array), ``bulk``
+    (the bodies in bulk), ``loads`` (the loads' force and torque per body) and ``readout``
+    (the reactions as a vector).
     """
 
     case: Case
@@ -94,6 +102,11 @@ class LinkageModel:
     drives: dict[str, pymunk.GearJoint]
     springs: dict[str, Spring]
     radius: dict[str, float]
+    scale: float = field(init=False)
+    radii: np.ndarray = field(init=False)
+    bulk: Bodies = field(init=False)
+    loads: LoadTerms = field(init=False)
+    readout: Readout = field(init=False)
 
     @property
     def linkage(self) -> Linkage:
@@ -260,29 +273,79 @@ def build_linkage_model(case: Case, settings: SolverSettings, q: Array,
     for constraint in model.constraints():
         constraint.error_bias = settings.error_bias
         space.add(constraint)
+    model.scale = linkage.scale
+    model.radii = np.array(list(model.radius.values()))
+    model.bulk = Bodies(space, list(bodies.values()))
+    model.loads = LoadTerms([ld for ld in linkage.loads if ld.link != GROUND],
+                            [m for m in linkage.masses if m.link != GROUND], linkage.gravity,
+                            bodies)
+    model.readout = compile_readout(model)
     place(model, q)
     return model
 
 
+def reaction_names(model: LinkageModel) -> list[str]:
+    """Every F_, M_, Q_ and S_ quantity of the linkage, in the order of its joints, then
+    drives and springs; a held slide's Q_ comes before its F_."""
+    names = []
+    for joint in model.linkage.joints:
+        if joint.kind == "revolute":
+            names += [f"F_{joint.name}_x", f"F_{joint.name}_y"]
+        else:
+            held = [f"Q_{joint.name}"] if joint.name in model.held else []
+            names += [*held, f"F_{joint.name}_x", f"F_{joint.name}_y", f"M_{joint.name}"]
+    return names + [f"Q_{name}" for name in model.drives] + [f"S_{name}" for name in model.springs]
+
+
+def compile_readout(model: LinkageModel) -> Readout:
+    """Which accumulated impulse is which quantity (:class:`~.readout.Readout`).
+
+    A constraint's impulse on its body b is the force by ``links[0]`` on ``links[1]``
+    (the module docstring): pins' and grooves' F, locks' M, drives' Q, a held slide's
+    pivot F + Q; a spring's S is the negative of its signed impulse.
+    """
+    linkage = model.linkage
+    forces: list[tuple[str, Cell]] = []
+    held = []
+    for joint in linkage.joints:
+        name = joint.name
+        if name in model.held and joint.axis is not None:
+            x, y = impulse_cells(model.held[name])
+            held.append(HeldSlide(name, (x, y), model.body(joint.links[0]), joint.axis))
+        else:
+            pin = model.pins[name] if joint.kind == "revolute" else model.grooves[name]
+            forces += zip((f"F_{name}_x", f"F_{name}_y"), impulse_cells(pin), strict=True)
+    couples = [(f"M_{name}", impulse_cells(lock)[0]) for name, lock in model.locks.items()]
+    couples += [(f"Q_{name}", impulse_cells(gear)[0]) for name, gear in model.drives.items()]
+    units = quantity_units(linkage)
+    springs = tuple((f"S_{name}", spring, units.get(f"S_{name}") == "N*m")
+                    for name, spring in model.springs.items())
+    return Readout(tuple(reaction_names(model)), model.settings.dt, linkage.scale, tuple(forces),
+                   tuple(couples), springs, tuple(held))
+
+
 def place(model: LinkageModel, q: Array) -> None:
-    """Put every body at its coordinates (t_x, t_y, φ) in q (3n,), at rest.
+    """Put every body at its coordinates (t_x, t_y, φ) in q (3n,), at rest, no load pending.
 
     This only seeds (or, in the constraint solve, re-poses) the configuration;
     the forces are still pymunk's.
     """
-    for k, body in enumerate(model.bodies.values()):
-        # Angle first: pymunk rotates a body about its centre of gravity, so setting
-        # the angle after the position would move the body's origin.
-        body.angle = float(q[3 * k + 2])
-        body.position = (float(q[3 * k]), float(q[3 * k + 1]))
-        body.velocity = (0.0, 0.0)
-        body.angular_velocity = 0.0
+    stage(model, q)
+    model.bulk.repose()
+
+
+def stage(model: LinkageModel, q: Array, loaded: bool = False) -> None:
+    """Ready the bodies' coordinates q (3n,), at rest, for :meth:`~.bulk.Bodies.repose`,
+    with the loads at that pose (``loaded``) or none."""
+    coords, loads = np.asarray(q, dtype=float).tolist(), model.loads
+    none = [0.0] * len(model.bodies)
+    model.bulk.stage(coords, loads.forces if loaded else none * 2,
+                     loads.torques(coords[2::3]) if loaded else none)
 
 
 def coordinates(model: LinkageModel) -> Array:
     """The bodies' coordinates q (3n,) in the linkage's layout (moving links in order)."""
-    return np.array([v for body in model.bodies.values()
-                     for v in (body.position.x, body.position.y, body.angle)])
+    return model.bulk.read()[:, :3].flatten()
 
 
 def apply_loads(model: LinkageModel) -> None:

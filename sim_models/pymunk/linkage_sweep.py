@@ -103,11 +103,13 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solutio
         if free and run.settled:
             previous = coordinates(model)
     simulated = dict(zip((o.index for o in outcomes),
-                         solutions(model, backend, method, outcomes, results) if model else [],
-                         strict=True))
-    out = []
-    for k, value in enumerate(values):
-        sol = verdicts.get(k) or simulated[k]
-        out.append(Solution(sol.case, sol.backend, sol.values, sol.status, sol.message,
-                            {**sol.diagnostics, "driver": float(value)}, units=sol.units))
-    return out
+                         solutions(model, backend, method, outcomes, results, values) if model
+                         else [], strict=True))
+    return [simulated[k] if k in simulated else with_driver(verdicts[k], float(value))
+            for k, value in enumerate(values)]
+
+
+def with_driver(sol: Solution, value: float) -> Solution:
+    """``sol`` with the sweep's driver ``value`` among its diagnostics."""
+    return Solution(sol.case, sol.backend, sol.values, sol.status, sol.message,
+                    {**sol.diagnostics, "driver": value}, units=sol.units)

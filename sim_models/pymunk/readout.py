@@ -1,4 +1,101 @@
-"""The quantity table every pymunk module passes around (:data:`Values`); a linkage's
-reactions are read by :func:`.linkage.reactions`."""
+"""The quantity table every pymunk module passes around (:data:`Values`), and
+:class:`Readout`, which reads a model's reactions.
+
+A settling run compares the reactions of consecutive steps (:mod:`.settle`), so it reads
+them every step. :class:`Readout` is compiled once per model
+(:func:`.linkage_model.compile_readout`): it keeps a pointer to every accumulated impulse
+(:func:`.forces.impulse_cells`), so the stop rule's reading (:meth:`Readout.impulses`) is
+one cffi index per impulse component, and the named table (:meth:`Readout.values`) is made
+only when a run reports.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import pymunk
+
+from mechcheck.sim_models.pymunk.forces import Cell
 
 Values = dict[str, float]
+
+
+def turned(axis: tuple[float, float], phi: float) -> tuple[float, float]:
+    """``axis`` (a direction fixed in a body) once the body has turned by ``phi``."""
+    c, s = math.cos(phi), math.sin(phi)
+    return c * axis[0] - s * axis[1], s * axis[0] + c * axis[1]
+
+
+def along_and_across(fx: float, fy: float, axis: tuple[float, float]) -> tuple[float, float, float]:
+    """A force split into its component along a unit ``axis`` and the rest: (along, x, y)."""
+    ux, uy = axis
+    along = fx * ux + fy * uy
+    return along, fx - along * ux, fy - along * uy
+
+
+@dataclass(frozen=True)
+class HeldSlide:
+    """A driven prismatic joint, held by a pivot (impulse ``cells``) whose force at ``at``
+    splits into the driver's effort Q along the axis and the reaction F across it
+    (LINKAGES.md: F excludes any driver effort); ``body`` is links[0], ``axis`` the slide's
+    direction in it."""
+
+    name: str
+    cells: tuple[Cell, Cell]
+    body: pymunk.Body
+    axis: tuple[float, float]
+
+    def split(self, dt: float) -> tuple[float, float, float]:
+        """(Q, F_x, F_y) of the last step, its impulse / ``dt``."""
+        (a, i), (b, j) = self.cells
+        return along_and_across(a[i] / dt, b[j] / dt,  # type: ignore[index]
+                                turned(self.axis, self.body.angle))
+
+
+@dataclass(frozen=True)
+class Readout:
+    """A model's reactions: ``forces`` (impulse cells of F components), ``couples`` (of M
+    and Q of gears), ``springs`` (each with whether it is torsional), ``held`` slides,
+    reported as the quantities ``names`` (in this order) of a step of ``dt``;
+    ``length`` is what a couple is divided by to compare it with a force."""
+
+    names: tuple[str, ...]
+    dt: float
+    length: float
+    forces: tuple[tuple[str, Cell], ...]
+    couples: tuple[tuple[str, Cell], ...]
+    springs: tuple[tuple[str, pymunk.Constraint, bool], ...]
+    held: tuple[HeldSlide, ...]
+
+    @cached_property
+    def _cells(self) -> tuple[tuple[Cell, ...], tuple[Cell, ...]]:
+        """The force and the couple cells alone, for :meth:`impulses`."""
+        return tuple(c for _, c in self.forces), tuple(c for _, c in self.couples)
+
+    def impulses(self) -> list[float]:
+        """What the stop rule compares from step to step: every reaction's impulse, a
+        couple's divided by ``length`` (N·s, in no particular order; a spring's sign
+        flipped, which no comparison of sizes or changes sees)."""
+        forces, couples = self._cells
+        out = [d[k] for d, k in forces]  # type: ignore[index]
+        if couples:
+            length = self.length
+            out += [d[k] / length for d, k in couples]  # type: ignore[index]
+        if self.springs:
+            out += [s.impulse / self.length if torsional else s.impulse
+                    for _, s, torsional in self.springs]
+        for slide in self.held:
+            out += slide.split(1.0)  # the impulse itself
+        return out
+
+    def values(self) -> Values:
+        """The last step's reactions by name (N, N·m): impulse / dt, a spring's S the
+        negative of its signed impulse on body b."""
+        table = {name: d[k] / self.dt for name, (d, k) in (*self.forces, *self.couples)}  # type: ignore[index]
+        table |= {name: -s.impulse / self.dt for name, s, _ in self.springs}
+        for slide in self.held:
+            q, fx, fy = slide.split(self.dt)
+            table |= {f"Q_{slide.name}": q, f"F_{slide.name}_x": fx, f"F_{slide.name}_y": fy}
+        return {name: table[name] for name in self.names}

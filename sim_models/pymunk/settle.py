@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from operator import sub
 
 from mechcheck.analytic.solution import FORCE_FLOOR_N
 from mechcheck.sim_models.pymunk.readout import Values
@@ -25,47 +26,46 @@ class Run:
     force_change: float
 
 
-def force_scale(values: Values, length: float, torque: Callable[[str], bool],
-                floor: float = FORCE_FLOOR_N) -> float:
-    """The largest force, or torque / length, in a reading (N), at least ``floor``; the
-    unit of 'change'."""
-    sizes = [abs(v) / length if torque(q) else abs(v) for q, v in values.items()]
-    return max(max(sizes, default=0.0), floor)  # an unloaded case settles too
+def relative_change(new: list[float], old: list[float], floor: float) -> float:
+    """Largest change between two readings as a fraction of the new reading's largest
+    entry, at least ``floor`` (an unloaded case settles too). The readings are impulses
+    (N·s), a couple's divided by the length (:meth:`~.readout.Readout.impulses`): the
+    fraction is that of the forces they are over one step."""
+    scale = max(max(map(abs, new), default=0.0), floor)
+    return max(map(abs, map(sub, new, old)), default=0.0) / scale
 
 
-def relative_change(new: Values, old: Values, length: float, torque: Callable[[str], bool],
-                    floor: float = FORCE_FLOOR_N) -> float:
-    """Largest change between two readings as a fraction of the new reading's force scale."""
-    scale = force_scale(new, length, torque, floor)
-    diffs = [abs(new[q] - old[q]) / (length if torque(q) else 1.0) for q in new]
-    return max(diffs) / scale
-
-
-#: One step of a run: (the reactions it read, the residual velocity after it, m/s).
-Reading = tuple[Values, float]
+#: One step of a run: (the impulses it read, :meth:`~.readout.Readout.impulses`, and how
+#: to get the residual velocity after it, m/s: computed only when the rule needs it).
+Reading = tuple[list[float], Callable[[], float]]
 
 
 def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, length: float,
-                      torque: Callable[[str], bool], floor: float = FORCE_FLOOR_N) -> Run:
+                      report: Callable[[], Values], floor: float = FORCE_FLOOR_N) -> Run:
     """Call ``step`` until the model is at rest and its forces stop changing.
 
     Settled means: residual velocity below ``settle_speed`` × ``length`` *and*
     relative force change below ``settle_force_change`` for ``settle_patience``
     consecutive steps. Never a fixed step count; ``max_steps`` is only a budget.
-    A step that re-poses the model (the constraint solve) reports velocity 0.
-    ``torque`` says which quantities are couples (compared as couple / ``length``),
-    ``floor`` is the smallest force scale a change is measured against (N).
+    A step that re-poses the model (the constraint solve) reports velocity 0. The
+    velocity is computed only where the force change passes (and for the last step).
+    The force change is that of every reported force, and couple / ``length``, as a
+    fraction of the largest of them, at least ``floor`` (N); it is measured on the
+    impulses a step reads, which are those forces × dt. ``report`` reads the named
+    reactions once, when the run ends.
     """
     s = settings
-    previous: Values | None = None
+    impulse_floor, still, calm_change = floor * s.dt, s.settle_speed * length, s.settle_force_change
+    previous: list[float] | None = None
     calm = 0
-    values: Values = {}
-    velocity = change = float("inf")
+    change = float("inf")
+    speed: Callable[[], float] = lambda: float("inf")  # noqa: E731 (no step taken yet)
     for n in range(1, s.max_steps + 1):
-        values, velocity = step()
-        change = relative_change(values, previous, length, torque, floor) if previous else float("inf")
-        previous = values
-        calm = calm + 1 if velocity <= s.settle_speed * length and change <= s.settle_force_change else 0
+        impulses, speed = step()
+        change = relative_change(impulses, previous, impulse_floor) if previous is not None \
+            else float("inf")
+        previous = impulses
+        calm = calm + 1 if change <= calm_change and speed() <= still else 0
         if calm >= s.settle_patience:
-            return Run(values, n, True, velocity, change)
-    return Run(values, s.max_steps, False, velocity, change)
+            return Run(report(), n, True, speed(), change)
+    return Run(report(), s.max_steps, False, speed(), change)
