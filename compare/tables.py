@@ -127,6 +127,11 @@ def diagnostics_frame(solutions: Sequence[Solution]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=DIAGNOSTIC_COLUMNS)
 
 
+def kinds_of(units: pd.Series) -> dict[str, str]:
+    """The kind of each distinct unit in ``units``."""
+    return {u: kind_of_unit(u) for u in units.unique()}
+
+
 def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.DataFrame,
                      other: pd.DataFrame) -> pd.DataFrame:
     """Per-pose comparisons of one backend's sweep against the reference, vectorised.
@@ -144,13 +149,14 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
         return pd.DataFrame(columns=["case", "theta12", *COMPARISON_COLUMNS[1:]])
     quantity = merged["quantity"]
     unit = merged["unit"]
-    factor = unit.map(unit_factor).to_numpy()
-    kind = unit.map(kind_of_unit)
+    # Mapped through a table of the few distinct units, not the function row by row.
+    factor = unit.map({u: unit_factor(u) for u in unit.unique()}).to_numpy()
+    kind = unit.map(kinds_of(unit))
     # Scale of each force/torque kind at each pose: the largest reference magnitude.
-    ref_kind = ref.assign(kind=ref["unit"].map(kind_of_unit), mag=ref["reference"].abs())
+    ref_kind = ref.assign(kind=ref["unit"].map(kinds_of(ref["unit"])), mag=ref["reference"].abs())
     scale_table = ref_kind.groupby(["theta12", "kind"], observed=True)["mag"].max()
     kinds = set(scale_table.index.get_level_values("kind"))
-    scale = pd.Series(list(zip(merged["theta12"], kind, strict=True))).map(scale_table).to_numpy()
+    scale = scale_table.reindex(pd.MultiIndex.from_arrays([merged["theta12"], kind])).to_numpy()
     scale = np.maximum(np.nan_to_num(scale, nan=SCALE_FLOOR), SCALE_FLOOR)
     # Forces at least the largest torque over the longest link, torques at least the
     # largest reaction times it (see kind_scales).
@@ -169,11 +175,13 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     rel_err = abs_err / scale
     cond = merged["theta12"].map(reference_status.set_index("theta12")["condition_number"])
     pose_kind = np.where(cond.to_numpy() > NEAR_SINGULAR_CONDITION, "near_singular", case.kind)
-    rules = {(q, k, u): tolerance_for(case, str(merged["backend"].iloc[0]), q, k, kind_of_unit(u))
-             for q, k, u in set(zip(quantity, pose_kind, unit, strict=True))}
-    pairs = list(zip(quantity, pose_kind, unit, strict=True))
-    rtol = np.array([rules[p].rtol for p in pairs])
-    atol = np.array([rules[p].atol for p in pairs])
+    # One rule per distinct (quantity, pose kind, unit), spread back by its codes: the
+    # columns are Arrow strings, which are slow to walk element by element.
+    codes, triples = pd.MultiIndex.from_arrays([quantity, pose_kind, unit]).factorize()
+    rules = [tolerance_for(case, str(merged["backend"].iloc[0]), q, k, kind_of_unit(u))
+             for q, k, u in triples]
+    rtol = np.array([r.rtol for r in rules])[codes]
+    atol = np.array([r.atol for r in rules])[codes]
     passed = (rel_err <= rtol) | (abs_err / factor <= atol)
     return pd.DataFrame({
         "case": case.name, "theta12": merged["theta12"], "quantity": quantity,
