@@ -1,51 +1,99 @@
 """Sweep figures (matplotlib, Agg): one four-panel figure per case over θ12.
 
 Panels: drive torque per backend; reaction magnitudes; relative error per
-backend on a log scale against its tolerance; the transmission angle. Singular
-poses (toggle and change points) are marked with vertical lines on every
-panel, near-singular ones shaded.
+backend on a log scale against its tolerance; the transmission angle (a
+linkage's condition number). Singular poses (toggle and change points) are
+marked with vertical lines on every panel, near-singular ones ticked.
+
+A figure is made in two steps, so that the drawing can run in a sweep's worker pool:
+:func:`sweep_plot` reduces the sweep's tables to the curves drawn, thinned to at most
+:data:`MAX_POINTS` points each (small enough to send to a worker), and :func:`draw_sweep`
+draws them with a fixed layout. Only the drawing imports matplotlib.
 """
 
 from __future__ import annotations
 
 import io
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import matplotlib
-
-matplotlib.use("Agg")  # files only: no display on CI machines
-
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.transmission import transmission_angle
 from mechcheck.backends import REFERENCE
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION
 
-#: Figures never plot more points than this per line (a 10⁶-pose sweep is thinned).
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+#: Figures never plot more points than this per curve: a 10⁶-pose sweep is thinned to
+#: each bucket's first, smallest, largest and last point (:func:`thin`), which at this
+#: density draws the same picture as every point (a curve spans ~800 pixels at 90 dpi).
 MAX_POINTS = 4000
+#: The figure's size (inches) and fixed margins (fractions of it): measured text extents
+#: never decide the layout (matplotlib's tight layout took over a third of a figure's time).
+FIGURE_SIZE = (11.0, 7.5)
+MARGINS = {"left": 0.075, "right": 0.985, "bottom": 0.075, "top": 0.915, "wspace": 0.2,
+           "hspace": 0.16}
+#: The most singular poses marked with a vertical line per panel.
+MAX_SINGULAR_LINES = 50
 
 
-def _thin(frame: pd.DataFrame) -> pd.DataFrame:
-    step = max(1, len(frame) // MAX_POINTS)
-    return frame.iloc[::step]
+def thin(x: np.ndarray, y: np.ndarray, limit: int = MAX_POINTS) -> tuple[np.ndarray, np.ndarray]:
+    """At most ``limit`` points of the curve (x ascending) that keep its shape: in each of
+    ``limit // 4`` runs of consecutive points, the first, the smallest, the largest and the
+    last. Every extreme of the curve and both ends survive; so does every gap, as a drawn
+    line only ever joins neighbours. NaNs are treated as absent."""
+    n = len(x)
+    if n <= limit:
+        return x, y
+    edges = np.linspace(0, n, limit // 4 + 1).astype(int)
+    starts, stops = edges[:-1], edges[1:] - 1
+    filled = np.where(np.isnan(y), 0.0, y)  # a NaN is never an extreme; 0 only marks it kept
+    low = np.minimum.reduceat(filled, starts)
+    high = np.maximum.reduceat(filled, starts)
+    bucket = np.repeat(np.arange(starts.size), np.diff(edges))
+    at_low = np.flatnonzero(filled == low[bucket])
+    at_high = np.flatnonzero(filled == high[bucket])
+    # The first index of each bucket that reaches the bucket's minimum (maximum).
+    first_low = at_low[np.unique(bucket[at_low], return_index=True)[1]]
+    first_high = at_high[np.unique(bucket[at_high], return_index=True)[1]]
+    keep = np.unique(np.concatenate([starts, stops, first_low, first_high]))
+    return x[keep], y[keep]
 
 
-def _series(results: pd.DataFrame, backend: str, quantity: str) -> pd.DataFrame:
-    rows = results[(results["backend"] == backend) & (results["quantity"] == quantity)]
-    return _thin(rows.sort_values("theta12"))
+@dataclass(frozen=True)
+class Curve:
+    """One drawn curve: its legend label and its (thinned) points."""
+
+    label: str
+    x: np.ndarray
+    y: np.ndarray
+
+    @classmethod
+    def of(cls, label: str, series: pd.Series) -> Curve:
+        """The curve of a series indexed by θ12 (sorted here), thinned."""
+        series = series.sort_index()
+        x, y = thin(series.index.to_numpy(dtype=float), series.to_numpy(dtype=float))
+        return cls(label, x, y)
 
 
-def _mark_singular(ax: Axes, status: pd.DataFrame) -> None:
-    ref = status[status["backend"] == REFERENCE]
-    for theta in ref.loc[ref["status"] == "singular", "theta12"].to_numpy()[:50]:
-        ax.axvline(theta, color="crimson", lw=0.8, ls="--", alpha=0.7)
-    near = ref[(ref["condition_number"] > NEAR_SINGULAR_CONDITION) & (ref["status"] == "ok")]
-    if len(near):
-        ax.plot(near["theta12"], np.zeros(len(near)), "|", color="orange",
-                transform=ax.get_xaxis_transform(), ms=8)
+@dataclass(frozen=True)
+class SweepPlot:
+    """Everything one case's figure shows, ready to draw."""
+
+    title: str
+    x_label: str
+    drive_label: str
+    drive: list[Curve]
+    reactions: list[Curve]
+    errors: list[tuple[Curve, Curve]]
+    lower: Curve
+    lower_is_condition: bool
+    singular: np.ndarray
+    near_singular: np.ndarray
 
 
 def _names(case: Case) -> tuple[str, str, list[tuple[str, str]], str]:
@@ -61,71 +109,113 @@ def _names(case: Case) -> tuple[str, str, list[tuple[str, str]], str]:
             f"driver {first} from the drawn pose [{'deg' if revolute else 'mm'}]")
 
 
-def sweep_figure(case: Case, results: pd.DataFrame, status: pd.DataFrame,
-                 comparison: pd.DataFrame) -> bytes:
-    """PNG bytes of the four-panel figure of one case's sweep."""
+def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
+               comparison: pd.DataFrame) -> SweepPlot:
+    """The curves of one case's sweep figure from its long results, statuses and
+    comparisons (each thinned to at most :data:`MAX_POINTS` points)."""
     drive, drive_unit, reactions, x_label = _names(case)
+    by_quantity = {(str(b), str(q)): rows.set_index("theta12")["value"]
+                   for (b, q), rows in results.groupby(["backend", "quantity"], observed=True)}
     backends = [str(b) for b in pd.unique(results["backend"])]
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), sharex=True)
-    (ax_t, ax_f), (ax_e, ax_mu) = axes
+    drive_curves = [Curve.of(b, by_quantity[(b, drive)]) for b in backends
+                    if (b, drive) in by_quantity]
+    reaction_curves = []
+    for label, stem in reactions:
+        x, y = by_quantity.get((REFERENCE, f"{stem}_x")), by_quantity.get((REFERENCE, f"{stem}_y"))
+        if x is not None and y is not None:
+            reaction_curves.append(Curve.of(label, np.hypot(x, y.reindex(x.index))))
+    errors = []
     for b in backends:
-        s = _series(results, b, drive)
-        style = {"lw": 1.6} if b == REFERENCE else {"ls": "none", "marker": ".", "ms": 3}
-        ax_t.plot(s["theta12"], s["value"], label=b, **style)
-    ax_t.set_ylabel(f"{drive} [{drive_unit}]")
+        rows = comparison[comparison["backend"] == b]
+        if len(rows):
+            by_pose = rows.groupby("theta12")
+            errors.append((Curve.of(b, by_pose["rel_err"].max().clip(lower=1e-17)),
+                           Curve.of(b, by_pose["tolerance"].min())))
+    ref = status[status["backend"] == REFERENCE]
+    near = ref[(ref["condition_number"] > NEAR_SINGULAR_CONDITION) & (ref["status"] == "ok")]
+    near_theta = np.sort(near["theta12"].to_numpy(dtype=float))
+    return SweepPlot(
+        title=f"{case.name}: sweep over {x_label.split(' [')[0]} (dashed red: singular pose)",
+        x_label=x_label, drive_label=f"{drive} [{drive_unit}]", drive=drive_curves,
+        reactions=reaction_curves, errors=errors, lower=_lower_curve(case, results, ref),
+        lower_is_condition=case.mechanism == "linkage",
+        singular=np.sort(ref.loc[ref["status"] == "singular", "theta12"].to_numpy(
+            dtype=float))[:MAX_SINGULAR_LINES],
+        near_singular=thin(near_theta, near_theta)[0])
+
+
+def _lower_curve(case: Case, results: pd.DataFrame, ref_status: pd.DataFrame) -> Curve:
+    """The four-bar's and slider-crank's transmission angle (deg); a linkage's condition
+    number (how close each pose is to a toggle), which every mechanism has."""
+    if case.mechanism == "linkage":
+        return Curve.of("condition", ref_status.set_index("theta12")["condition_number"])
+    theta = np.unique(results.loc[results["backend"] == REFERENCE, "theta12"].to_numpy(float))
+    mu = np.degrees(transmission_angle(case, np.radians(theta)))
+    return Curve.of("μ", pd.Series(mu, index=theta))
+
+
+def draw_sweep(plot: SweepPlot) -> bytes:
+    """PNG bytes of the four-panel figure (matplotlib imported here: only where drawn)."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only: no display on CI machines
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=FIGURE_SIZE, sharex=True)
+    fig.subplots_adjust(**MARGINS)
+    (ax_t, ax_f), (ax_e, ax_mu) = axes
+    for curve in plot.drive:
+        style = {"lw": 1.6} if curve.label == REFERENCE else {"ls": "none", "marker": ".", "ms": 3}
+        ax_t.plot(curve.x, curve.y, label=curve.label, **style)
+    ax_t.set_ylabel(plot.drive_label)
     ax_t.set_title("Drive effort")
     ax_t.legend(fontsize=7, ncol=2)
-    for label, stem in reactions:
-        x = _series(results, REFERENCE, f"{stem}_x").set_index("theta12")["value"]
-        y = _series(results, REFERENCE, f"{stem}_y").set_index("theta12")["value"]
-        ax_f.plot(x.index, np.hypot(x, y.reindex(x.index)), label=label)
+    for curve in plot.reactions:
+        ax_f.plot(curve.x, curve.y, label=curve.label)
     ax_f.set_yscale("log")
     ax_f.set_ylabel("reaction [N] (analytic)")
     ax_f.set_title("Reaction magnitudes")
     ax_f.legend(fontsize=7)
-    for b in backends:
-        rows = comparison[comparison["backend"] == b]
-        if rows.empty:
-            continue
-        worst = rows.groupby("theta12")["rel_err"].max().clip(lower=1e-17)
-        tol = rows.groupby("theta12")["tolerance"].min()
-        line = ax_e.plot(worst.index, worst.to_numpy(), ".", ms=3, label=b)[0]
-        ax_e.plot(tol.index, tol.to_numpy(), "-", lw=0.8, color=line.get_color(), alpha=0.6)
+    for worst, tolerance in plot.errors:
+        line = ax_e.plot(worst.x, worst.y, ".", ms=3, label=worst.label)[0]
+        ax_e.plot(tolerance.x, tolerance.y, "-", lw=0.8, color=line.get_color(), alpha=0.6)
     ax_e.set_yscale("log")
     ax_e.set_ylabel("worst relative error (dots) / tolerance (line)")
-    ax_e.set_title("Error against the tolerance" if len(comparison)
+    ax_e.set_title("Error against the tolerance" if plot.errors
                    else "Error against the tolerance (nothing to compare)")
-    if len(comparison):
+    if plot.errors:
         ax_e.legend(fontsize=7, ncol=2)
-    _condition_or_transmission(ax_mu, case, results, status)
+    _draw_lower(ax_mu, plot)
     for ax in axes.flat:
-        _mark_singular(ax, status)
+        for theta in plot.singular:
+            ax.axvline(theta, color="crimson", lw=0.8, ls="--", alpha=0.7)
+        if plot.near_singular.size:
+            ax.plot(plot.near_singular, np.zeros(plot.near_singular.size), "|", color="orange",
+                    transform=ax.get_xaxis_transform(), ms=8)
         ax.grid(alpha=0.3)
     for ax in axes[1]:
-        ax.set_xlabel(x_label)
-    fig.suptitle(f"{case.name}: sweep over {x_label.split(' [')[0]} (dashed red: singular pose)")
-    fig.tight_layout()
+        ax.set_xlabel(plot.x_label)
+    fig.suptitle(plot.title)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=90)
     plt.close(fig)
     return buffer.getvalue()
 
 
-def _condition_or_transmission(ax: Axes, case: Case, results: pd.DataFrame,
-                               status: pd.DataFrame) -> None:
-    """The four-bar's and slider-crank's transmission angle; a linkage's condition number
-    (how close each pose is to a toggle), which every mechanism has."""
-    if case.mechanism == "linkage":
-        ref = _thin(status[status["backend"] == REFERENCE].sort_values("theta12"))
-        ax.plot(ref["theta12"], ref["condition_number"], color="k")
+def _draw_lower(ax: Axes, plot: SweepPlot) -> None:
+    ax.plot(plot.lower.x, plot.lower.y, color="k")
+    if plot.lower_is_condition:
         ax.axhline(NEAR_SINGULAR_CONDITION, color="grey", lw=0.8, ls=":")
         ax.set_yscale("log")
         ax.set_ylabel("condition number (analytic)")
         ax.set_title("Distance from toggles (dotted: near-singular line)")
         return
-    theta = np.sort(results.loc[results["backend"] == REFERENCE, "theta12"].unique())
-    theta = theta[:: max(1, len(theta) // MAX_POINTS)]
-    ax.plot(theta, np.degrees(transmission_angle(case, np.radians(theta))), color="k")
     ax.axhline(40.0, color="grey", lw=0.8, ls=":")
     ax.set_ylabel("transmission angle μ [deg]")
     ax.set_title("Transmission angle (dotted: 40° guideline)")
+
+
+def sweep_figure(case: Case, results: pd.DataFrame, status: pd.DataFrame,
+                 comparison: pd.DataFrame) -> bytes:
+    """PNG bytes of the four-panel figure of one case's sweep."""
+    return draw_sweep(sweep_plot(case, results, status, comparison))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 import time
+from concurrent.futures import Executor
 from pathlib import Path
 
 import pandas as pd
@@ -13,7 +14,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
 from mechcheck.executors import executor_for
-from mechcheck.figures import sweep_figure
+from mechcheck.figures import draw_sweep, sweep_plot
 from mechcheck.junit import junit_sweep_xml
 from mechcheck.output import file_stem, write_all
 from mechcheck.report import render_sweep, sweep_view_model
@@ -39,6 +40,16 @@ def compare_sweep(cases: list[Case], outcome: SweepOutcome) -> pd.DataFrame:
                  "rel_err", "tolerance", "passed", "case_kind"])
 
 
+def draw_figures(executor: Executor, cases: list[Case], outcome: SweepOutcome,
+                 statuses: pd.DataFrame, comparison: pd.DataFrame) -> dict[str, bytes]:
+    """Each case's figure (PNG bytes), drawn in the sweep's worker pool: this process
+    only reduces the tables to the thinned curves (:func:`mechcheck.figures.sweep_plot`)."""
+    pending = {c.name: executor.submit(draw_sweep, sweep_plot(
+        c, outcome.read(case=c.name), statuses[statuses["case"] == c.name],
+        comparison[comparison["case"] == c.name])) for c in cases}
+    return {name: future.result() for name, future in pending.items()}
+
+
 def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask], n_poses: int,
                       out: Path, *, workers: int | None, dask: str | None,
                       fail_on: tuple[str, ...], junit: Path | None, quiet: bool) -> int:
@@ -55,13 +66,12 @@ def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask],
 
     with executor_for(workers, dask) as executor:
         outcome = run_sweep(tasks, out, executor, progress=progress)
-    if bar is not None:
-        bar.close()
-    wall = time.perf_counter() - start
-    comparison = compare_sweep(cases, outcome)
-    statuses = outcome.read(kind="status")
-    figures = {c.name: sweep_figure(c, outcome.read(case=c.name), statuses[statuses["case"] == c.name],
-                                    comparison[comparison["case"] == c.name]) for c in cases}
+        if bar is not None:
+            bar.close()
+        wall = time.perf_counter() - start
+        comparison = compare_sweep(cases, outcome)
+        statuses = outcome.read(kind="status")
+        figures = draw_figures(executor, cases, outcome, statuses, comparison)
     model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, figures,
                              title="mechcheck sweep report", n_poses=n_poses, wall_time_s=wall,
                              executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)
