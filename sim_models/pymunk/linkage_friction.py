@@ -89,9 +89,11 @@ def apply_joint_friction(model: LinkageModel, link: str, body: pymunk.Body,
                          loads: JointLoads) -> None:
     """Add the friction on ``link`` (its body) from ``loads``, at the current pose."""
     linkage = model.linkage
-    for name, value in loads.items():
-        joint = linkage.joint(name)
-        if link not in joint.links:
+    # The joints in the loads' order (friction_loads builds them in the linkage's), walked
+    # rather than looked up by name: this runs for every body at every step.
+    for joint in linkage.joints:
+        value = loads.get(joint.name)
+        if value is None or link not in joint.links:
             continue
         share = 1.0 if joint.links[1] == link else -1.0
         if joint.kind == "revolute":
@@ -106,10 +108,10 @@ def with_sliding(model: LinkageModel, values: Values, loads: JointLoads) -> Valu
     """The reactions with each prismatic joint's friction force added to its F (the force
     by links[0] on links[1] includes it)."""
     out = dict(values)
-    for name, value in loads.items():
-        joint = model.linkage.joint(name)
-        if joint.kind == "prismatic":
+    for joint in model.linkage.joints:
+        value = loads.get(joint.name)
+        if value is not None and joint.kind == "prismatic":
             ux, uy = axis_now(model, joint)
-            out[f"F_{name}_x"] += value * ux
-            out[f"F_{name}_y"] += value * uy
+            out[f"F_{joint.name}_x"] += value * ux
+            out[f"F_{joint.name}_y"] += value * uy
     return out
