@@ -10,8 +10,14 @@ Each is a fresh process, timed ``--repeats`` times: median, min and max.
    line and the report cost on top.
 2. ``mechcheck sweep --fresh`` — the built-in whole-cycle sweeps (seed four-bar,
    seed slider-crank with and without friction, 360 poses each) through every
-   backend, with figures and the report.
-3. ``mechcheck sweep FILE -b analytic`` over 10⁶ poses, written to Parquet.
+   backend, with figures and the report; its reference, the same run's own time for
+   solving the tasks (the sweep prints it): the ratio is what comparing, drawing and
+   reporting add on top of the backends' work.
+3. ``mechcheck sweep`` again on the same directory, every part already there (the
+   resume path: imports, software versions, reading the parts, comparing, figures,
+   report); its reference, ``import mechcheck`` and reading the parts with pandas in a
+   fresh process.
+4. ``mechcheck sweep FILE -b analytic`` over 10⁶ poses, written to Parquet.
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import re
 import statistics
 import subprocess
 import sys
@@ -54,6 +61,18 @@ API_SUITE = ("import mechcheck; from mechcheck.casefile import builtin_case_file
              "print(len(r.comparison), 'comparisons, exit', r.exit_status)")
 
 
+#: The resume path's reference: a fresh process that imports mechcheck and reads every part.
+READ_PARTS = ("import mechcheck, pandas as pd; r = pd.read_parquet({out!r} + '/results'); "
+              "s = pd.read_parquet({out!r} + '/status'); print(len(r), 'rows,', len(s), 'poses')")
+
+
+def solve_time(line: str) -> float:
+    """The time a sweep spent solving its tasks, from its summary line ("…, 37.1 s -> …")."""
+    found = re.search(r"reused, ([0-9.]+) s ->", line)
+    assert found, line
+    return float(found.group(1))
+
+
 def timed(command: list[str]) -> tuple[float, str]:
     start = time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True, check=False)
@@ -85,15 +104,23 @@ def main() -> None:
         print(f"  reference, the same through mechcheck.check, nothing written: "
               f"{spread(reference)}  ({ref_last}); ratio "
               f"{statistics.median(suite) / statistics.median(reference):.2f}")
-        for label, args in (
-            ("built-in sweeps (3 × 360 poses), every backend",
-             ["sweep", "-q", "--fresh", "--out", str(out / "sweep")]),
-            ("analytic sweep, 10^6 poses to Parquet",
-             ["sweep", str(out / "e1.toml"), "-b", "analytic", "--theta12", "0:360:0.00036",
-              "-q", "--fresh", "--out", str(out / "million")]),
-        ):
-            times, last = repeated([*cli, *args], repeats)
-            print(f"{label}: {spread(times)}  ({last})")
+        sweep = [*cli, "sweep", "-q", "--out", str(out / "sweep")]
+        runs = [timed([*sweep, "--fresh"]) for _ in range(repeats)]
+        fresh, solving = [t for t, _ in runs], [solve_time(line) for _, line in runs]
+        print(f"built-in sweeps (3 × 360 poses), every backend, with figures and the report: "
+              f"{spread(fresh)}  ({runs[-1][1]})")
+        print(f"  reference, the same runs' time solving the tasks: {spread(solving)}; "
+              f"ratio {statistics.median(fresh) / statistics.median(solving):.2f}")
+        resumed, last = repeated(sweep, repeats)
+        read_parts = [sys.executable, "-c", READ_PARTS.format(out=str(out / "sweep"))]
+        reading, read_last = repeated(read_parts, repeats)
+        print(f"the same sweeps resumed, every part there: {spread(resumed)}  ({last})")
+        print(f"  reference, import mechcheck and read the parts: {spread(reading)}  "
+              f"({read_last}); ratio {statistics.median(resumed) / statistics.median(reading):.2f}")
+        million = ["sweep", str(out / "e1.toml"), "-b", "analytic", "--theta12", "0:360:0.00036",
+                   "-q", "--fresh", "--out", str(out / "million")]
+        times, last = repeated([*cli, *million], repeats)
+        print(f"analytic sweep, 10^6 poses to Parquet: {spread(times)}  ({last})")
 
 
 if __name__ == "__main__":
