@@ -124,7 +124,8 @@ def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
     for label, stem in reactions:
         x, y = by_quantity.get((REFERENCE, f"{stem}_x")), by_quantity.get((REFERENCE, f"{stem}_y"))
         if x is not None and y is not None:
-            reaction_curves.append(Curve.of(label, np.hypot(x, y.reindex(x.index))))
+            magnitude = np.hypot(x.to_numpy(), y.reindex(x.index).to_numpy())
+            reaction_curves.append(Curve.of(label, pd.Series(magnitude, index=x.index)))
     errors = []
     for b in backends:
         rows = comparison[comparison["backend"] == b]
