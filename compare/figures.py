@@ -115,17 +115,14 @@ def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
     """The curves of one case's sweep figure from its long results, statuses and
     comparisons (each thinned to at most :data:`MAX_POINTS` points)."""
     drive, drive_unit, reactions, x_label = _names(case)
-    by_quantity = {(str(b), str(q)): rows.set_index("theta12")["value"]
-                   for (b, q), rows in results.groupby(["backend", "quantity"], observed=True)}
     backends = [str(b) for b in pd.unique(results["backend"])]
-    drive_curves = [Curve.of(b, by_quantity[(b, drive)]) for b in backends
-                    if (b, drive) in by_quantity]
+    drive_curves = [Curve.of(b, _series(results, b, drive)) for b in backends]
+    reference = results[results["backend"] == REFERENCE]
     reaction_curves = []
     for label, stem in reactions:
-        x, y = by_quantity.get((REFERENCE, f"{stem}_x")), by_quantity.get((REFERENCE, f"{stem}_y"))
-        if x is not None and y is not None:
-            magnitude = np.hypot(x.to_numpy(), y.reindex(x.index).to_numpy())
-            reaction_curves.append(Curve.of(label, pd.Series(magnitude, index=x.index)))
+        x, y = _series(reference, REFERENCE, f"{stem}_x"), _series(reference, REFERENCE, f"{stem}_y")
+        magnitude = np.hypot(x.to_numpy(), y.reindex(x.index).to_numpy())
+        reaction_curves.append(Curve.of(label, pd.Series(magnitude, index=x.index)))
     errors = []
     for b in backends:
         rows = comparison[comparison["backend"] == b]
@@ -139,21 +136,29 @@ def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
     return SweepPlot(
         title=f"{case.name}: sweep over {x_label.split(' [')[0]} (dashed red: singular pose)",
         x_label=x_label, drive_label=f"{drive} [{drive_unit}]", drive=drive_curves,
-        reactions=reaction_curves, errors=errors, lower=_lower_curve(case, results, ref),
+        reactions=reaction_curves, errors=errors, lower=_lower_curve(case, ref),
         lower_is_condition=case.mechanism == "linkage",
         singular=np.sort(ref.loc[ref["status"] == "singular", "theta12"].to_numpy(
             dtype=float))[:MAX_SINGULAR_LINES],
         near_singular=thin(near_theta, near_theta)[0])
 
 
-def _lower_curve(case: Case, results: pd.DataFrame, ref_status: pd.DataFrame) -> Curve:
+def _series(results: pd.DataFrame, backend: str, quantity: str) -> pd.Series:
+    """One backend's values of one quantity, indexed by θ12 (masks on the categorical
+    columns: a 10⁶-pose sweep has 10⁷ rows, and only a few series are drawn)."""
+    rows = results[(results["backend"] == backend) & (results["quantity"] == quantity)]
+    return rows.set_index("theta12")["value"]
+
+
+def _lower_curve(case: Case, ref_status: pd.DataFrame) -> Curve:
     """The four-bar's and slider-crank's transmission angle (deg); a linkage's condition
     number (how close each pose is to a toggle), which every mechanism has."""
     if case.mechanism == "linkage":
         return Curve.of("condition", ref_status.set_index("theta12")["condition_number"])
-    theta = np.unique(results.loc[results["backend"] == REFERENCE, "theta12"].to_numpy(float))
-    mu = np.degrees(transmission_angle(case, np.radians(theta)))
-    return Curve.of("μ", pd.Series(mu, index=theta))
+    # Computed, not read: at most MAX_POINTS evenly spread poses show this closed form.
+    theta = np.sort(ref_status["theta12"].to_numpy(dtype=float))
+    theta = theta[::-(-len(theta) // MAX_POINTS) or 1]
+    return Curve("μ", theta, np.degrees(transmission_angle(case, np.radians(theta))))
 
 
 def draw_sweep(plot: SweepPlot) -> bytes:
