@@ -1,6 +1,6 @@
 """End-to-end wall times of the command line, as a user runs it.
 
-Usage:  python benchmarks/bench_pipeline.py [--repeats 3]
+Usage:  python benchmarks/bench_pipeline.py [--repeats 3] [--only suite|sweeps]
 
 Each is a fresh process, timed ``--repeats`` times: median, min and max.
 
@@ -91,36 +91,48 @@ def spread(times: list[float]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
-    repeats = parser.parse_args().repeats
+    parser.add_argument("--only", choices=["suite", "sweeps"], help="time only these")
+    args = parser.parse_args()
+    repeats = args.repeats
     cli = [sys.executable, "-m", "mechcheck.cli"]
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
           f"{platform.python_version()}; median of {repeats}")
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
         (out / "e1.toml").write_text(E1)
-        suite, last = repeated([*cli, "run", "-q", "--out", str(out / "suite")], repeats)
-        reference, ref_last = repeated([sys.executable, "-c", API_SUITE], repeats)
-        print(f"built-in suite, every backend, with the report: {spread(suite)}  ({last})")
-        print(f"  reference, the same through mechcheck.check, nothing written: "
-              f"{spread(reference)}  ({ref_last}); ratio "
-              f"{statistics.median(suite) / statistics.median(reference):.2f}")
-        sweep = [*cli, "sweep", "-q", "--out", str(out / "sweep")]
-        runs = [timed([*sweep, "--fresh"]) for _ in range(repeats)]
-        fresh, solving = [t for t, _ in runs], [solve_time(line) for _, line in runs]
-        print(f"built-in sweeps (3 × 360 poses), every backend, with figures and the report: "
-              f"{spread(fresh)}  ({runs[-1][1]})")
-        print(f"  reference, the same runs' time solving the tasks: {spread(solving)}; "
-              f"ratio {statistics.median(fresh) / statistics.median(solving):.2f}")
-        resumed, last = repeated(sweep, repeats)
-        read_parts = [sys.executable, "-c", READ_PARTS.format(out=str(out / "sweep"))]
-        reading, read_last = repeated(read_parts, repeats)
-        print(f"the same sweeps resumed, every part there: {spread(resumed)}  ({last})")
-        print(f"  reference, import mechcheck and read the parts: {spread(reading)}  "
-              f"({read_last}); ratio {statistics.median(resumed) / statistics.median(reading):.2f}")
-        million = ["sweep", str(out / "e1.toml"), "-b", "analytic", "--theta12", "0:360:0.00036",
-                   "-q", "--fresh", "--out", str(out / "million")]
-        times, last = repeated([*cli, *million], repeats)
-        print(f"analytic sweep, 10^6 poses to Parquet: {spread(times)}  ({last})")
+        if args.only != "sweeps":
+            time_suite(cli, out, repeats)
+        if args.only != "suite":
+            time_sweeps(cli, out, repeats)
+
+
+def time_suite(cli: list[str], out: Path, repeats: int) -> None:
+    suite, last = repeated([*cli, "run", "-q", "--out", str(out / "suite")], repeats)
+    reference, ref_last = repeated([sys.executable, "-c", API_SUITE], repeats)
+    print(f"built-in suite, every backend, with the report: {spread(suite)}  ({last})")
+    print(f"  reference, the same through mechcheck.check, nothing written: "
+          f"{spread(reference)}  ({ref_last}); ratio "
+          f"{statistics.median(suite) / statistics.median(reference):.2f}")
+
+
+def time_sweeps(cli: list[str], out: Path, repeats: int) -> None:
+    sweep = [*cli, "sweep", "-q", "--out", str(out / "sweep")]
+    runs = [timed([*sweep, "--fresh"]) for _ in range(repeats)]
+    fresh, solving = [t for t, _ in runs], [solve_time(line) for _, line in runs]
+    print(f"built-in sweeps (3 × 360 poses), every backend, with figures and the report: "
+          f"{spread(fresh)}  ({runs[-1][1]})")
+    print(f"  reference, the same runs' time solving the tasks: {spread(solving)}; "
+          f"ratio {statistics.median(fresh) / statistics.median(solving):.2f}")
+    resumed, last = repeated(sweep, repeats)
+    read_parts = [sys.executable, "-c", READ_PARTS.format(out=str(out / "sweep"))]
+    reading, read_last = repeated(read_parts, repeats)
+    print(f"the same sweeps resumed, every part there: {spread(resumed)}  ({last})")
+    print(f"  reference, import mechcheck and read the parts: {spread(reading)}  "
+          f"({read_last}); ratio {statistics.median(resumed) / statistics.median(reading):.2f}")
+    million = ["sweep", str(out / "e1.toml"), "-b", "analytic", "--theta12", "0:360:0.00036",
+               "-q", "--fresh", "--out", str(out / "million")]
+    times, last = repeated([*cli, *million], repeats)
+    print(f"analytic sweep, 10^6 poses to Parquet: {spread(times)}  ({last})")
 
 
 if __name__ == "__main__":
