@@ -38,6 +38,7 @@ masses, 1.7e-5 at 1e-2, against ~1e-5 on ordinary cases, measured).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import mujoco
@@ -170,10 +171,22 @@ def massless_reading(rigs: LinkageRigs) -> dict[str, float]:
     return massless_limit(values, rigs.doubled.read(), rigs.base.units)
 
 
-def with_friction(rigs: LinkageRigs) -> dict[str, float]:
-    """Read the massless-limit reactions and set the friction they give on every model,
-    with the senses of MuJoCo's own joint velocities; returns the reading."""
-    values = massless_reading(rigs)
+def massless_reactions(rigs: LinkageRigs) -> dict[str, float]:
+    """The efforts and reactions alone, free of fictitious inertia: what a step's friction
+    needs (:meth:`.linkage_rig.LinkageRig.reactions`)."""
+    values = rigs.base.reactions()
+    if rigs.doubled is None:
+        return values
+    return massless_limit(values, rigs.doubled.reactions(), rigs.base.units)
+
+
+def with_friction(rigs: LinkageRigs,
+                  reading: Callable[[LinkageRigs], dict[str, float]] = massless_reading
+                  ) -> dict[str, float]:
+    """Read the massless limit (``reading``: everything, or at every step the reactions
+    alone) and set the friction it gives on every model, with the senses of MuJoCo's own
+    joint velocities; returns the reading."""
+    values = reading(rigs)
     rates = rigs.base.joint_rates(rigs.base.data.qvel)
     for rig in rigs.members:
         apply_friction(rig, values, rates)
@@ -191,7 +204,7 @@ def read_drive(rigs: LinkageRigs, motion: Motion, steps: int, dt: float,
         for rig in rigs.members:
             forward(rig)
         if friction:
-            with_friction(rigs)
+            with_friction(rigs, massless_reactions)
         for rig in rigs.members:
             mujoco.mj_Euler(rig.model, rig.data)
     values: dict[str, float] = {}

@@ -207,6 +207,10 @@ class LinkageRig:
         self.closure_damping = {j.name: c for j in self.tree.closures
                                 if (c := joint_damping(linkage, j)) > 0.0}
         self.phi_names = tuple(f"phi_{link}" for link in linkage.moving_links)
+        # Looked up at every step of a driven run: computed once.
+        self.moving_links = tuple(linkage.moving_links)
+        self.origins = {link: origin_of(self.tree, linkage, link)
+                        for link in (GROUND, *self.moving_links)}
         self.plan = self._read_plan()
 
     def _id(self, kind: mujoco.mjtObj, name: str) -> int:
@@ -278,7 +282,7 @@ class LinkageRig:
 
     def joint_rates(self, qvel: Array) -> dict[str, float]:
         """Every joint's coordinate rate q̇ (LINKAGES.md) from joint velocities."""
-        omega = dict(zip(self.linkage.moving_links, self.rotation @ qvel, strict=True))
+        omega = dict(zip(self.moving_links, self.rotation @ qvel, strict=True))
         omega[GROUND] = 0.0
         return {j.name: float(qvel[self.dof[j.name]]) if j.name in self.dof
                 else float(omega[j.links[1]] - omega[j.links[0]]) for j in self.linkage.joints}
@@ -311,7 +315,7 @@ class LinkageRig:
         out += self.extra
         if self.closure_damping and self.viscous:
             omega = qvel @ self.rotation.T
-            spin = {link: omega[:, k] for k, link in enumerate(self.linkage.moving_links)}
+            spin = {link: omega[:, k] for k, link in enumerate(self.moving_links)}
             still = np.zeros(qvel.shape[0])
             for name, c in self.closure_damping.items():
                 i, j = self.linkage.joint(name).links
@@ -379,7 +383,7 @@ class LinkageRig:
                   drawn: tuple[float, float]) -> Array:
         """(N, 2): the point of ``link`` drawn at ``drawn`` in N states' body frames."""
         b = self.body[link]
-        o = origin_of(self.tree, self.linkage, link)
+        o = self.origins[link]
         r = np.array([drawn[0] - o[0], drawn[1] - o[1], 0.0])
         return (xpos[:, b] + xmat[:, b].reshape(-1, 3, 3) @ r)[:, :2]
 
@@ -426,6 +430,18 @@ class LinkageRig:
         """Every quantity of the states in ``s``, each an (N,) array: the read-out of
         LINKAGES.md from MuJoCo's own arrays, vectorised over states (a sweep captures
         every pose and reads them at once), by gathers planned once (:class:`ReadPlan`)."""
+        out = self._efforts_and_reactions(s)
+        out.update(self._springs(s))
+        out.update(self._pose_columns(s.qpos, s.site_xpos))
+        return {name: out[name] for name in self.plan.order}
+
+    def reactions(self) -> dict[str, float]:
+        """The drivers' efforts and the joints' reactions alone from the current data (after
+        a forward pass): what friction is computed from at every step of a driven run."""
+        mujoco.mj_rnePostConstraint(self.model, self.data)
+        return one_state(self._efforts_and_reactions(self.current()))
+
+    def _efforts_and_reactions(self, s: Snapshot) -> dict[str, Array]:
         plan = self.plan
         total = s.efc_force[:, :self.nefc]
         efforts = total[:, plan.effort_rows] - plan.effort_armature * s.qacc[:, plan.effort_dofs]
@@ -436,9 +452,7 @@ class LinkageRig:
         for joint in plan.slides:
             effort = out.get(f"Q_{joint.name}")
             out.update(self._slide_reaction(s, joint, effort))
-        out.update(self._springs(s))
-        out.update(self._pose_columns(s.qpos, s.site_xpos))
-        return {name: out[name] for name in plan.order}
+        return out
 
     def _slide_reaction(self, s: Snapshot, joint: Joint,
                         effort: Array | None) -> dict[str, Array]:
