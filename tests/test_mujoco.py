@@ -29,7 +29,7 @@ from mechcheck.analytic.presets import linkage_of
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
 from mechcheck.sim_models.mujoco.backend import settle, solve_at_pose, sweep
-from mechcheck.sim_models.mujoco.batch_settle import CHUNK, RULES, first_stops
+from mechcheck.sim_models.mujoco.batch_settle import CHUNK, REFINE_CHUNK, RULES, first_stops
 from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
 from mechcheck.sim_models.mujoco.linkage_model import model_xml
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
@@ -212,10 +212,12 @@ def watch_until_settled(forces: np.ndarray) -> tuple[int, str]:
 
 def batch_until_settled(forces: np.ndarray) -> tuple[int, str]:
     """The same from the batch settler's vectorised rule (:func:`.batch_settle.first_stops`),
-    fed chunk by chunk with the pass's history as the settler feeds it."""
+    fed chunk by chunk with the pass's history as the settler feeds it: a refinement pass's
+    first chunk short, then whole ones."""
     history = np.full((1, FLOOR_WINDOW - 1, forces.shape[1]), np.nan)
-    for start in range(0, len(forces), CHUNK):
-        chunk = forces[start:start + CHUNK][None]
+    starts = [0, *range(REFINE_CHUNK, len(forces), CHUNK)]
+    for start, end in zip(starts, [*starts[1:], len(forces)], strict=True):
+        chunk = forces[start:end][None]
         first, rule = first_stops(history, chunk, np.zeros(chunk.shape[:2]))
         if first[0] >= 0:
             return start + int(first[0]), RULES[rule[0]]

@@ -3,7 +3,8 @@
 The poses of a static sweep settle exactly as :func:`.settle.settle_refined` settles one
 (held by their drivers, started at rest in the analytic pose, passes with the constraint
 forces carried, the same stop rules and budgets), but the stepping runs in MuJoCo's
-multi-threaded rollout, ``CHUNK`` steps at a time for up to ``POOL`` poses, and Python
+multi-threaded rollout, ``CHUNK`` steps at a time (a refinement pass starts with
+``REFINE_CHUNK``) for up to ``POOL`` poses, and Python
 only looks at what it recorded:
 
 - **What the stop rule watches.** Each step's forces come from MuJoCo's own force and
@@ -66,6 +67,12 @@ Array = np.ndarray
 #: checks (measured on the Watt sweep, CPU time: 8, 16 and 32 steps took 0.94, 0.84 and
 #: 1.07 ms/pose, and 0.61, 0.55 and 0.63 once the readings were batched).
 CHUNK = 16
+#: The first rollout of a refinement pass: the readings up to the first at which a rule can
+#: fire (the quiet and decay rules need STOP_WINDOW changes). A pass started with the
+#: last pass's forces carried almost always stops right there (measured, 360-pose sweeps
+#: of seed E1 and the Watt six-bar: the median and the 10th–90th percentiles of the second
+#: passes are 4 steps), and a CHUNK would step 11 more for nothing.
+REFINE_CHUNK = STOP_WINDOW + 1
 #: Poses in flight at once, each with its own copy of the model (178 µs a copy, measured).
 POOL = 32
 #: A sweep settles every STRIDE-th pose first, and starts the others from them
@@ -108,7 +115,8 @@ class Pose:
 class Readings:
     """MuJoCo's readings of some poses' states, read at once."""
 
-    columns: dict[str, Array]  # every quantity, (n,) each
+    names: list[str]  # every quantity
+    table: Array  # (n, quantities)
     forces: Array  # (n, m): the forces the passes compare, torques over the size
     totals: Array  # (n, nefc): the equality forces, carried ones included
     speed: Array
@@ -116,10 +124,10 @@ class Readings:
     drift: Array
 
     def values(self, j: int) -> dict[str, float]:
-        return {q: float(v[j]) for q, v in self.columns.items()}
+        return dict(zip(self.names, self.table[j].tolist(), strict=True))
 
     def finite(self) -> Array:
-        return np.all(np.isfinite(np.stack(list(self.columns.values()), axis=1)), axis=1)
+        return np.all(np.isfinite(self.table), axis=1)
 
 
 def sensing_rig(case: Case) -> LinkageRig:
@@ -164,39 +172,53 @@ class BatchSettler:
                                      for q in self.force_names])
 
     # -- seeds and readings --------------------------------------------------------------
-    def seeded(self, pose: Pose) -> None:
-        """``pose`` at rest in its analytic pose, its carried forces as loads: its rollout
-        state and controls."""
-        i = pose.index
-        xfrc, drives = self.rig.carried_loads(pose.carried, self.arms[i])
-        qfrc = np.zeros(self.rig.model.nv)
-        qfrc[self.rig.drive_dofs] = drives
-        pose.state = self.seeds[i]
-        pose.control = np.concatenate([qfrc, (self.loads[i] + xfrc).ravel()])
-        pose.pass_steps = 0
-        pose.history = np.full((FLOOR_WINDOW - 1, self.columns.size), np.nan)
+    def seed(self, poses: list[Pose]) -> None:
+        """Each of ``poses`` at rest in its analytic pose, its carried forces as loads: its
+        rollout state and controls (a new pass)."""
+        if not poses:
+            return
+        rig = self.rig
+        index = np.array([p.index for p in poses])
+        xfrc, drives = rig.carried_loads(np.array([p.carried for p in poses]), self.arms[index])
+        qfrc = np.zeros((len(poses), rig.model.nv))
+        qfrc[:, rig.drive_dofs] = drives
+        controls = np.concatenate([qfrc, (self.loads[index] + xfrc).reshape(len(poses), -1)],
+                                  axis=1)
+        history = np.full((FLOOR_WINDOW - 1, self.columns.size), np.nan)
+        for pose, control in zip(poses, controls, strict=True):
+            pose.state = self.seeds[pose.index]
+            pose.control = control
+            pose.pass_steps = 0
+            pose.history = history
 
-    def read(self, poses: list[Pose], states: list[Array]) -> Readings:
+    def read(self, poses: list[Pose], states: Array) -> Readings:
         """MuJoCo's reading of each pose at its state: the loads applied at that state's
         own pose, a forward pass, the read-out of all at once (:meth:`.linkage_rig.LinkageRig.values`)."""
         rig = self.rig
         m, d = rig.model, rig.data
+        qpos = states[:, self.qpos_slice]
+        # The loads at each state's own pose, computed for all at once from its kinematics.
+        sites, centres = rig.load_points(qpos)
+        carried = np.array([p.carried for p in poses])
+        xfrc, drives = rig.carried_loads(carried, sites[:, rig.pairs.sites]
+                                         - centres[:, rig.pairs.bodies])
+        xfrc += rig.wrenches(sites, centres, states[:, self.qvel_slice])
         snapshot = rig.snapshot(len(poses))
-        for k, (pose, state) in enumerate(zip(poses, states, strict=True)):
-            mujoco.mj_setState(m, d, state, STATE)
+        rig.reset_carried()  # added to the equality forces below, for all at once
+        for k, pose in enumerate(poses):
+            mujoco.mj_setState(m, d, states[k], STATE)
             rig.set_targets(pose.targets)
-            rig.carried = pose.carried
-            d.qfrc_applied[:] = 0.0  # set only while forces are carried
-            mujoco.mj_kinematics(m, d)
-            mujoco.mj_comPos(m, d)
-            rig.apply_loads()
+            d.xfrc_applied[:] = xfrc[k]
+            d.qfrc_applied[rig.drive_dofs] = drives[k]
             mujoco.mj_forward(m, d)
             mujoco.mj_rnePostConstraint(m, d)
             rig.capture(snapshot, k)
+        snapshot.efc_force[:, :rig.nefc] += carried
         columns = rig.values(snapshot)
         analytic = self.qpos[[p.index for p in poses]]
         return Readings(
-            columns=columns,
+            names=list(columns),
+            table=np.stack(list(columns.values()), axis=1),
             forces=np.stack([columns[q] for q in self.force_names], axis=1) * self.force_scale,
             totals=snapshot.efc_force[:, :rig.nefc].copy(),
             speed=np.abs(snapshot.qvel * rig.weight).max(axis=1, initial=0.0),
@@ -235,24 +257,30 @@ class BatchSettler:
         their Settled (None for the others) and the constraint forces each settled pose
         ended with."""
         nefc = self.rig.nefc
-        queue = deque(Pose(i, targets[i], starts.get(i, np.zeros(nefc))) for i in which)
-        for pose in queue:
-            self.seeded(pose)
+        poses = [Pose(i, targets[i], starts.get(i, np.zeros(nefc))) for i in which]
+        self.seed(poses)
+        # The poses waiting, by the length of their next rollout: a refinement pass's
+        # first is short (:data:`REFINE_CHUNK`); a wave takes poses of one length.
+        queues = {CHUNK: deque(poses), REFINE_CHUNK: deque[Pose]()}
         out: list[Settled | None] = [None] * len(self.qpos)
         forces: dict[int, Array] = {}
-        while queue:
+        while any(queues.values()):
+            # Short rollouts once they fill a wave, or when nothing else is left.
+            short = queues[REFINE_CHUNK]
+            nstep = REFINE_CHUNK if len(short) >= POOL or not queues[CHUNK] else CHUNK
+            queue = queues[nstep]
             wave = [queue.popleft() for _ in range(min(POOL, len(queue)))]
-            for pose, result in zip(wave, self.run_chunk(wave), strict=True):
-                if result is None:
-                    queue.append(pose)
-                    continue
-                out[pose.index] = result
-                if result.settled:
-                    forces[pose.index] = pose.carried
+            for pose, result in zip(wave, self.run_chunk(wave, nstep), strict=True):
+                if result is not None:
+                    out[pose.index] = result
+                    if result.settled:
+                        forces[pose.index] = pose.carried
+                else:
+                    queues[REFINE_CHUNK if pose.pass_steps == 0 else CHUNK].append(pose)
         return out, forces
 
-    def run_chunk(self, wave: list[Pose]) -> list[Settled | None]:
-        """One rollout of ``CHUNK`` steps for the poses of ``wave``; for each, its final
+    def run_chunk(self, wave: list[Pose], nstep: int) -> list[Settled | None]:
+        """One rollout of ``nstep`` steps for the poses of ``wave``; for each, its final
         Settled, or None while it goes on."""
         for model, pose in zip(self.pool, wave, strict=False):
             model.eq_data[self.rig.driver_eqs, 0] = pose.targets
@@ -260,32 +288,33 @@ class BatchSettler:
         control = np.array([p.control for p in wave])[:, None, :]
         assert self.runner is not None, "within settle()"
         states, sensors = self.runner.rollout(self.pool[:len(wave)], self.datas, initial,
-                                              control, control_spec=CONTROLS, nstep=CHUNK)
+                                              control, control_spec=CONTROLS, nstep=nstep)
         readings = sensors[:, :, self.columns] * self.column_scale
         # The state each reading was taken at: the chunk's start, then each step's end.
         before = np.concatenate([initial[:, None], states[:, :-1]], axis=1)
         speed = np.abs(before[:, :, self.qvel_slice] * self.rig.weight).max(axis=2)
         # A pass reads at most MAX_STEPS + 1 times (run_until_settled's budget).
         left = np.array([MAX_STEPS + 1 - p.pass_steps for p in wave])
-        speed[np.arange(CHUNK)[None, :] >= left[:, None]] = np.inf
+        speed[np.arange(nstep)[None, :] >= left[:, None]] = np.inf
         first, rule = first_stops(np.array([p.history for p in wave]), readings, speed)
         ended: list[tuple[int, int, str]] = []  # (pose in wave, step in chunk, rule or "")
         for k, pose in enumerate(wave):
             if first[k] >= 0:
                 ended.append((k, int(first[k]), RULES[rule[k]]))
-            elif left[k] <= CHUNK or not np.all(np.isfinite(readings[k])):
-                ended.append((k, min(int(left[k]), CHUNK) - 1, ""))
+            elif left[k] <= nstep or not np.all(np.isfinite(readings[k])):
+                ended.append((k, min(int(left[k]), nstep) - 1, ""))
             else:
-                pose.pass_steps += CHUNK
+                pose.pass_steps += nstep
                 pose.history = np.concatenate([pose.history, readings[k]])[-(FLOOR_WINDOW - 1):]
                 pose.state = states[k, -1]
         out: list[Settled | None] = [None] * len(wave)
         if ended:
             read = self.read([wave[k] for k, _, _ in ended],
-                             [before[k, step] for k, step, _ in ended])
+                             np.array([before[k, step] for k, step, _ in ended]))
             finite = read.finite()
             for j, (k, step, stop) in enumerate(ended):
                 out[k] = self.end_pass(wave[k], read, j, step, stop, bool(finite[j]))
+            self.seed([wave[k] for k, _, _ in ended if out[k] is None])
         return out
 
     def end_pass(self, pose: Pose, read: Readings, j: int, step: int, rule: str,
@@ -307,8 +336,7 @@ class BatchSettler:
         pose.previous = forces
         pose.carried = read.totals[j]
         pose.passes += 1
-        self.seeded(pose)
-        return None
+        return None  # seeded anew by the caller
 
     @staticmethod
     def result(pose: Pose, read: Readings, j: int, rule: str, settled: bool) -> Settled:
@@ -359,12 +387,13 @@ def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, A
     holds a NaN, and no rule fires on it, as no rule fires before its window is known.
     """
     back = history.shape[1]
-    x = np.concatenate([history, readings], axis=1)
-    size = np.maximum(np.abs(x).max(axis=2), FORCE_FLOOR_N)
-    change = np.full(size.shape, np.nan)
-    change[:, 1:] = np.abs(np.diff(x, axis=1)).max(axis=2) / size[:, 1:]
-    # The windows ending at each reading of the chunk.
-    windows = sliding_window_view(change, STOP_WINDOW, axis=1)[:, back - STOP_WINDOW + 1:]
+    # Each reading's change from the last (largest over the forces) and size, from the
+    # first reading the chunk's windows reach back to on.
+    recent = np.concatenate([history[:, back - STOP_WINDOW:], readings], axis=1)
+    size = np.maximum(np.abs(recent).max(axis=2), FORCE_FLOOR_N)
+    step = np.abs(np.diff(recent, axis=1)).max(axis=2)
+    # The windows of changes ending at each reading of the chunk.
+    windows = sliding_window_view(step / size[:, 1:], STOP_WINDOW, axis=1)
     largest = windows.max(axis=2)
     with np.errstate(divide="ignore", invalid="ignore"):
         steps = windows[:, :, 1:] / windows[:, :, :-1]
@@ -372,15 +401,22 @@ def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, A
         left = np.where(ratio < 1.0, largest * ratio / (1.0 - ratio), np.inf)
     decay = (largest == 0.0) | (left <= SETTLE_RTOL)
     quiet = largest <= QUIET_RTOL
-    # The floor's spread only where the rest of its rule holds: a window of 32 readings at
-    # every reading costs more than the rollout.
+    here = size[:, STOP_WINDOW:]  # the size at each reading of the chunk
+    # The floor's spread only where the rest of its rule holds and no single step in its
+    # window is larger than the spread allowed (a spread is at least every step within
+    # it): a window of 32 readings at every reading costs more than the rollout.
     floor = np.zeros_like(decay)
-    p, t = np.nonzero((largest <= WOBBLE_RTOL) & ~decay & ~quiet)
-    if p.size:
+    candidate = (largest <= WOBBLE_RTOL) & ~decay & ~quiet & (speed <= VELOCITY_TOL)
+    if candidate.any():
+        x = np.concatenate([history, readings], axis=1)
+        jumps = np.abs(np.diff(x, axis=1)).max(axis=2)
+        widest = sliding_window_view(jumps, FLOOR_WINDOW - 1, axis=1)[:, -readings.shape[1]:]
+        candidate &= widest.max(axis=2) <= WOBBLE_RTOL * here
+        p, t = np.nonzero(candidate)
         rows = (back + t + 1 - FLOOR_WINDOW)[:, None] + np.arange(FLOOR_WINDOW)
-        recent = x[p[:, None], rows]  # (candidates, FLOOR_WINDOW, m)
-        spread = (recent.max(axis=1) - recent.min(axis=1)).max(axis=1)
-        floor[p, t] = spread / size[p, back + t] <= WOBBLE_RTOL
+        window = x[p[:, None], rows]  # (candidates, FLOOR_WINDOW, m)
+        spread = (window.max(axis=1) - window.min(axis=1)).max(axis=1)
+        floor[p, t] = spread / here[p, t] <= WOBBLE_RTOL
     rule = np.where(decay, 0, np.where(quiet, 1, np.where(floor, 2, -1)))
     fired = (rule >= 0) & (speed <= VELOCITY_TOL)
     first = np.where(fired.any(axis=1), fired.argmax(axis=1), -1)

@@ -346,14 +346,15 @@ class LinkageRig:
         """Each connect's carried force as a pair at its sites (xfrc_applied to add, with
         ``arm`` = each pair site's position from its body's centre of mass), each driver's
         as a generalised force on its joint (qfrc_applied of ``drive_dofs``); arrays from
-        :meth:`_carried_layout`."""
+        :meth:`_carried_layout`. Leading dimensions of ``carried`` (…, nefc) and ``arm``
+        (…, pairs, 3) are states: the loads of many at once."""
         pairs = self.pairs
-        xfrc = np.zeros((self.model.nbody, 6))
+        xfrc = np.zeros((*carried.shape[:-1], self.model.nbody, 6))
         if pairs.sites.size:
-            f = carried[pairs.rows] * pairs.signs[:, None]
-            xfrc[:, 0:3] = pairs.incidence @ f
-            xfrc[:, 5] = pairs.incidence @ cross_z(arm, f)
-        return xfrc, carried[self.drive_first_rows]
+            f = carried[..., pairs.rows] * pairs.signs[:, None]
+            xfrc[..., 0:3] = pairs.incidence @ f
+            xfrc[..., 5] = cross_z(arm, f) @ pairs.incidence.T
+        return xfrc, carried[..., self.drive_first_rows]
 
     def load_points(self, qpos: Array) -> tuple[Array, Array]:
         """(site_xpos, xipos) of MuJoCo's kinematics at each pose of ``qpos`` (N, nq)."""
