@@ -10,6 +10,9 @@ Each backend's time is printed beside a reference measured in the same run, and 
 ratio (issue 13): for settled statics the C floor, the steps the sweep's poses settled in
 (summed over their passes) stepped by a single-threaded ``mujoco.rollout`` of the same
 model with nothing else done; for ``mujoco_solve`` one bare ``mj_forward`` per pose.
+Settled statics also get issue 13's own floor ("42 steps × 3.5 µs"): the steps each pose
+takes settled alone (the single-pose backend, nothing carried from a neighbour), stepped
+the same way; the sweep's continuation makes its own floor the lower, stricter one.
 Targets: settled ≤ 2× the C floor; ``mujoco_solve`` ≤ 20 µs/pose.
 
 A second table follows the near-toggle study (seed E1 at θ12 = 180° − δ): the
@@ -80,10 +83,10 @@ def main() -> None:
     theta = np.radians(np.arange(360.0))
     print(f"MuJoCo {mujoco.__version__}; {CASE}, 360 poses (1° steps), the pose gate included; "
           f"median of {LINKAGE_REPEATS}\n")
-    print("| backend | ms/pose | reference ms/pose | ratio | poses ok | gated (singular) | "
-          "not settled | worst rel. error (cond ≤ 1e4) | outside tolerance | median steps | "
-          "max steps |")
-    print("|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    print("| backend | ms/pose | reference ms/pose | ratio | floor alone ms/pose | ratio | "
+          "poses ok | gated (singular) | not settled | worst rel. error (cond ≤ 1e4) | "
+          "outside tolerance | median steps | max steps |")
+    print("|---|---|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
     linkage = as_linkage(case)
     for backend in ("mujoco", "mujoco_solve"):
         times = []
@@ -95,9 +98,15 @@ def main() -> None:
         steps = [s.diagnostics.get("steps", 0) for s in sols if s.status == "ok"]
         reference = (c_floor(linkage, steps, LINKAGE_REPEATS) if backend == "mujoco"
                      else forward_floor(linkage, LINKAGE_REPEATS))
+        if backend == "mujoco":  # issue 13's floor: the steps of each pose settled alone
+            alone = [settle(case.with_(theta12=float(t))).diagnostics["steps"] for t in kept]
+            floor_alone = c_floor(linkage, alone, LINKAGE_REPEATS)
+            alone_cells = f"{spread(floor_alone, '.4f')} | {ratio(times, floor_alone)}"
+        else:
+            alone_cells = "— | —"
         _, failing, worst_regular = pose_errors(case, kept, sols)
         print(f"| {backend} | {spread(times)} | {spread(reference, '.4f')} | "
-              f"{ratio(times, reference)} | {status.count('ok')} | "
+              f"{ratio(times, reference)} | {alone_cells} | {status.count('ok')} | "
               f"{gated} | {status.count('not_settled')} | "
               f"{worst_regular:.2e} | {failing} | {np.median(steps):.0f} | {max(steps)} |")
 
@@ -196,11 +205,13 @@ def linkage_sweep_table(cases) -> None:
     first = np.radians(np.linspace(-170.0, 100.0, 360))
     results = analytic_results(case, first)
     print(f"\n{LINKAGE} held statically, 360 poses over −170°…100°; {LINKAGE_REPEATS} repeats\n")
-    print("| backend | ms/pose | reference ms/pose | ratio | poses ok | worst rel. error | "
-          "outside tolerance | median steps | max steps |")
-    print("|---|---|---|---|---:|---:|---:|---:|---:|")
-    runs = {"mujoco (continued)": ("mujoco", True), "mujoco (each pose alone)": ("mujoco", False),
+    print("| backend | ms/pose | reference ms/pose | ratio | floor alone ms/pose | ratio | "
+          "poses ok | worst rel. error | outside tolerance | median steps | max steps |")
+    print("|---|---|---|---|---|---|---:|---:|---:|---:|---:|")
+    runs = {"mujoco (each pose alone)": ("mujoco", False), "mujoco (continued)": ("mujoco", True),
             "mujoco_solve": ("mujoco_solve", True)}
+    floor_alone: list[float] = []
+    rows = {}
     for label, (backend, continuation) in runs.items():
         times = []
         for _ in range(LINKAGE_REPEATS):
@@ -211,10 +222,16 @@ def linkage_sweep_table(cases) -> None:
         steps = [s.diagnostics.get("steps", 0) for s in sols if s.status == "ok"]
         reference = (c_floor(case, steps, LINKAGE_REPEATS) if backend == "mujoco"
                      else forward_floor(case, LINKAGE_REPEATS))
+        if not continuation and backend == "mujoco":
+            floor_alone = reference
+        alone_cells = (f"{spread(floor_alone, '.4f')} | {ratio(times, floor_alone)}"
+                       if backend == "mujoco" else "— | —")
         ok = sum(s.status == "ok" for s in sols)
-        print(f"| {label} | {spread(times)} | {spread(reference, '.4f')} | "
-              f"{ratio(times, reference)} | {ok} | {worst:.2e} | {failing} | "
-              f"{np.median(steps):.0f} | {max(steps)} |")
+        rows[label] = (f"| {label} | {spread(times)} | {spread(reference, '.4f')} | "
+                       f"{ratio(times, reference)} | {alone_cells} | {ok} | {worst:.2e} | "
+                       f"{failing} | {np.median(steps):.0f} | {max(steps)} |")
+    for label in ("mujoco (continued)", "mujoco (each pose alone)", "mujoco_solve"):
+        print(rows[label])
 
 
 if __name__ == "__main__":
