@@ -49,15 +49,13 @@ from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.settle import (
     FLOOR_WINDOW,
     MAX_PASSES,
-    MAX_STEPS,
     QUIET_RTOL,
-    REFINE_RTOL,
     SETTLE_RTOL,
     STOP_WINDOW,
     VELOCITY_TOL,
     WOBBLE_RTOL,
+    Refinement,
     Settled,
-    refinement_left,
 )
 
 Array = np.ndarray
@@ -104,11 +102,10 @@ class Pose:
     state: Array = field(default_factory=lambda: np.zeros(0))
     control: Array = field(default_factory=lambda: np.zeros(0))
     passes: int = 1
-    steps: int = 0  # all passes
     pass_steps: int = 0  # readings taken in this pass
     history: Array = field(default_factory=lambda: np.zeros((0, 0)))
     previous: Array | None = None  # the last pass's forces (:attr:`Readings.forces`)
-    differences: list[float] = field(default_factory=list)
+    refinement: Refinement = field(default_factory=Refinement)  # the passes' progress, steps
 
 
 @dataclass(frozen=True)
@@ -293,8 +290,8 @@ class BatchSettler:
         # The state each reading was taken at: the chunk's start, then each step's end.
         before = np.concatenate([initial[:, None], states[:, :-1]], axis=1)
         speed = np.abs(before[:, :, self.qvel_slice] * self.rig.weight).max(axis=2)
-        # A pass reads at most MAX_STEPS + 1 times (run_until_settled's budget).
-        left = np.array([MAX_STEPS + 1 - p.pass_steps for p in wave])
+        # A pass reads at most its budget + 1 times (run_until_settled's).
+        left = np.array([p.refinement.budget() + 1 - p.pass_steps for p in wave])
         speed[np.arange(nstep)[None, :] >= left[:, None]] = np.inf
         first, rule = first_stops(np.array([p.history for p in wave]), readings, speed)
         ended: list[tuple[int, int, str]] = []  # (pose in wave, step in chunk, rule or "")
@@ -321,28 +318,28 @@ class BatchSettler:
                  finite: bool) -> Settled | None:
         """After ``pose``'s pass ended at ``step`` of the chunk (reading ``j`` of ``read``;
         ``rule`` "": out of budget), as :func:`.settle.settle_refined` goes on."""
-        pose.steps += pose.pass_steps + step
+        pose.refinement.ran(pose.pass_steps + step)
         if not rule or not finite:
             return self.result(pose, read, j, "", settled=False)
         forces = read.forces[j]
-        if pose.previous is not None:
-            pose.differences.append(float(np.abs(forces - pose.previous).max())
-                                    / max(float(np.abs(pose.previous).max()), FORCE_FLOOR_N))
-            if refinement_left(pose.differences) <= REFINE_RTOL:
-                pose.carried = read.totals[j]  # what it ended with
-                return self.result(pose, read, j, rule, settled=True)
+        if pose.previous is not None and pose.refinement.converged(
+                float(np.abs(forces - pose.previous).max())
+                / max(float(np.abs(pose.previous).max()), FORCE_FLOOR_N)):
+            pose.carried = read.totals[j]  # what it ended with
+            return self.result(pose, read, j, rule, settled=True)
         if pose.passes == MAX_PASSES:
             return self.result(pose, read, j, rule, settled=False)
         pose.previous = forces
-        pose.carried = read.totals[j]
+        factor = pose.refinement.factor(pose.carried, read.totals[j], self.rig.efc_scale)
+        pose.carried = pose.carried + factor * (read.totals[j] - pose.carried)
         pose.passes += 1
         return None  # seeded anew by the caller
 
     @staticmethod
     def result(pose: Pose, read: Readings, j: int, rule: str, settled: bool) -> Settled:
-        return Settled(read.values(j), pose.steps, settled, float(read.speed[j]),
+        return Settled(read.values(j), pose.refinement.total, settled, float(read.speed[j]),
                        float(read.gap[j]), passes=pose.passes,
-                       refinement=pose.differences[-1] if pose.differences else float("nan"),
+                       refinement=pose.refinement.last_difference,
                        rule=rule if settled else "", pose_drift=float(read.drift[j]))
 
 

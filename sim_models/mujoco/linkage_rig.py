@@ -329,8 +329,10 @@ class LinkageRig:
         self.carried = np.zeros(self.nefc)
         self.data.qfrc_applied[:] = 0.0
 
-    def carry(self) -> None:
-        self.carried = self.carried + self.data.efc_force[:self.nefc]
+    def carry(self, factor: float = 1.0) -> None:
+        """The constraints' forces carried as loads from now on, times ``factor`` (an
+        extrapolated pass, :class:`.settle.Refinement`)."""
+        self.carried = self.carried + factor * self.data.efc_force[:self.nefc]
 
     def apply_carried(self) -> None:
         """The carried forces added to the loads (:meth:`carried_loads` at the current

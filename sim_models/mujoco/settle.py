@@ -26,9 +26,10 @@ number is still MuJoCo's: carried forces are its own earlier constraint forces.
 from __future__ import annotations
 
 import itertools
+import math
 from collections import deque
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import mujoco
@@ -92,8 +93,9 @@ VELOCITY_TOL = 1e-9
 #: Step budget of one settling run; a pose that has not settled by then is
 #: reported ``not_settled``. Ordinary poses settle in 30–60 steps; next to a
 #: change point the slow mode takes longer (about 270 steps at condition number
-#: 880, 1100 at 2100, 2600 at 5400; a second pass somewhat more), and from
-#: condition number ~4000 on the budget runs out, which is the honest verdict.
+#: 880, 1100 at 2100, 2600 at 5400; a second pass somewhat more); a later pass
+#: gets more where the passes before it needed it (:data:`PASS_GROWTH`). Beyond
+#: what the passes' total budget reaches, ``not_settled`` is the honest verdict.
 MAX_STEPS = 3000
 #: Settling passes: after each one the constraint forces are carried as loads
 #: (:meth:`~.linkage_rig.LinkageRig.carry`), the pose is re-seeded unbent and the mechanism
@@ -112,11 +114,39 @@ MAX_STEPS = 3000
 #: left, ~d.
 REFINE_RTOL = 1e-7
 #: Enough passes for the contraction measured up to condition number ~3500
-#: (ordinary poses need two, 179° three, condition number 880 five, 2100 eight
-#: or nine, 2600 ten, 3200 thirteen, 3550 sixteen); closer to the change point
-#: the passes' own settling runs out of steps first (:data:`MAX_STEPS`). The
-#: old limit, 8, was reached from condition number ~2100 on.
+#: (ordinary poses need two, 179° three, condition number 880 four, 2100 six); nearer
+#: the change point the passes are extrapolated (:class:`Refinement`) and need seven at
+#: condition number 5300, ten at 9970 and fifteen at 10 300 (seed E1, measured); at
+#: 10 800 the last passes still differ by 4e-8 after sixteen, where the contraction
+#: measured (0.89) asks for 1.2e-8, and 32 passes would settle it, at 11 300 not even
+#: those: each further pass buys less. The old limit, 8, was reached from condition
+#: number ~2100 on.
 MAX_PASSES = 16
+#: A pass may take this many times the steps of the longest pass before it, if that is
+#: more than its budget: next to a change point the carried forces soften the slow mode,
+#: so each pass settles more slowly than the last (seed E1 at condition number 10⁴,
+#: measured: 2500 steps for the first pass, then 4400, 7000, 8900, 9500), and a pass
+#: that the passes before it show to be slow is given the time they took. It grows with
+#: the simulator's own progress only, within :data:`TOTAL_BUDGET` (:meth:`Refinement.budget`).
+PASS_GROWTH = 2.0
+#: All passes of a pose together have this many times a pass's budget (:data:`MAX_STEPS`).
+TOTAL_BUDGET = 32
+#: Passes are extrapolated (:meth:`Refinement.factor`) when the contraction measured says
+#: plain passes would need more than this many more: an extrapolated pass's difference
+#: from the one before is no measure of convergence, so extrapolating costs at least one
+#: pass, and the ordinary poses, which two to four plain passes settle, go on unchanged.
+#: Once a pose's passes are extrapolated, none may stop before the first pass's steps
+#: (:meth:`Refinement.minimum`): a pass starts at rest, at a turning point of the slow
+#: mode, where the stop rules' windows (sized for half-periods up to ~36 steps,
+#: :data:`FLOOR_WINDOW`, :data:`QUIET_RTOL`) take its slow start for rest — measured at
+#: condition number 10⁴: a pass after an extrapolated carry stopped by the floor rule
+#: after 55 steps still holding 5e-5 of the forces, where the first pass took 2511.
+EXTRAPOLATE_AFTER = 3
+#: A contraction is measured (:func:`secant_slope`) only across a carry of at least this
+#: fraction of the largest force: 30× the rounding floor (≤ 3e-8, :data:`WOBBLE_RTOL`),
+#: so the floor moves the measured contraction by at most ~0.03; a carry at the floor
+#: itself would measure only the floor.
+MEASURABLE_CARRY = 1e-6
 
 
 class SettlingRig(Protocol):
@@ -133,7 +163,11 @@ class SettlingRig(Protocol):
     def joint_velocity(self) -> float: ...
     def read(self) -> dict[str, float]: ...
     def loop_violation(self) -> float: ...
-    def carry(self) -> None: ...
+    carried: np.ndarray
+    efc_scale: np.ndarray
+
+    def carry(self, factor: float = 1.0) -> None: ...
+    def total_constraint_forces(self) -> np.ndarray: ...
     def set_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None: ...
     def pose_drift(self, theta12: float | None = None, qpos: np.ndarray | None = None) -> float: ...
 
@@ -155,21 +189,24 @@ class Settled:
     pose_drift: float = float("nan")
 
 
-def run_until_settled(rig: SettlingRig, max_steps: int | None = None) -> Settled:
+def run_until_settled(rig: SettlingRig, max_steps: int | None = None,
+                      min_steps: int = 0) -> Settled:
     """Step ``rig`` from its current state until settled or out of budget
-    (``max_steps``, default :data:`MAX_STEPS`)."""
+    (``max_steps``, default :data:`MAX_STEPS`), not stopping before ``min_steps``
+    (:meth:`Refinement.minimum`)."""
     max_steps = MAX_STEPS if max_steps is None else max_steps
     m, d = rig.model, rig.data
     watch = DecayWatch()
     settled = False
     step = 0
-    for step in range(max_steps + 1):  # noqa: B007 - the step count is reported
+    for step in range(max_steps + 1):
         mujoco.mj_kinematics(m, d)  # loads at the current positions (mj_Euler moved them)
         rig.apply_loads()
         mujoco.mj_forward(m, d)
         # The equality forces determine every reaction (the loads are known),
         # so their change is the force-change criterion; cheap to read each step.
-        if watch.settled(rig.constraint_forces()) and rig.joint_velocity() <= VELOCITY_TOL:
+        if (watch.settled(rig.constraint_forces()) and step >= min_steps
+                and rig.joint_velocity() <= VELOCITY_TOL):
             settled = True
             break
         mujoco.mj_Euler(m, d)
@@ -247,51 +284,148 @@ def reseed(rig: SettlingRig, qpos: np.ndarray) -> None:
 def settle_refined(rig: SettlingRig, qpos: np.ndarray,
                    restart: Callable[[], None] | None = None,
                    max_steps: int | None = None) -> Settled:
-    """Settle, carry the constraint forces, re-seed the pose, settle again, until
-    the passes have converged (:func:`refinement_left` ≤ :data:`REFINE_RTOL`) or
-    one does not settle.
+    """Settle, carry the constraint forces (extrapolated where the passes converge
+    slowly, :class:`Refinement`), re-seed the pose, settle again, until the passes have
+    converged (:func:`refinement_left` ≤ :data:`REFINE_RTOL`) or one does not settle.
 
     ``restart`` replaces the re-seeding in ``qpos`` (free coordinates have no analytic
-    pose to re-seed: they go on from where they settled); ``max_steps`` is each pass's
-    budget (:func:`run_until_settled`)."""
-    total = 0
+    pose to re-seed: they go on from where they settled); ``max_steps`` is a pass's
+    budget (:func:`run_until_settled`; :meth:`Refinement.budget`)."""
+    refinement = Refinement()
     previous: Settled | None = None
-    differences: list[float] = []
     for passes in range(1, MAX_PASSES + 1):
-        result = run_until_settled(rig, max_steps)
-        total += result.steps
+        result = run_until_settled(rig, refinement.budget(max_steps), refinement.minimum())
+        refinement.ran(result.steps)
+        done = replace(result, steps=refinement.total, passes=passes,
+                       refinement=refinement.last_difference)
         if not result.settled or not np.all(np.isfinite(list(result.values.values()))):
-            return replace(result, steps=total, settled=False, passes=passes,
-                           refinement=differences[-1] if differences else float("nan"))
-        if previous is not None:
-            differences.append(disagreement(result.values, previous.values, rig.scale, rig.units))
-            if refinement_left(differences) <= REFINE_RTOL:
-                return replace(result, steps=total, passes=passes, refinement=differences[-1])
+            return replace(done, settled=False)
+        if previous is not None and refinement.converged(
+                disagreement(result.values, previous.values, rig.scale, rig.units)):
+            return replace(done, refinement=refinement.last_difference)
         previous = result
-        rig.carry()
+        rig.carry(refinement.factor(rig.carried, rig.total_constraint_forces(), rig.efc_scale))
         if restart is None:
             reseed(rig, qpos)
         else:
             restart()
-    return replace(result, steps=total, settled=False, passes=MAX_PASSES,
-                   refinement=differences[-1])
+    return replace(done, settled=False, refinement=refinement.last_difference)
 
 
-def refinement_left(differences: list[float]) -> float:
+@dataclass
+class Refinement:
+    """The passes of one settling so far (:func:`settle_refined`; a batch's
+    :meth:`.batch_settle.BatchSettler.end_pass`): the differences between successive
+    passes' readings, the contraction measured, the steps taken.
+
+    Each pass settles with what the passes before it carried, and holds in its
+    constraints the rest, λ. Carrying λ leaves the next pass holding c·λ: the passes
+    contract by c (a fixed point iteration), and c → 1 next to a change point (0.49 at
+    condition number 5300, 0.86 at 10⁴, measured), where plain passes crawl. The
+    contraction is measured from the passes themselves, as a secant: two passes that
+    started with carried C₁ and C₂ and held λ₁ and λ₂ give 1 − c = −(λ₂ − λ₁)·(C₂ − C₁)
+    / |C₂ − C₁|² (:func:`secant_slope`). Carrying λ/(1 − c) instead of λ then lands on
+    the fixed point, up to how far c varies (Aitken's extrapolation where the passes
+    were plain). The fixed point is unchanged, every number is still MuJoCo's at a
+    settled state, and the last two passes must still agree: what an extrapolated
+    carry changes is only how many passes that takes.
+    """
+
+    differences: list[float] = field(default_factory=list)
+    #: The largest contraction measured: :func:`refinement_left` never takes less.
+    contraction: float = 0.0
+    last: tuple[np.ndarray, np.ndarray] | None = None  # the last pass's carried and held
+    extrapolated: bool = False  # the last carry was: the next difference is no pass's
+    extrapolations: int = 0
+    first: int = 0  # the first pass's steps
+    longest: int = 0
+    total: int = 0
+
+    @property
+    def last_difference(self) -> float:
+        return self.differences[-1] if self.differences else float("nan")
+
+    def budget(self, max_steps: int | None = None) -> int:
+        """The next pass's step budget: ``max_steps`` (default :data:`MAX_STEPS`), or
+        :data:`PASS_GROWTH` × the longest pass so far, within what is left of
+        :data:`TOTAL_BUDGET` × ``max_steps`` for all passes."""
+        base = MAX_STEPS if max_steps is None else max_steps
+        return max(0, min(max(base, int(PASS_GROWTH * self.longest)),
+                          TOTAL_BUDGET * base - self.total))
+
+    def minimum(self) -> int:
+        """The steps before which the next pass may not stop: none, or once the passes are
+        extrapolated (their slow mode measured slow), the first pass's
+        (:data:`EXTRAPOLATE_AFTER`)."""
+        return self.first if self.extrapolations else 0
+
+    def ran(self, steps: int) -> None:
+        self.first = self.first or steps
+        self.total += steps
+        self.longest = max(self.longest, steps)
+
+    def converged(self, difference: float) -> bool:
+        """Record ``difference`` (this pass's reading against the last pass's, relative
+        to the largest force); True when :func:`refinement_left` ≤ :data:`REFINE_RTOL`.
+        Across an extrapolated carry it is no pass's difference and is not recorded."""
+        if self.extrapolated:
+            self.extrapolated = False
+            return False
+        self.differences.append(difference)
+        return refinement_left(self.differences, self.contraction) <= REFINE_RTOL
+
+    def factor(self, carried: np.ndarray, total: np.ndarray, scale: np.ndarray) -> float:
+        """By what to multiply the held forces ``total − carried`` (constraint rows,
+        ``scale`` making torques forces) as they are carried into the next pass: 1 for a
+        plain pass, 1/(1 − c) for an extrapolated one."""
+        carried, held = carried * scale, (total - carried) * scale
+        size = max(float(np.abs(total * scale).max(initial=0.0)), FORCE_FLOOR_N)
+        factor = 1.0
+        if self.last is not None and np.abs(carried - self.last[0]).max() > MEASURABLE_CARRY * size:
+            slope = secant_slope(self.last, (carried, held))
+            if 0.0 < slope < 1.0:
+                self.contraction = max(self.contraction, 1.0 - slope)
+                held_part = float(np.abs(held).max(initial=0.0)) / size
+                if plain_passes_left(held_part, 1.0 - slope) > EXTRAPOLATE_AFTER:
+                    factor = 1.0 / slope
+        self.last = (carried, held)
+        self.extrapolated = factor != 1.0
+        self.extrapolations += self.extrapolated
+        return factor
+
+
+def secant_slope(first: tuple[np.ndarray, np.ndarray], second: tuple[np.ndarray, np.ndarray]
+                 ) -> float:
+    """1 − c from two passes' (carried, held) forces: how much less the second held per
+    force carried more, along the carried forces' change."""
+    step = second[0] - first[0]
+    return float(-np.dot(second[1] - first[1], step) / np.dot(step, step))
+
+
+def plain_passes_left(held: float, c: float) -> float:
+    """How many more plain passes, contracting by ``c``, until :func:`refinement_left`
+    is below :data:`REFINE_RTOL`, the last pass holding the fraction ``held``."""
+    return math.log(REFINE_RTOL * (1.0 - c) / (held * c)) / math.log(c) if held > 0.0 else 0.0
+
+
+def refinement_left(differences: list[float], contraction: float = 0.0) -> float:
     """How far the last pass may still be from the rigid answer, given the
     differences ``d`` between successive passes (relative to the largest force).
 
     With a contraction c = d_k/d_(k−1) < 1 per pass, what is left is d·c/(1 − c);
-    never taken as less than d itself (the last step is known only to d). Two
-    passes are all ordinary poses need and give no c; their difference is then
-    taken as it is (a bending small enough for two passes to agree to 1e-7 is
-    shrunk ≥ 50× by the second). A difference that no longer shrinks (c ≥ 1)
+    never taken as less than d itself (the last step is known only to d), nor c as
+    less than ``contraction``, the largest measured over the passes
+    (:class:`Refinement`): at c near 1 two passes can agree closely by chance (the
+    floor, a pass stopped at a turning point), which d_k/d_(k−1) alone would take for
+    a fast contraction. Two passes are all ordinary poses need and give no c; their
+    difference is then taken as it is (a bending small enough for two passes to agree
+    to 1e-7 is shrunk ≥ 50× by the second). A difference that no longer shrinks (c ≥ 1)
     is the floor: both passes read the same equilibrium, up to the floor.
     """
     d = differences[-1]
-    if len(differences) == 1 or d >= differences[-2]:
-        return d
-    c = d / differences[-2]
+    c = contraction
+    if len(differences) > 1 and d < differences[-2]:
+        c = max(c, d / differences[-2])
     return d * max(1.0, c / (1.0 - c))
 
 
