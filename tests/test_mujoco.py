@@ -39,8 +39,11 @@ from mechcheck.sim_models.mujoco.settle import (
     SETTLE_RTOL,
     WOBBLE_RTOL,
     DecayWatch,
+    Refinement,
+    plain_passes_left,
     refinement_left,
     remaining_change,
+    secant_slope,
 )
 from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sweep import SweepTask, run_task
@@ -285,6 +288,74 @@ def test_refinement_counts_the_passes_still_to_come() -> None:
     assert refinement_left([1e-5, 1e-6, 9e-8]) <= REFINE_RTOL
     assert refinement_left([1.1e-7, 9.9e-8]) == pytest.approx(9.9e-8 * 9.0)
     assert refinement_left([3e-9, 8e-9]) == 8e-9
+
+
+def test_refinement_with_a_measured_contraction_needs_the_difference_it_implies() -> None:
+    """Two passes agreeing to d are within d·c/(1 − c) of the fixed point only if the passes
+    contract by c; a contraction measured earlier in the run (0.9) holds even where the
+    last two differences happen to shrink fast or not at all."""
+    assert refinement_left([1e-8], contraction=0.9) == pytest.approx(9e-8)
+    assert refinement_left([1e-7, 1e-8], contraction=0.9) == pytest.approx(9e-8)
+    assert refinement_left([3e-9, 8e-9], contraction=0.5) == 8e-9  # c/(1 − c) = 1
+    assert refinement_left([5e-8], contraction=0.0) == 5e-8  # as without
+
+
+#: A linear fixed-point iteration as the passes are next to a change point: a pass started
+#: with ``carried`` holds (1 − c)(F* − carried) in its constraints.
+FIXED_POINT = np.array([6.4e4, -28.5, 0.0, 5.5])
+
+
+def held_by_a_pass(carried: np.ndarray, c: float) -> np.ndarray:
+    return (1.0 - c) * (FIXED_POINT - carried)
+
+
+@pytest.mark.parametrize("c", [0.3, 0.9, 0.99])
+def test_secant_of_two_passes_measures_their_contraction(c: float) -> None:
+    """On a linear iteration the secant of any two passes is exactly 1 − c (an identity),
+    and carrying the held forces times 1/(1 − c) lands on the fixed point (Aitken)."""
+    first = np.array([100.0, -1.0, 0.0, 0.3])
+    second = first + 3.7 * held_by_a_pass(first, c)  # an extrapolated carry between them
+    slope = secant_slope((first, held_by_a_pass(first, c)), (second, held_by_a_pass(second, c)))
+    assert slope == pytest.approx(1.0 - c, rel=1e-12)
+    landed = second + held_by_a_pass(second, c) / slope
+    assert np.allclose(landed, FIXED_POINT, rtol=1e-12, atol=1e-9)
+
+
+def test_passes_are_extrapolated_only_when_plain_ones_would_crawl() -> None:
+    """Plain passes go on while they would converge within :data:`EXTRAPOLATE_AFTER` more
+    (c = 0.01: one more); at c = 0.9 the next carry is extrapolated by 1/(1 − c) = 10, and
+    the difference across it is not taken for a pass's."""
+    scale = np.ones(FIXED_POINT.size)
+    for c, expected in ((0.01, 1.0), (0.9, 10.0)):
+        refinement = Refinement()
+        carried = np.zeros(FIXED_POINT.size)
+        factors = []
+        for _ in range(2):
+            total = carried + held_by_a_pass(carried, c)
+            factors.append(refinement.factor(carried, total, scale))
+            carried = carried + factors[-1] * (total - carried)
+        assert factors == [1.0, pytest.approx(expected)]
+        assert refinement.contraction == pytest.approx(c)
+        assert refinement.extrapolated == (expected != 1.0)
+        assert not refinement.converged(0.0) or expected == 1.0
+    # Passes left at c = 0.5 from a pass holding 1e-4: 0.5ⁿ·1e-4 ≤ 1e-7 → n = log2(1000).
+    assert plain_passes_left(1e-4, 0.5) == pytest.approx(math.log2(1000.0))
+
+
+#: Seed E1 1.15e-2° from its change point: condition number 1.03e4 (issue 13's target 1e4).
+REACH_DELTA = 0.0115
+
+
+def test_settled_statics_reach_condition_number_ten_thousand() -> None:
+    """Seed E1 at condition number 1.03e4 settles within the static target, alone and in a
+    batch (it was ``not_settled`` from condition number ~5300: the passes contracted by
+    0.5–0.9 each and ran out)."""
+    case = fourbar_e1().with_(theta12=math.pi - math.radians(REACH_DELTA))
+    assert mechcheck.solve(case, "analytic").diagnostics["condition_number"] > 1e4
+    for sim in (settle(case), *sweep(fourbar_e1(), [case.theta12])):
+        assert sim.status == "ok", sim.message
+        assert sim.diagnostics["passes"] > 2
+        assert_solution_close(case, sim, complete=True)
 
 
 #: Seed E1 at θ12 = 180° − δ, δ from the near-toggle study (condition numbers 59, 145, 357, 880).
