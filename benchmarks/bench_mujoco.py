@@ -15,9 +15,7 @@ takes settled alone (the single-pose backend, nothing carried from a neighbour),
 the same way; the sweep's continuation makes its own floor the lower, stricter one.
 Targets: settled ≤ 2× the C floor; ``mujoco_solve`` ≤ 20 µs/pose.
 
-A second table follows the near-toggle study (seed E1 at θ12 = 180° − δ): the
-settled backend's status, error, steps and passes as the change point nears.
-A third table times a linkage sweep (issue 12): the Watt II six-bar held statically
+A second table times a linkage sweep (issue 12): the Watt II six-bar held statically
 (``watt-ii-demo`` with its driver at rest) at 360 crank angles over −170°…100° (where it
 assembles from the drawn pose), through both backends, with the analytic pose analysis
 done once beforehand (not timed). The settled sweep is stepped in batches
@@ -25,7 +23,11 @@ done once beforehand (not timed). The settled sweep is stepped in batches
 neighbours; a row gives it with every pose settled from nothing carried.
 Medians over ``LINKAGE_REPEATS`` repeats, with min and max.
 
-Run: /work/venv/bin/python benchmarks/bench_mujoco.py [--linkage]
+A last table follows the near-toggle study (seed E1 at θ12 = 180° − δ): the
+settled backend's status, error, steps and passes as the change point nears, and its time
+per pose against the C floor of as many steps (``--near-toggle``: that table alone).
+
+Run: /work/venv/bin/python benchmarks/bench_mujoco.py [--linkage | --near-toggle]
 """
 
 import dataclasses
@@ -47,8 +49,11 @@ from mechcheck.tables import comparison_rows
 CASE = "seed-E1-as-stated"
 LINKAGE = "watt-ii-demo"
 LINKAGE_REPEATS = 5
-#: The near-toggle study's distances from the change point down to condition number ~5000, degrees.
-NEAR_TOGGLE_DELTAS = np.geomspace(30.0, 1e-4, 15)[2:9]
+#: The near-toggle study's distances from the change point, degrees: its grid from condition
+#: number 24 to 13 100 (5.0°…0.009°), with 0.0119° and 0.0115° (condition numbers 9970 and
+#: 10 300, the closest MuJoCo settles) and 0.011° (10 800, the first it does not).
+NEAR_TOGGLE_DELTAS = np.sort(np.r_[np.geomspace(30.0, 1e-4, 15)[2:10], 0.0119, 0.0115, 0.011])[::-1]
+NEAR_TOGGLE_REPEATS = 3
 
 
 def pose_errors(case, theta, solutions):
@@ -112,17 +117,31 @@ def main() -> None:
 
     linkage_sweep_table({c.name: c for c in load_cases(*builtin_case_files())})
 
-    print("\n| δ (deg) | condition number | status | rel. error | steps | passes | ms |")
-    print("|---:|---:|---|---:|---:|---:|---:|")
+    near_toggle_table(case)
+
+
+def near_toggle_table(case) -> None:
+    """Settled statics of one pose at each of NEAR_TOGGLE_DELTAS (the single-pose path,
+    as the study runs it): status, error, steps, passes, and ms against the C floor of as
+    many steps, medians over NEAR_TOGGLE_REPEATS."""
+    print(f"\nNear the change point, one pose at a time; median of {NEAR_TOGGLE_REPEATS}\n")
+    print("| δ (deg) | condition number | status | rel. error | steps | passes | ms | "
+          "C floor ms | ratio |")
+    print("|---:|---:|---|---:|---:|---:|---:|---:|---:|")
     for delta in NEAR_TOGGLE_DELTAS:
         at = case.with_(theta12=math.pi - math.radians(float(delta)))
-        start = time.perf_counter()
-        sim = settle(at)
-        ms = (time.perf_counter() - start) * 1e3
+        times = []
+        for _ in range(NEAR_TOGGLE_REPEATS):
+            start = time.perf_counter()
+            sim = settle(at)
+            times.append((time.perf_counter() - start) * 1e3)
+        steps = sim.diagnostics["steps"]
+        floor = c_floor(as_linkage(at), [steps], NEAR_TOGGLE_REPEATS, poses=1)
         reference = solve(at)
         error = pose_errors(at, [at.theta12], [sim])[0] if sim.status == "ok" else math.nan
         print(f"| {delta:.4g} | {reference.diagnostics['condition_number']:.0f} | {sim.status} | "
-              f"{error:.1e} | {sim.diagnostics['steps']} | {sim.diagnostics['passes']} | {ms:.1f} |")
+              f"{error:.1e} | {steps} | {sim.diagnostics['passes']} | {spread(times, '.1f')} | "
+              f"{spread(floor, '.1f')} | {ratio(times, floor)} |")
 
 
 def static_watt(cases):
@@ -150,10 +169,10 @@ def linkage_errors(case, results, solutions):
     return worst, failing
 
 
-def c_floor(case, steps, repeats):
-    """ms per pose of stepping a 360-pose sweep's ``steps`` (each pose's total) with nothing
-    but MuJoCo: one single-threaded rollout of the static model from the drawn pose at rest,
-    as many steps in all; times over ``repeats``."""
+def c_floor(case, steps, repeats, poses=360):
+    """ms per pose of stepping a sweep's ``steps`` (each pose's total; ``poses`` of them)
+    with nothing but MuJoCo: one single-threaded rollout of the static model from the drawn
+    pose at rest, as many steps in all; times over ``repeats``."""
     import copy
 
     from mujoco import rollout
@@ -164,13 +183,13 @@ def c_floor(case, steps, repeats):
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.zeros(mujoco.mj_stateSize(rig.model, spec))
     mujoco.mj_getState(rig.model, rig.data, state, spec)
-    per = max(1, round(sum(steps) / 360))
-    models = [copy.copy(rig.model) for _ in range(360)]
+    per = max(1, round(sum(steps) / poses))
+    models = [copy.copy(rig.model) for _ in range(poses)]
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        rollout.rollout(models, [mujoco.MjData(rig.model)], np.tile(state, (360, 1)), nstep=per)
-        times.append((time.perf_counter() - start) / 360 * 1e3)
+        rollout.rollout(models, [mujoco.MjData(rig.model)], np.tile(state, (poses, 1)), nstep=per)
+        times.append((time.perf_counter() - start) / poses * 1e3)
     return times
 
 
@@ -237,5 +256,7 @@ def linkage_sweep_table(cases) -> None:
 if __name__ == "__main__":
     if "--linkage" in sys.argv:  # the linkage table alone
         linkage_sweep_table({c.name: c for c in load_cases(*builtin_case_files())})
+    elif "--near-toggle" in sys.argv:  # the near-toggle table alone
+        near_toggle_table({c.name: c for c in load_cases(*builtin_case_files())}[CASE])
     else:
         main()

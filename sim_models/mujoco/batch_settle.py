@@ -290,9 +290,12 @@ class BatchSettler:
         # The state each reading was taken at: the chunk's start, then each step's end.
         before = np.concatenate([initial[:, None], states[:, :-1]], axis=1)
         speed = np.abs(before[:, :, self.qvel_slice] * self.rig.weight).max(axis=2)
-        # A pass reads at most its budget + 1 times (run_until_settled's).
+        # A pass reads at most its budget + 1 times and stops no earlier than its minimum
+        # (run_until_settled's).
         left = np.array([p.refinement.budget() + 1 - p.pass_steps for p in wave])
-        speed[np.arange(nstep)[None, :] >= left[:, None]] = np.inf
+        early = np.array([p.refinement.minimum() - p.pass_steps for p in wave])
+        at = np.arange(nstep)[None, :]
+        speed[(at >= left[:, None]) | (at < early[:, None])] = np.inf
         first, rule = first_stops(np.array([p.history for p in wave]), readings, speed)
         ended: list[tuple[int, int, str]] = []  # (pose in wave, step in chunk, rule or "")
         for k, pose in enumerate(wave):

@@ -135,18 +135,22 @@ TOTAL_BUDGET = 32
 #: plain passes would need more than this many more: an extrapolated pass's difference
 #: from the one before is no measure of convergence, so extrapolating costs at least one
 #: pass, and the ordinary poses, which two to four plain passes settle, go on unchanged.
-#: Once a pose's passes are extrapolated, none may stop before the first pass's steps
-#: (:meth:`Refinement.minimum`): a pass starts at rest, at a turning point of the slow
-#: mode, where the stop rules' windows (sized for half-periods up to ~36 steps,
-#: :data:`FLOOR_WINDOW`, :data:`QUIET_RTOL`) take its slow start for rest — measured at
-#: condition number 10⁴: a pass after an extrapolated carry stopped by the floor rule
-#: after 55 steps still holding 5e-5 of the forces, where the first pass took 2511.
 EXTRAPOLATE_AFTER = 3
 #: A contraction is measured (:func:`secant_slope`) only across a carry of at least this
 #: fraction of the largest force: 30× the rounding floor (≤ 3e-8, :data:`WOBBLE_RTOL`),
 #: so the floor moves the measured contraction by at most ~0.03; a carry at the floor
 #: itself would measure only the floor.
 MEASURABLE_CARRY = 1e-6
+#: Once the passes have measured a contraction of at least this, none may stop before the
+#: first pass's steps (:meth:`Refinement.minimum`). A pass starts at rest, at a turning
+#: point of the slow mode, where the stop rules' windows (sized for half-periods up to ~36
+#: steps, condition number ~2000: :data:`FLOOR_WINDOW`, :data:`QUIET_RTOL`) can take its
+#: slow start for rest — measured at condition number 10⁴ (c = 0.86): a pass after an
+#: extrapolated carry stopped by the floor rule after 55 steps still holding 5e-5 of the
+#: forces, where the first pass took 2511. The passes contract by 0.1 at condition number
+#: 2100 and by 0.3 at 3400 (:data:`REFINE_RTOL`), so the windows' measured range ends
+#: about here.
+SLOW_CONTRACTION = 0.3
 
 
 class SettlingRig(Protocol):
@@ -336,7 +340,6 @@ class Refinement:
     contraction: float = 0.0
     last: tuple[np.ndarray, np.ndarray] | None = None  # the last pass's carried and held
     extrapolated: bool = False  # the last carry was: the next difference is no pass's
-    extrapolations: int = 0
     first: int = 0  # the first pass's steps
     longest: int = 0
     total: int = 0
@@ -354,10 +357,9 @@ class Refinement:
                           TOTAL_BUDGET * base - self.total))
 
     def minimum(self) -> int:
-        """The steps before which the next pass may not stop: none, or once the passes are
-        extrapolated (their slow mode measured slow), the first pass's
-        (:data:`EXTRAPOLATE_AFTER`)."""
-        return self.first if self.extrapolations else 0
+        """The steps before which the next pass may not stop: none, or once the passes
+        contract slowly (:data:`SLOW_CONTRACTION`), the first pass's."""
+        return self.first if self.contraction >= SLOW_CONTRACTION else 0
 
     def ran(self, steps: int) -> None:
         self.first = self.first or steps
@@ -390,7 +392,6 @@ class Refinement:
                     factor = 1.0 / slope
         self.last = (carried, held)
         self.extrapolated = factor != 1.0
-        self.extrapolations += self.extrapolated
         return factor
 
 
