@@ -21,6 +21,10 @@ in passes (:func:`settle_refined`): the constraint forces of each settled state
 are carried as explicit loads and the mechanism, re-seeded unbent, settles
 again, holding in its constraints only what is left (:mod:`.rig`). Every
 number is still MuJoCo's: carried forces are its own earlier constraint forces.
+Next to a change point each pass removes only a fraction of what is left, and the
+passes, measuring that fraction themselves, carry their forces extrapolated
+(:class:`Refinement`): seed E1 settles within the static target up to condition number
+10 300 (it stopped at ~5300 before).
 """
 
 from __future__ import annotations
