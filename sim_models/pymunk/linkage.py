@@ -22,6 +22,7 @@ friction are driven (:mod:`.linkage_dynamics`); here they are ``not_applicable``
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -51,8 +52,16 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     stage,
 )
 from mechcheck.sim_models.pymunk.readout import Values, turned
-from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
+from mechcheck.sim_models.pymunk.settings import (
+    LINKAGE_SETTLE,
+    LINKAGE_SOLVE,
+    PROBE_STEPS,
+    SOFT_CONTRACTION,
+    SolverSettings,
+    near_change_point,
+)
 from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
+from mechcheck.sim_models.pymunk.slow_mode import SlowMode
 
 #: A held linkage that comes to rest farther than this × its size from the pose it was
 #: held at has left that assembly (it settles within ~1e-12 of it otherwise).
@@ -155,11 +164,14 @@ def residual_velocity(radii: list[float], state: Sequence[float]) -> float:
     return max(map(add, map(hypot, state[3::6], state[4::6]), map(mul, map(abs, state[5::6]), radii)))
 
 
-def settle_run(model: LinkageModel) -> Run:
+def settle_run(model: LinkageModel, contraction: float = 0.0) -> Run:
     """Step the damped, loaded model until it is at rest and its forces stop changing.
 
     The bodies are read and written in bulk (:mod:`.bulk`), and each step reads only what
     the stop rule needs: the impulses, and the residual velocity when the rule asks.
+    ``contraction``: the slowest mode's shrinking per step, measured by the constraint
+    solve that primed the run (:class:`~.slow_mode.SlowMode`), which adds a window to the
+    stop rule (:func:`~.settle.slow_window`).
     """
     s, bodies, impulses = model.settings, model.bulk, model.readout.impulses
     prepare, radii, dt = damped_and_loaded(model), model.radii.tolist(), s.dt
@@ -170,13 +182,17 @@ def settle_run(model: LinkageModel) -> Run:
         state = now = bodies.advance(prepare(state), dt)
         return impulses(), lambda: residual_velocity(radii, now)
 
-    run = run_until_settled(step, s, model.scale, model.readout.values, rounding_floor(model))
+    slowest = (lambda: contraction) if contraction > 0.0 else None
+    run = run_until_settled(step, s, model.scale, model.readout.values, rounding_floor(model),
+                            slowest)
     bodies.verify()
     return run
 
 
-def primed_settle_run(model: LinkageModel, seed: Array) -> Run:
-    """Settle, after pymunk's own constraint solve at the seed has warmed its impulses.
+def primed_settle_run(model: LinkageModel, seed: Array) -> tuple[LinkageModel, Run]:
+    """Settle, after pymunk's own constraint solve at the seed has warmed its impulses;
+    next to a change point with the settings that needs (:func:`~.settings.near_change_point`),
+    in a model built anew with them. (The model that ran, and how the run ended.)
 
     From zero impulses the first steps' Gauss–Seidel leaves part of the load unresolved,
     and the bodies move by about (unresolved force)·dt²/m before the solver catches up.
@@ -185,11 +201,49 @@ def primed_settle_run(model: LinkageModel, seed: Array) -> Run:
     its lock at 108.06°: 8 mm away, reactions reversed). The priming steps re-pose the
     bodies on the seed, exactly like the sweep's continuation from a neighbouring pose;
     the settling that follows is free to move them, and its stop rules decide.
+
+    The first :data:`~.settings.PROBE_STEPS` of the priming look for a slow mode
+    (:class:`~.slow_mode.SlowMode`); one slower than :data:`~.settings.SOFT_CONTRACTION`
+    marks a pose next to a change point. The priming extrapolates the slow mode, and its
+    measured contraction adds a window to the stop rules of the priming and of the
+    settling (:func:`~.settle.slow_window`).
     """
-    priming = solve_run(model, seed)
-    run = settle_run(model)
-    return Run(run.values, priming.steps + run.steps, run.settled, run.residual_velocity,
-               run.force_change)
+    slow, probed = probe(model, seed)
+    if slow.contraction > SOFT_CONTRACTION:
+        model, slow, priming = soft_priming(model, seed)
+    else:
+        priming = solve_run(model, seed, slow)
+    run = settle_run(model, slow.contraction)
+    return model, Run(run.values, probed + priming.steps + run.steps, run.settled,
+                      run.residual_velocity, run.force_change)
+
+
+def soft_priming(model: LinkageModel, seed: Array) -> tuple[LinkageModel, SlowMode, Run]:
+    """The priming next to a change point: a model built anew with
+    :func:`~.settings.near_change_point`'s settings, its constraint solve at the seed
+    without joint-error correction (:func:`hold_without_correction`: the heavier bodies
+    would turn Newton's 1e-13·L gaps into m-fold larger forces, 9e-9 of the reactions at
+    1e5 kg), which the settling then has back. (The model, its slow mode, the run.)"""
+    model = build_linkage_model(model.case, near_change_point(model.settings), seed)
+    slow = SlowMode(model.readout)
+    hold_without_correction(model)
+    priming = solve_run(model, seed, slow)
+    set_correction(model, math.inf)
+    return model, slow, priming
+
+
+def probe(model: LinkageModel, seed: Array) -> tuple[SlowMode, int]:
+    """Re-posed steps at the seed, under the loads, until a slow mode is measured or
+    :data:`~.settings.PROBE_STEPS` have passed: (the watch, the steps taken)."""
+    stage(model, seed, loaded=True)
+    slow = SlowMode(model.readout)
+    for n in range(1, PROBE_STEPS + 1):
+        model.bulk.repose()
+        model.space.step(model.settings.dt)
+        slow.observe()
+        if slow.contraction:
+            return slow, n
+    return slow, PROBE_STEPS
 
 
 def hold_without_correction(model: LinkageModel) -> None:
@@ -201,8 +255,14 @@ def hold_without_correction(model: LinkageModel) -> None:
     reactions measured on random slider-cranks). Without the bias, each step solves the
     rigid velocity constraints of that pose: statics.
     """
+    set_correction(model, 0.0)
+
+
+def set_correction(model: LinkageModel, max_bias: float) -> None:
+    """Every constraint's ``max_bias``: 0 for none, ``math.inf`` (pymunk's default) for the
+    full correction its ``error_bias`` asks."""
     for constraint in model.constraints():
-        constraint.max_bias = 0.0
+        constraint.max_bias = max_bias
 
 
 def at_rest() -> float:
@@ -210,17 +270,22 @@ def at_rest() -> float:
     return 0.0
 
 
-def solve_run(model: LinkageModel, q: Array) -> Run:
-    """Re-pose at q, with the loads there, and step until the impulses stop changing."""
+def solve_run(model: LinkageModel, q: Array, slow: SlowMode | None = None) -> Run:
+    """Re-pose at q, with the loads there, and step until the impulses stop changing;
+    ``slow``: watch the slow mode and extrapolate it (:class:`~.slow_mode.SlowMode`), its
+    measured contraction tightening the stop rule."""
     s = model.settings
     stage(model, q, loaded=True)
 
     def step() -> Reading:
         model.bulk.repose()
         model.space.step(s.dt)
+        if slow is not None:
+            slow.observe()
         return model.readout.impulses(), at_rest
 
-    run = run_until_settled(step, s, model.scale, model.readout.values)
+    run = run_until_settled(step, s, model.scale, model.readout.values,
+                            slowest=(lambda: slow.contraction) if slow is not None else None)
     place(model, q)  # report the pose the forces belong to
     return run
 
@@ -378,7 +443,10 @@ def settle(case: Case, settings: SolverSettings = LINKAGE_SETTLE,
     elif seed is None:
         seed = results.pose.q[0]
     model = build_linkage_model(case, settings, seed)
-    run = settle_run(model) if has_free_coordinates(case) else primed_settle_run(model, seed)
+    if has_free_coordinates(case):
+        run = settle_run(model)
+    else:
+        model, run = primed_settle_run(model, seed)
     return solutions(model, backend, "settle", [outcome(model, run, start)], results)[0]
 
 

@@ -74,6 +74,22 @@ class Readout:
         """The force and the couple cells alone, for :meth:`impulses`."""
         return tuple(c for _, c in self.forces), tuple(c for _, c in self.couples)
 
+    @cached_property
+    def warm(self) -> tuple[Cell, ...]:
+        """Every accumulated impulse Chipmunk carries from one step to the next as its warm
+        start (pivots', grooves', gears' and held slides' jAcc; springs keep none)."""
+        forces, couples = self._cells
+        return (*forces, *couples, *(cell for slide in self.held for cell in slide.cells))
+
+    def accumulated(self) -> list[float]:
+        """The warm-start impulses (:attr:`warm`) now, N·s or N·m·s."""
+        return [d[k] for d, k in self.warm]  # type: ignore[index]
+
+    def carry(self, impulses: list[float]) -> None:
+        """Make ``impulses`` (one per :attr:`warm` cell) the warm start of the next step."""
+        for (d, k), value in zip(self.warm, impulses, strict=True):
+            d[k] = value  # type: ignore[index]
+
     def impulses(self) -> list[float]:
         """What the stop rule compares from step to step: every reaction's impulse, a
         couple's divided by ``length`` (N·s, in no particular order; a spring's sign

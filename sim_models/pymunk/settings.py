@@ -101,3 +101,38 @@ SOLVE = SolverSettings(settle_force_change=1.0e-14, settle_speed=float("inf"),
 #: the stop rules end it.
 LINKAGE_SETTLE = SETTLE.with_(max_steps=50_000)
 LINKAGE_SOLVE = SOLVE.with_(max_steps=50_000)
+
+#: A held pose whose constraint solve's slowest mode shrinks by more than this per step
+#: (measured by :class:`~mechcheck.sim_models.pymunk.slow_mode.SlowMode` within
+#: :data:`PROBE_STEPS`) is next to a change point, and is settled with
+#: :func:`near_change_point`'s settings. Seed E1 at θ12 = 180° − δ, 100 iterations a step:
+#: 0.9987 at δ = 0.3° (condition number 395), 0.99975 at 0.135° (880).
+SOFT_CONTRACTION = 0.99
+#: Re-posed steps in which the slow mode is looked for before settling (they warm the
+#: impulses, and count among the run's steps).
+PROBE_STEPS = 16
+#: Next to a change point, Gauss–Seidel iterations a step × this: the slow mode then
+#: shrinks 16× faster per step, the faster modes die out within a step, and its ratio
+#: is measured, and extrapolated, after a few steps (:mod:`.slow_mode`).
+SOFT_ITERATIONS = 16
+#: Next to a change point, the fictitious mass × this. There the large reactions turn
+#: with the links: a step that moves a link by s changes their pull on it by ∝ F·s/L,
+#: against the constraint solve's restoring, which converges by only 1 − ρ a step; with
+#: the bodies light, the settling run is unstable and leaves the held pose within tens of
+#: steps even from converged impulses. A heavier body moves F·dt²/m less a step. Measured
+#: on seed E1 after a converged constraint solve, 1 600 iterations a step (stable: still
+#: at rest after 3 000 steps): 1 000 kg stable at δ = 0.1° (1 − ρ = 2.2e-3), unstable
+#: from 0.05° (5.5e-4) inward; 1e4 kg stable down to 0.008° (1.4e-5, condition number
+#: 1.5e4), unstable at 0.005° (5.5e-6), where a pose then ends ``not_settled``; 1e5 kg
+#: stable down to 0.005° too, but its position rounding is 10× larger (m·ε·L/dt²) and a
+#: settling run's own slow mode took 15 000 steps at condition number 1.3e4 (1 100 at
+#: 1e4 kg). At rest the mass does not enter the reactions (:class:`SolverSettings`).
+SOFT_MASS = 10.0
+
+
+def near_change_point(settings: SolverSettings) -> SolverSettings:
+    """``settings`` for a held pose next to a change point (:data:`SOFT_CONTRACTION`): the
+    step budget keeps its size in Gauss–Seidel iterations."""
+    return settings.with_(iterations=settings.iterations * SOFT_ITERATIONS,
+                          fictitious_mass=settings.fictitious_mass * SOFT_MASS,
+                          max_steps=settings.max_steps // SOFT_ITERATIONS)

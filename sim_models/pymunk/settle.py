@@ -6,6 +6,7 @@ forces are then pymunk's accumulated impulses / dt.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from operator import sub
@@ -31,8 +32,51 @@ def relative_change(new: list[float], old: list[float], floor: float) -> float:
     entry, at least ``floor`` (an unloaded case settles too). The readings are impulses
     (N·s), a couple's divided by the length (:meth:`~.readout.Readout.impulses`): the
     fraction is that of the forces they are over one step."""
-    scale = max(max(map(abs, new), default=0.0), floor)
-    return max(map(abs, map(sub, new, old)), default=0.0) / scale
+    return largest_change(new, old) / size(new, floor)
+
+
+#: The slowest convergence per step that ``settle_force_change`` is sized for: warm-started
+#: Gauss–Seidel leaves about change × ρ/(1 − ρ) still to come, ≤ 10× the threshold at
+#: ρ ≤ 0.9 (:class:`~.settings.SolverSettings`). A run whose slow mode is slower
+#: (:mod:`.slow_mode`, next to a change point) is judged over a window as well
+#: (:func:`slow_window`).
+ASSUMED_CONTRACTION = 0.9
+#: Next to a change point a slow mode with 1 − ρ ≈ 1e-5 shrinks by 1e-5 of itself a step:
+#: to leave no more than 10 × ``settle_force_change`` still to come, a step's change would
+#: have to be below 1e-14 of the forces, under the rounding of the positions (2e-13 of the
+#: reactions, seed E1 at condition number 1e4 with 1e5 kg bodies), so a per-step rule
+#: would never end. Over a window of W steps with W·(1 − ρ) = this fraction, the slow mode
+#: moves by that fraction of what is left, while the rounding stays the size of one step's.
+#: So the run is settled only when, besides the per-step rule, the net change over the
+#: window is at most this fraction of 10 × ``settle_force_change``: 1e-11 of the forces,
+#: 50× above that rounding.
+WINDOW_SHARE = 1.0e-2
+
+
+#: Next to a change point the settling run has a slow mode of its own, slower than the
+#: constraint solve's (seed E1 at condition number 880: 1/(1 − ρ) = 15 000 steps settling,
+#: 4 000 solving): a run still moving by more than :data:`WINDOW_SHARE` over its window
+#: is settled if it decays over two windows with at most this fraction of the forces left
+#: to come: 100× below the 1e-6 static target (MuJoCo's ``SETTLE_RTOL``).
+SLOW_REMAINING = 1.0e-8
+
+
+def slow_window(contraction: float) -> int:
+    """The steps over which a slow mode shrinking by ``contraction`` a step moves by
+    :data:`WINDOW_SHARE` of itself (0: no window, for ρ ≤ :data:`ASSUMED_CONTRACTION`)."""
+    if contraction <= ASSUMED_CONTRACTION:
+        return 0
+    return math.ceil(WINDOW_SHARE / (1.0 - contraction))
+
+
+def largest_change(new: list[float], old: list[float]) -> float:
+    """The largest change of any entry between two readings."""
+    return max(map(abs, map(sub, new, old)), default=0.0)
+
+
+def size(reading: list[float], floor: float) -> float:
+    """A reading's largest entry in size, at least ``floor``."""
+    return max(max(reading, default=0.0), -min(reading, default=0.0), floor)
 
 
 #: One step of a run: (the impulses it read, :meth:`~.readout.Readout.impulses`, and how
@@ -41,7 +85,8 @@ Reading = tuple[list[float], Callable[[], float]]
 
 
 def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, length: float,
-                      report: Callable[[], Values], floor: float = FORCE_FLOOR_N) -> Run:
+                      report: Callable[[], Values], floor: float = FORCE_FLOOR_N,
+                      slowest: Callable[[], float] | None = None) -> Run:
     """Call ``step`` until the model is at rest and its forces stop changing.
 
     Settled means: residual velocity below ``settle_speed`` × ``length`` *and*
@@ -51,21 +96,60 @@ def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, len
     velocity is computed only where the force change passes (and for the last step).
     The force change is that of every reported force, and couple / ``length``, as a
     fraction of the largest of them, at least ``floor`` (N); it is measured on the
-    impulses a step reads, which are those forces × dt. ``report`` reads the named
-    reactions once, when the run ends.
+    impulses a step reads, which are those forces × dt. Every step compares the largest
+    change with that fraction of the size (:func:`largest_change`, :func:`size`); the
+    fraction itself (:func:`relative_change`) is computed once, for the report.
+    ``report`` reads the named reactions once, when the run ends.
+
+    ``slowest``, if given, is the contraction per step of the run's slowest mode as
+    measured so far (:class:`~.slow_mode.SlowMode`). Slower than
+    :data:`ASSUMED_CONTRACTION`, the run must also have changed by no more than
+    :data:`WINDOW_SHARE` × 10 × ``settle_force_change`` of the forces over the last
+    :func:`slow_window` steps, or be decaying over the last two such windows with no more
+    than :data:`SLOW_REMAINING` of them left to come (:func:`settled_over_window`).
     """
     s = settings
     impulse_floor, still, calm_change = floor * s.dt, s.settle_speed * length, s.settle_force_change
+    patience, window_change = s.settle_patience, WINDOW_SHARE * 10.0 * calm_change
+    readings: list[list[float]] = []
     previous: list[float] | None = None
+    earlier: list[float] | None = None
     calm = 0
-    change = float("inf")
     speed: Callable[[], float] = lambda: float("inf")  # noqa: E731 (no step taken yet)
     for n in range(1, s.max_steps + 1):
         impulses, speed = step()
-        change = relative_change(impulses, previous, impulse_floor) if previous is not None \
-            else float("inf")
-        previous = impulses
-        calm = calm + 1 if change <= calm_change and speed() <= still else 0
-        if calm >= s.settle_patience:
-            return Run(report(), n, True, speed(), change)
+        scale = size(impulses, impulse_floor)
+        if previous is not None and largest_change(impulses, previous) <= calm_change * scale \
+                and speed() <= still:
+            calm += 1
+            if calm >= patience and (slowest is None or settled_over_window(
+                    impulses, readings, slow_window(slowest()), window_change * scale,
+                    SLOW_REMAINING * scale)):
+                return Run(report(), n, True, speed(),
+                           relative_change(impulses, previous, impulse_floor))
+        else:
+            calm = 0
+        if slowest is not None:
+            readings.append(impulses)
+        earlier, previous = previous, impulses
+    change = relative_change(previous, earlier, impulse_floor) \
+        if previous is not None and earlier is not None else float("inf")
     return Run(report(), s.max_steps, False, speed(), change)
+
+
+def settled_over_window(reading: list[float], before: list[list[float]], window: int,
+                        allowed: float, remaining: float) -> bool:
+    """Whether a slow run has settled over its last two windows of ``window`` steps (True
+    without a window; False until the run is two windows long): the net change over the
+    last window is at most ``allowed``, or it shrinks geometrically from the window
+    before and what it leaves to come (change × q/(1 − q), q the ratio of the two
+    windows' changes) is at most ``remaining``."""
+    if window == 0:
+        return True
+    if len(before) < 2 * window:
+        return False
+    last = largest_change(reading, before[-window])
+    if last <= allowed:
+        return True
+    first = largest_change(before[-window], before[-2 * window])
+    return last < first and last * last / (first - last) <= remaining
