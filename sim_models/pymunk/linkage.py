@@ -70,9 +70,10 @@ ASSEMBLY_DRIFT = 1.0e-6
 #: they are off by at most about condition number × drift / size (relative: the condition
 #: number bounds the solution's sensitivity to the pose, to first order). A reading whose
 #: bound exceeds the 1e-6 static target is withheld. Measured on seed E1 near its change
-#: point: 0.135° from it (condition number 3.2e3) at rest 3.1e-10 m off the held pose after
-#: 62 000 steps, bound 4.6e-6, forces 1.5e-6 off (withheld); 0.33° from it, bound 1.7e-7,
-#: forces 6.5e-8 off (kept).
+#: point before its slow mode was extrapolated (:mod:`.slow_mode`): 0.135° from it
+#: (condition number 3.2e3) at rest 3.1e-10 m off the held pose after 62 000 steps, bound
+#: 4.6e-6, forces 1.5e-6 off (withheld); 0.33° from it, bound 1.7e-7, forces 6.5e-8 off
+#: (kept). With it, 0.135° from it rests 3e-16 m off in 22 steps.
 DRIFT_EFFECT = 1.0e-6
 
 
@@ -221,9 +222,10 @@ def primed_settle_run(model: LinkageModel, seed: Array) -> tuple[LinkageModel, R
 def soft_priming(model: LinkageModel, seed: Array) -> tuple[LinkageModel, SlowMode, Run]:
     """The priming next to a change point: a model built anew with
     :func:`~.settings.near_change_point`'s settings, its constraint solve at the seed
-    without joint-error correction (:func:`hold_without_correction`: the heavier bodies
-    would turn Newton's 1e-13·L gaps into m-fold larger forces, 9e-9 of the reactions at
-    1e5 kg), which the settling then has back. (The model, its slow mode, the run.)"""
+    without joint-error correction (:func:`hold_without_correction`: the correction of
+    Newton's 1e-13·L gaps is a force ∝ the mass, measured on seed E1 0.05° from its change
+    point 6e-11 of the reactions at 1 000 kg, 8e-10 at 1e4 kg, 9e-9 at 1e5 kg), which the
+    settling then has back. (The model, its slow mode, the run.)"""
     model = build_linkage_model(model.case, near_change_point(model.settings), seed)
     slow = SlowMode(model.readout)
     hold_without_correction(model)
@@ -238,10 +240,8 @@ def probe(model: LinkageModel, seed: Array) -> tuple[SlowMode, int]:
     stage(model, seed, loaded=True)
     slow = SlowMode(model.readout)
     for n in range(1, PROBE_STEPS + 1):
-        model.bulk.repose()
-        model.space.step(model.settings.dt)
-        slow.observe()
-        if slow.contraction:
+        reposed_step(model, slow)
+        if slow.contraction > 0.0:
             return slow, n
     return slow, PROBE_STEPS
 
@@ -265,6 +265,15 @@ def set_correction(model: LinkageModel, max_bias: float) -> None:
         constraint.max_bias = max_bias
 
 
+def reposed_step(model: LinkageModel, slow: SlowMode | None = None) -> None:
+    """One step of the constraint solve: the bodies back on the staged pose, a step, and
+    the slow mode watched (if ``slow``)."""
+    model.bulk.repose()
+    model.space.step(model.settings.dt)
+    if slow is not None:
+        slow.observe()
+
+
 def at_rest() -> float:
     """The residual velocity of a re-posed step: none."""
     return 0.0
@@ -273,18 +282,14 @@ def at_rest() -> float:
 def solve_run(model: LinkageModel, q: Array, slow: SlowMode | None = None) -> Run:
     """Re-pose at q, with the loads there, and step until the impulses stop changing;
     ``slow``: watch the slow mode and extrapolate it (:class:`~.slow_mode.SlowMode`), its
-    measured contraction tightening the stop rule."""
-    s = model.settings
+    measured contraction adding a window to the stop rule."""
     stage(model, q, loaded=True)
 
     def step() -> Reading:
-        model.bulk.repose()
-        model.space.step(s.dt)
-        if slow is not None:
-            slow.observe()
+        reposed_step(model, slow)
         return model.readout.impulses(), at_rest
 
-    run = run_until_settled(step, s, model.scale, model.readout.values,
+    run = run_until_settled(step, model.settings, model.scale, model.readout.values,
                             slowest=(lambda: slow.contraction) if slow is not None else None)
     place(model, q)  # report the pose the forces belong to
     return run
