@@ -20,8 +20,9 @@ import numpy as np
 from mechcheck.analytic.case import Case, Load
 from mechcheck.analytic.forces import solve_poses, verdict_at
 from mechcheck.analytic.kinematics import pose_of
-from mechcheck.analytic.linkage_forces import pose_quantities
-from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
+from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.presets import link_name, linkage_of, names_of
 from mechcheck.analytic.solution import Solution
 
@@ -70,6 +71,17 @@ class Renaming:
         """``solution`` under the preset's names, as case ``name``."""
         return dataclasses.replace(solution, case=name, values=self.values(solution.values))
 
+    def solutions(self, solutions: list[Solution], name: str) -> list[Solution]:
+        """:meth:`solution` of each, made at once (:meth:`Solution.batch`) when all are
+        ``ok`` with the same quantities (a sweep's)."""
+        if not solutions or any(s.status != "ok" or s.values.keys() != solutions[0].values.keys()
+                                for s in solutions):
+            return [self.solution(s, name) for s in solutions]
+        renamed = [self.values(s.values) for s in solutions]
+        return Solution.batch(name, solutions[0].backend, tuple(renamed[0]),
+                              (tuple(values.values()) for values in renamed),
+                              (dict(s.diagnostics) for s in solutions), solutions[0].units)
+
 
 def preset_values(case: Case, values: Mapping[str, float]) -> dict[str, float]:
     """A linkage solution's values under the preset's names (:class:`Renaming`), for the
@@ -100,15 +112,14 @@ def driver_offsets(case: Case, theta12: Sequence[float] | np.ndarray) -> np.ndar
 SAME_BRANCH = 1e-6
 
 
-def follows_branch(case: Case, theta12: np.ndarray) -> int:
+def follows_branch(case: Case, theta12: np.ndarray, pose: LinkagePose) -> int:
     """How many poses of ``theta12`` (the first is ``case``'s own) the linkage drawn at the
-    first one reaches on the preset's branch, by continuation from its drawn pose.
+    first one reaches on the preset's branch, by continuation from its drawn pose
+    (``pose``: the linkage's pose analysis at those poses, the one its sweep runs at).
 
     The closed form keeps its branch by definition (``open``/``crossed``, ``right``/``left``),
     also through a change point, where the two branches meet; continuation goes straight on
     and ends on the other one, as it does after poses that do not assemble."""
-    linkage = linkage_of(case)
-    pose = solve_pose(linkage, driver_offsets(case, theta12)[:, None])
     values = pose_quantities(pose)
     closed = pose_of(case, theta12)
     phi = {3: link_name(case, 3), 4: link_name(case, 4)}
@@ -119,9 +130,26 @@ def follows_branch(case: Case, theta12: np.ndarray) -> int:
     if case.mechanism == "slider_crank":
         u = np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
         s14 = closed.joints["B"] @ u
-        gap = np.maximum(gap, np.abs(s14 - s14[0] - values["q_slide"]) / linkage.scale)
+        gap = np.maximum(gap, np.abs(s14 - s14[0] - values["q_slide"]) / pose.linkage.scale)
     off = np.flatnonzero(~(gap <= SAME_BRANCH))
     return int(off[0]) if off.size else theta12.size
+
+
+def first_poses(results: LinkageResults, n: int) -> LinkageResults:
+    """The first ``n`` poses of ``results``: the analysis of the first ``n`` driver values
+    alone, as the continuation and each pose's statics go in order (tested)."""
+    if n == results.pose.q.shape[0]:
+        return results
+    pose = results.pose
+    head = dataclasses.replace(pose, drivers=pose.drivers[:n], q=pose.q[:n],
+                               qdot=pose.qdot[:n], qddot=pose.qddot[:n],
+                               locked_at=pose.locked_at[:n])
+    return dataclasses.replace(
+        results, pose=head, values={q: v[:n] for q, v in results.values.items()},
+        condition_of=lambda: results.condition[:n],
+        ill_conditioned=results.ill_conditioned[:n], converged=results.converged[:n],
+        reversing=results.reversing[:n],
+        stable=None if results.stable is None else results.stable[:n])
 
 
 def verdicts(case: Case, theta12: np.ndarray, backend: str) -> list[Solution | None]:
@@ -130,23 +158,26 @@ def verdicts(case: Case, theta12: np.ndarray, backend: str) -> list[Solution | N
     Solution, None where it has forces. A linkage drawn at such a pose is degenerate (at a
     change point its pins are collinear and its constraints redundant), so none is built."""
     results = solve_poses(case, theta12)
-    out: list[Solution | None] = []
-    for i, t in enumerate(theta12):
+    # verdict_at's tests at every pose at once: it is asked only where one holds.
+    flagged = ~results.assembled | results.singular | results.indeterminate | ~results.converged
+    out: list[Solution | None] = [None] * len(theta12)
+    for i in np.flatnonzero(flagged).tolist():
         verdict = verdict_at(case, results, i)
-        out.append(None if verdict is None else Solution(
+        out[i] = None if verdict is None else Solution(
             case.name, backend, {}, status=verdict.status, message=verdict.message,
-            diagnostics={"condition_number": verdict.condition, "theta12": float(t)}))
+            diagnostics={"condition_number": verdict.condition, "theta12": float(theta12[i])})
     return out
 
 
 def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, backend: str,
-                          sweep: Callable[[Case, np.ndarray], list[Solution]],
+                          sweep: Callable[[Case, np.ndarray, LinkageResults], list[Solution]],
                           solve: Callable[[Case], Solution]) -> list[Solution]:
     """A preset θ12 sweep through a linkage backend, each pose read under the preset's
     names.
 
     Poses with a verdict of their own get it (:func:`verdicts`). Held statics run as the
-    linkage's driver sweep (``sweep``, continuation from pose to pose), in stretches on the
+    linkage's driver sweep (``sweep``: the linkage, its driver's values and their analytic
+    pose analysis, done once here; continuation from pose to pose), in stretches on the
     preset's branch (:func:`follows_branch`) between verdicts, each drawn at its first pose.
     A moving or friction case is driven pose by pose (``solve``): with a drive on the
     rocker, each pose has its own rocker rates."""
@@ -168,11 +199,13 @@ def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, bac
         while stop < grid.size and given[stop] is None:
             stop += 1
         first = pose(i)
-        stop = i + max(1, follows_branch(first, grid[i:stop]))
-        results = sweep(as_linkage(first), driver_offsets(first, grid[i:stop]))
-        renaming = Renaming.of(first)
-        out += [renaming.solution(s, case.name) for s in results]
-        i = stop
+        linkage = as_linkage(first)
+        offsets = driver_offsets(first, grid[i:stop])
+        results = analytic_results(linkage, offsets)
+        n = max(1, follows_branch(first, grid[i:stop], results.pose))
+        solved = sweep(linkage, offsets[:n], first_poses(results, n))
+        out += Renaming.of(first).solutions(solved, case.name)
+        i += n
     return out
 
 
