@@ -14,6 +14,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
@@ -25,6 +26,9 @@ from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.presets import link_name, linkage_of, names_of
 from mechcheck.analytic.solution import Solution
+
+#: A value or a column of values (:meth:`Renaming.columns`).
+T = TypeVar("T", float, np.ndarray)
 
 
 def as_linkage(case: Case) -> Case:
@@ -57,13 +61,16 @@ class Renaming:
                    drawn)
 
     def values(self, values: Mapping[str, float]) -> dict[str, float]:
-        out = {legacy: float(values[name]) for legacy, name in self.names.items()
-               if name in values}
+        return {q: float(v) for q, v in self.columns(values).items()}
+
+    def columns(self, values: Mapping[str, T]) -> dict[str, T]:
+        """:meth:`values` of floats or of arrays (a column per quantity, a row per pose)."""
+        out = {legacy: values[name] for legacy, name in self.names.items() if name in values}
         moved = {"theta13": self.coupler, "theta14": self.rocker, "s14": "q_slide"}
         for quantity, drawn in self.drawn.items():
             if moved[quantity] in values:
-                at = drawn + float(values[moved[quantity]])
-                # wrap_angle on a float: np.remainder is Python's %, bit for bit.
+                at = drawn + values[moved[quantity]]
+                # wrap_angle: np.remainder is Python's %, bit for bit.
                 out[quantity] = at if quantity == "s14" else (at + math.pi) % math.tau - math.pi
         return out
 
@@ -72,14 +79,17 @@ class Renaming:
         return dataclasses.replace(solution, case=name, values=self.values(solution.values))
 
     def solutions(self, solutions: list[Solution], name: str) -> list[Solution]:
-        """:meth:`solution` of each, made at once (:meth:`Solution.batch`) when all are
-        ``ok`` with the same quantities (a sweep's)."""
-        if not solutions or any(s.status != "ok" or s.values.keys() != solutions[0].values.keys()
+        """:meth:`solution` of each; of a sweep's (all ``ok``, the same quantities) at once:
+        the quantities renamed as columns, the Solutions made as a batch
+        (:meth:`Solution.batch`)."""
+        given = tuple(solutions[0].values) if solutions else ()
+        if not solutions or any(s.status != "ok" or tuple(s.values) != given
                                 for s in solutions):
             return [self.solution(s, name) for s in solutions]
-        renamed = [self.values(s.values) for s in solutions]
-        return Solution.batch(name, solutions[0].backend, tuple(renamed[0]),
-                              (tuple(values.values()) for values in renamed),
+        table = np.array([tuple(s.values.values()) for s in solutions])
+        columns = self.columns(dict(zip(given, table.T, strict=True)))
+        return Solution.batch(name, solutions[0].backend, tuple(columns),
+                              np.column_stack(list(columns.values())).tolist(),
                               (dict(s.diagnostics) for s in solutions), solutions[0].units)
 
 

@@ -248,11 +248,12 @@ def post_constraint(rig: LinkageRig, state: tuple[np.ndarray, ...], loads: np.nd
                          ("efc_force", forces), ("efc_pos", efc_pos)):
         getattr(snapshot, field)[:] = given
     copies = [(getattr(snapshot, field), source) for field, source in rig.derived]
-    nefc, tendons = rig.nefc, bool(m.ntendon)
+    nefc, tendons, rolling = rig.nefc, bool(m.ntendon), bool(qvel.any())
     d_qpos, d_qvel, d_qacc, d_xfrc = d.qpos, d.qvel, d.qacc, d.xfrc_applied
     for i in range(len(qpos)):
         d_qpos[:] = qpos[i]
-        d_qvel[:] = qvel[i]
+        if rolling:  # else qvel is 0 since the data was reset (:func:`exact_sweep`)
+            d_qvel[:] = qvel[i]
         d_xfrc[:] = loads[i]
         if tendons:
             mujoco.mj_forward(m, d)
@@ -283,11 +284,13 @@ def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets
     smooth = np.empty((n, m.nv))
     inertial = np.zeros((n, m.nv))
     efc_pos = np.empty((n, nefc))
-    moving = bool(qacc.any())
+    moving, rolling = bool(qacc.any()), bool(qvel.any())
     d_qpos, d_qvel, d_xfrc, d_smooth = d.qpos, d.qvel, d.xfrc_applied, d.qfrc_smooth
+    d_qvel[:] = 0.0
     for i in range(n):
         d_qpos[:] = qpos[i]
-        d_qvel[:] = qvel[i]
+        if rolling:
+            d_qvel[:] = qvel[i]
         rig.set_targets(targets[i])
         d_xfrc[:] = loads[i]
         mujoco.mj_forward(m, d)
