@@ -249,7 +249,10 @@ def post_constraint(rig: LinkageRig, state: tuple[np.ndarray, ...], loads: np.nd
         getattr(snapshot, field)[:] = given
     copies = [(getattr(snapshot, field), source) for field, source in rig.derived]
     nefc, tendons, rolling = rig.nefc, bool(m.ntendon), bool(qvel.any())
+    # qacc is written at each pose where a forward pass overwrites it or the poses accelerate.
+    steady = not (tendons or qacc.any())
     d_qpos, d_qvel, d_qacc, d_xfrc = d.qpos, d.qvel, d.qacc, d.xfrc_applied
+    d_qacc[:] = 0.0
     for i in range(len(qpos)):
         d_qpos[:] = qpos[i]
         if rolling:  # else qvel is 0 since the data was reset (:func:`exact_sweep`)
@@ -262,7 +265,8 @@ def post_constraint(rig: LinkageRig, state: tuple[np.ndarray, ...], loads: np.nd
             mujoco.mj_comPos(m, d)
             mujoco.mj_comVel(m, d)
         d.efc_force[:nefc] = forces[i]
-        d_qacc[:] = qacc[i]
+        if not steady:
+            d_qacc[:] = qacc[i]
         mujoco.mj_rnePostConstraint(m, d)
         for target, source in copies:
             target[i] = source
@@ -287,11 +291,16 @@ def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets
     moving, rolling = bool(qacc.any()), bool(qvel.any())
     d_qpos, d_qvel, d_xfrc, d_smooth = d.qpos, d.qvel, d.xfrc_applied, d.qfrc_smooth
     d_qvel[:] = 0.0
+    # The drivers' targets (:meth:`.linkage_rig.LinkageRig.set_targets`) as whole columns of
+    # eq_data, one per pose: one copy each instead of a scatter.
+    held = m.eq_data[:, 0]
+    columns = np.repeat(held[None], n, axis=0)
+    columns[:, rig.driver_eqs] = targets
     for i in range(n):
         d_qpos[:] = qpos[i]
         if rolling:
             d_qvel[:] = qvel[i]
-        rig.set_targets(targets[i])
+        held[:] = columns[i]
         d_xfrc[:] = loads[i]
         mujoco.mj_forward(m, d)
         jac[i] = d.efc_J[:size]
