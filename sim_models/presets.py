@@ -145,23 +145,6 @@ def follows_branch(case: Case, theta12: np.ndarray, pose: LinkagePose) -> int:
     return int(off[0]) if off.size else theta12.size
 
 
-def first_poses(results: LinkageResults, n: int) -> LinkageResults:
-    """The first ``n`` poses of ``results``: the analysis of the first ``n`` driver values
-    alone, as the continuation and each pose's statics go in order (tested)."""
-    if n == results.pose.q.shape[0]:
-        return results
-    pose = results.pose
-    head = dataclasses.replace(pose, drivers=pose.drivers[:n], q=pose.q[:n],
-                               qdot=pose.qdot[:n], qddot=pose.qddot[:n],
-                               locked_at=pose.locked_at[:n])
-    return dataclasses.replace(
-        results, pose=head, values={q: v[:n] for q, v in results.values.items()},
-        condition_of=lambda: results.condition[:n],
-        ill_conditioned=results.ill_conditioned[:n], converged=results.converged[:n],
-        reversing=results.reversing[:n],
-        stable=None if results.stable is None else results.stable[:n])
-
-
 def verdicts(case: Case, theta12: np.ndarray, backend: str) -> list[Solution | None]:
     """The preset's own verdict at each pose (does not assemble, singular, friction
     reversing or self-locking: :func:`mechcheck.analytic.forces.verdict_at`) as ``backend``'s
@@ -213,7 +196,11 @@ def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, bac
         offsets = driver_offsets(first, grid[i:stop])
         results = analytic_results(linkage, offsets)
         n = max(1, follows_branch(first, grid[i:stop], results.pose))
-        solved = sweep(linkage, offsets[:n], first_poses(results, n))
+        if n < offsets.size:
+            # The stretch's own analysis, as its sweep would make it: a pose's rounding in a
+            # vectorised Newton iteration depends on the poses iterated with it.
+            results = analytic_results(linkage, offsets[:n])
+        solved = sweep(linkage, offsets[:n], results)
         out += Renaming.of(first).solutions(solved, case.name)
         i += n
     return out
