@@ -18,6 +18,7 @@ refuse, with the reason, what the builder cannot model (a loop without a revolut
 from __future__ import annotations
 
 import functools
+import threading
 import time
 
 import mujoco
@@ -133,8 +134,13 @@ def sweep_rig(case: Case) -> LinkageRig:
     """:func:`exact_linkage_rig`, kept for the next exact sweep of the same Case (a Case is
     immutable, and so is the model built from it): building it is a sweep's largest fixed
     cost. :func:`exact_sweep` sets everything it reads (state, targets, loads, forces) and
-    resets the rest of the data and the emulated friction before it starts."""
+    resets the rest of the data and the emulated friction before it starts; one sweep at a
+    time uses it (:data:`SWEEP_RIG_LOCK`)."""
     return exact_linkage_rig(case)
+
+
+#: Held while a kept rig (:func:`sweep_rig`) is in use: threads would share its MjData.
+SWEEP_RIG_LOCK = threading.Lock()
 
 
 def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
@@ -341,7 +347,8 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     if backend == "mujoco":
         return settled_sweep(case, first, results, continuation)
     if not coulomb_terms(results.pose):
-        return exact_sweep(case, sweep_rig(case), results)
+        with SWEEP_RIG_LOCK:
+            return exact_sweep(case, sweep_rig(case), results)
     rig = exact_linkage_rig(case)
     states = rig.joint_states(results.pose)
     targets = results.pose.drivers
