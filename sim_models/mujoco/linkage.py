@@ -234,7 +234,7 @@ def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults) -> list[So
     common = RunDiagnostics("constraint_solve", 0, share, 0.0, 0.0, 0.0).as_dict()
     return Solution.batch(
         case.name, "mujoco_solve", tuple(columns),
-        zip(*(c.tolist() for c in columns.values()), strict=True),
+        np.column_stack(list(columns.values())).tolist(),
         ({**common, "loop_violation": gap, "equation_residual": r}
          for gap, r in zip(rig.loop_gaps(efc_pos).tolist(), residual.tolist(), strict=True)),
         rig.units or {})
