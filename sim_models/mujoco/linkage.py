@@ -226,10 +226,13 @@ def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults) -> list[So
     # A rig may be reused (:func:`sweep_rig`): MuJoCo warns once per MjData, so its
     # warnings are reset with the rest of the data, to be raised again where they apply.
     mujoco.mj_resetData(rig.model, rig.data)
-    loads = rig.wrenches(*rig.load_points(state[0]), state[1])
+    sites, centres = rig.load_points(state[0])
+    loads = rig.wrenches(sites, centres, state[1])
     jac, rhs, efc_pos = constraint_equations(rig, state, results.pose.drivers, loads)
     forces, residual = batch_rigid_forces(jac, rhs)
-    columns = rig.values(post_constraint(rig, state, loads, forces, efc_pos))
+    known = {"qpos": state[0], "qvel": state[1], "qacc": state[2], "efc_force": forces,
+             "efc_pos": efc_pos, "site_xpos": sites}
+    columns = rig.values(post_constraint(rig, state, loads, known))
     share = (time.perf_counter() - start) / max(len(state[0]), 1)
     common = RunDiagnostics("constraint_solve", 0, share, 0.0, 0.0, 0.0).as_dict()
     return Solution.batch(
@@ -241,20 +244,23 @@ def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults) -> list[So
 
 
 def post_constraint(rig: LinkageRig, state: tuple[np.ndarray, ...], loads: np.ndarray,
-                    forces: np.ndarray, efc_pos: np.ndarray) -> Snapshot:
+                    known: dict[str, np.ndarray]) -> Snapshot:
     """The read-out arrays of every pose of ``state`` (qpos, qvel, qacc) with the
-    constraint ``forces`` imposed: MuJoCo's kinematics (the whole forward pass if the
-    linkage has springs: their tendons' lengths and pull on their sites), then
-    ``mj_rnePostConstraint`` with ``loads`` as xfrc_applied. Only what the read-out reads
-    of the data is copied per pose (:attr:`.linkage_rig.LinkageRig.derived`)."""
+    constraint forces ``known["efc_force"]`` imposed: MuJoCo's kinematics (the whole
+    forward pass if the linkage has springs: their tendons' lengths and pull on their
+    sites), then ``mj_rnePostConstraint`` with ``loads`` as xfrc_applied. The arrays
+    ``known`` already (the state, the constraint arrays, the sites' positions from the
+    same kinematics) are taken as they are; of the rest, only what the read-out reads is
+    copied per pose (:attr:`.linkage_rig.LinkageRig.derived`)."""
     m, d = rig.model, rig.data
     qpos, qvel, qacc = state
     snapshot = rig.snapshot(len(qpos))
-    for field, given in (("qpos", qpos), ("qvel", qvel), ("qacc", qacc),
-                         ("efc_force", forces), ("efc_pos", efc_pos)):
+    for field, given in known.items():
         getattr(snapshot, field)[:] = given
-    copies = [(getattr(snapshot, field), source) for field, source in rig.derived]
+    copies = [(getattr(snapshot, field), source) for field, source in rig.derived
+              if field not in known]
     nefc, tendons, rolling = rig.nefc, bool(m.ntendon), bool(qvel.any())
+    forces = known["efc_force"]
     # qacc is written at each pose where a forward pass overwrites it or the poses accelerate.
     steady = not (tendons or qacc.any())
     d_qpos, d_qvel, d_qacc, d_xfrc = d.qpos, d.qvel, d.qacc, d.xfrc_applied
