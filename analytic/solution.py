@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Literal
@@ -55,6 +55,16 @@ def unknown_quantities(names: tuple[str, ...], with_units: tuple[str, ...]) -> f
     linkage = set(with_units)
     return frozenset(q for q in names if q not in QUANTITY_UNITS
                      and not (LINKAGE_QUANTITY.fullmatch(q) and q in linkage))
+
+
+def check_quantities(names: tuple[str, ...], with_units: tuple[str, ...]) -> None:
+    """Refuse :func:`unknown_quantities`."""
+    unknown = unknown_quantities(names, with_units)
+    if unknown:
+        raise ValueError(f"unknown quantities, or linkage quantities without a unit: "
+                         f"{sorted(unknown)}")
+
+
 #: Order of a linkage's quantities in tables: by family, then by name.
 LINKAGE_FAMILIES = ("Q_", "F_", "M_", "S_", "x_", "y_", "phi_", "q_")
 
@@ -144,10 +154,30 @@ class Solution:
         return (Solution, (self.case, self.backend, dict(self.values), self.status, self.message,
                            dict(self.diagnostics), dict(self.units)))
 
+    @classmethod
+    def batch(cls, case: str, backend: str, names: tuple[str, ...],
+              rows: Iterable[Sequence[float]], diagnostics: Iterable[dict[str, float | str]],
+              units: Mapping[str, str]) -> list[Solution]:
+        """``ok`` Solutions of one case and backend at many poses, each row of ``rows`` the
+        values of ``names`` at one pose: as if made one by one (:meth:`__post_init__`:
+        read-only copies, the same check of the names, done once here as the names are
+        the same) but for one shared copy of ``units``. Each ``diagnostics`` dict becomes
+        its Solution's own (read-only): they must be fresh dicts no one else holds. A
+        sweep builds hundreds of Solutions, and the copying was most of a pose's time."""
+        shared = MappingProxyType(dict(units))
+        check_quantities(names, tuple(shared))
+        out = []
+        for row, diagnostic in zip(rows, diagnostics, strict=True):
+            solution = object.__new__(cls)
+            # A frozen dataclass refuses setattr; its __dict__ is what __init__ would fill.
+            vars(solution).update(case=case, backend=backend,
+                                  values=MappingProxyType(dict(zip(names, row, strict=True))),
+                                  status="ok", message="",
+                                  diagnostics=MappingProxyType(diagnostic), units=shared)
+            out.append(solution)
+        return out
+
     def __post_init__(self) -> None:
         for name in ("values", "diagnostics", "units"):
             object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
-        unknown = unknown_quantities(tuple(self.values), tuple(self.units))
-        if unknown:
-            raise ValueError(f"unknown quantities, or linkage quantities without a unit: "
-                             f"{sorted(unknown)}")
+        check_quantities(tuple(self.values), tuple(self.units))

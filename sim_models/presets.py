@@ -14,16 +14,21 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
 from mechcheck.analytic.case import Case, Load
 from mechcheck.analytic.forces import solve_poses, verdict_at
 from mechcheck.analytic.kinematics import pose_of
-from mechcheck.analytic.linkage_forces import pose_quantities
-from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
+from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.presets import link_name, linkage_of, names_of
 from mechcheck.analytic.solution import Solution
+
+#: A value or a column of values (:meth:`Renaming.columns`).
+T = TypeVar("T", float, np.ndarray)
 
 
 def as_linkage(case: Case) -> Case:
@@ -56,19 +61,36 @@ class Renaming:
                    drawn)
 
     def values(self, values: Mapping[str, float]) -> dict[str, float]:
-        out = {legacy: float(values[name]) for legacy, name in self.names.items()
-               if name in values}
+        return {q: float(v) for q, v in self.columns(values).items()}
+
+    def columns(self, values: Mapping[str, T]) -> dict[str, T]:
+        """:meth:`values` of floats or of arrays (a column per quantity, a row per pose)."""
+        out = {legacy: values[name] for legacy, name in self.names.items() if name in values}
         moved = {"theta13": self.coupler, "theta14": self.rocker, "s14": "q_slide"}
         for quantity, drawn in self.drawn.items():
             if moved[quantity] in values:
-                at = drawn + float(values[moved[quantity]])
-                # wrap_angle on a float: np.remainder is Python's %, bit for bit.
+                at = drawn + values[moved[quantity]]
+                # wrap_angle: np.remainder is Python's %, bit for bit.
                 out[quantity] = at if quantity == "s14" else (at + math.pi) % math.tau - math.pi
         return out
 
     def solution(self, solution: Solution, name: str) -> Solution:
         """``solution`` under the preset's names, as case ``name``."""
         return dataclasses.replace(solution, case=name, values=self.values(solution.values))
+
+    def solutions(self, solutions: list[Solution], name: str) -> list[Solution]:
+        """:meth:`solution` of each; of a sweep's (all ``ok``, the same quantities) at once:
+        the quantities renamed as columns, the Solutions made as a batch
+        (:meth:`Solution.batch`)."""
+        given = tuple(solutions[0].values) if solutions else ()
+        if not solutions or any(s.status != "ok" or tuple(s.values) != given
+                                for s in solutions):
+            return [self.solution(s, name) for s in solutions]
+        table = np.array([tuple(s.values.values()) for s in solutions])
+        columns = self.columns(dict(zip(given, table.T, strict=True)))
+        return Solution.batch(name, solutions[0].backend, tuple(columns),
+                              np.column_stack(list(columns.values())).tolist(),
+                              (dict(s.diagnostics) for s in solutions), solutions[0].units)
 
 
 def preset_values(case: Case, values: Mapping[str, float]) -> dict[str, float]:
@@ -100,15 +122,14 @@ def driver_offsets(case: Case, theta12: Sequence[float] | np.ndarray) -> np.ndar
 SAME_BRANCH = 1e-6
 
 
-def follows_branch(case: Case, theta12: np.ndarray) -> int:
+def follows_branch(case: Case, theta12: np.ndarray, pose: LinkagePose) -> int:
     """How many poses of ``theta12`` (the first is ``case``'s own) the linkage drawn at the
-    first one reaches on the preset's branch, by continuation from its drawn pose.
+    first one reaches on the preset's branch, by continuation from its drawn pose
+    (``pose``: the linkage's pose analysis at those poses, the one its sweep runs at).
 
     The closed form keeps its branch by definition (``open``/``crossed``, ``right``/``left``),
     also through a change point, where the two branches meet; continuation goes straight on
     and ends on the other one, as it does after poses that do not assemble."""
-    linkage = linkage_of(case)
-    pose = solve_pose(linkage, driver_offsets(case, theta12)[:, None])
     values = pose_quantities(pose)
     closed = pose_of(case, theta12)
     phi = {3: link_name(case, 3), 4: link_name(case, 4)}
@@ -119,7 +140,7 @@ def follows_branch(case: Case, theta12: np.ndarray) -> int:
     if case.mechanism == "slider_crank":
         u = np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
         s14 = closed.joints["B"] @ u
-        gap = np.maximum(gap, np.abs(s14 - s14[0] - values["q_slide"]) / linkage.scale)
+        gap = np.maximum(gap, np.abs(s14 - s14[0] - values["q_slide"]) / pose.linkage.scale)
     off = np.flatnonzero(~(gap <= SAME_BRANCH))
     return int(off[0]) if off.size else theta12.size
 
@@ -130,23 +151,26 @@ def verdicts(case: Case, theta12: np.ndarray, backend: str) -> list[Solution | N
     Solution, None where it has forces. A linkage drawn at such a pose is degenerate (at a
     change point its pins are collinear and its constraints redundant), so none is built."""
     results = solve_poses(case, theta12)
-    out: list[Solution | None] = []
-    for i, t in enumerate(theta12):
+    # verdict_at's tests at every pose at once: it is asked only where one holds.
+    flagged = ~results.assembled | results.singular | results.indeterminate | ~results.converged
+    out: list[Solution | None] = [None] * len(theta12)
+    for i in np.flatnonzero(flagged).tolist():
         verdict = verdict_at(case, results, i)
-        out.append(None if verdict is None else Solution(
+        out[i] = None if verdict is None else Solution(
             case.name, backend, {}, status=verdict.status, message=verdict.message,
-            diagnostics={"condition_number": verdict.condition, "theta12": float(t)}))
+            diagnostics={"condition_number": verdict.condition, "theta12": float(theta12[i])})
     return out
 
 
 def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, backend: str,
-                          sweep: Callable[[Case, np.ndarray], list[Solution]],
+                          sweep: Callable[[Case, np.ndarray, LinkageResults], list[Solution]],
                           solve: Callable[[Case], Solution]) -> list[Solution]:
     """A preset θ12 sweep through a linkage backend, each pose read under the preset's
     names.
 
     Poses with a verdict of their own get it (:func:`verdicts`). Held statics run as the
-    linkage's driver sweep (``sweep``, continuation from pose to pose), in stretches on the
+    linkage's driver sweep (``sweep``: the linkage, its driver's values and their analytic
+    pose analysis, done once here; continuation from pose to pose), in stretches on the
     preset's branch (:func:`follows_branch`) between verdicts, each drawn at its first pose.
     A moving or friction case is driven pose by pose (``solve``): with a drive on the
     rocker, each pose has its own rocker rates."""
@@ -168,11 +192,17 @@ def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, bac
         while stop < grid.size and given[stop] is None:
             stop += 1
         first = pose(i)
-        stop = i + max(1, follows_branch(first, grid[i:stop]))
-        results = sweep(as_linkage(first), driver_offsets(first, grid[i:stop]))
-        renaming = Renaming.of(first)
-        out += [renaming.solution(s, case.name) for s in results]
-        i = stop
+        linkage = as_linkage(first)
+        offsets = driver_offsets(first, grid[i:stop])
+        results = analytic_results(linkage, offsets)
+        n = max(1, follows_branch(first, grid[i:stop], results.pose))
+        if n < offsets.size:
+            # The stretch's own analysis, as its sweep would make it: a pose's rounding in a
+            # vectorised Newton iteration depends on the poses iterated with it.
+            results = analytic_results(linkage, offsets[:n])
+        solved = sweep(linkage, offsets[:n], results)
+        out += Renaming.of(first).solutions(solved, case.name)
+        i += n
     return out
 
 

@@ -43,7 +43,8 @@ def sweep(case: Case, grid: ArrayLike, backend: str = "mujoco") -> list[Solution
     """Either backend over a sweep of a linkage's first driver (rad or m from the drawn
     pose, :func:`.linkage.sweep_linkage`), or of θ12 (rad) of a four-bar or slider-crank."""
     if case.mechanism != "linkage":
-        return sweep_through_linkage(case, np.asarray(grid, dtype=float), backend,
-                                     lambda linkage, offsets: sweep(linkage, offsets, backend),
-                                     settle if backend == "mujoco" else solve_at_pose)
+        return sweep_through_linkage(
+            case, np.asarray(grid, dtype=float), backend,
+            lambda linkage, offsets, results: sweep_linkage(linkage, offsets, backend, results),
+            settle if backend == "mujoco" else solve_at_pose)
     return sweep_linkage(case, np.asarray(grid, dtype=float), backend)

@@ -17,6 +17,8 @@ refuse, with the reason, what the builder cannot model (a loop without a revolut
 
 from __future__ import annotations
 
+import functools
+import threading
 import time
 
 import mujoco
@@ -38,7 +40,7 @@ from mechcheck.sim_models.mujoco.linkage_friction import (
     friction_change,
 )
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, spanning_tree
-from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
 from mechcheck.sim_models.mujoco.model import EXACT
 from mechcheck.sim_models.mujoco.settle import settle_refined, settled_solution
 from mechcheck.sim_models.mujoco.solve import (
@@ -127,6 +129,20 @@ def exact_linkage_rig(case: Case) -> LinkageRig:
     return rig
 
 
+@functools.lru_cache(maxsize=8)
+def sweep_rig(case: Case) -> LinkageRig:
+    """:func:`exact_linkage_rig`, kept for the next exact sweep of the same Case (a Case is
+    immutable, and so is the model built from it): building it is a sweep's largest fixed
+    cost. :func:`exact_sweep` sets everything it reads (state, targets, loads, forces) and
+    resets the rest of the data and the emulated friction before it starts; one sweep at a
+    time uses it (:data:`SWEEP_RIG_LOCK`)."""
+    return exact_linkage_rig(case)
+
+
+#: Held while a kept rig (:func:`sweep_rig`) is in use: threads would share its MjData.
+SWEEP_RIG_LOCK = threading.Lock()
+
+
 def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
                           results: LinkageResults | None = None, index: int = 0) -> Solution:
     """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose (row
@@ -201,40 +217,72 @@ def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults) -> list[So
     Coulomb friction (nothing to iterate), in three passes over the poses so that the
     linear algebra and the read-out run once for all of them: the load points (MuJoCo's
     kinematics), the constraint equations (its forward pass: Jacobian and smooth forces),
-    then, with the batch's forces imposed, its kinematics (the whole forward pass again if
-    the linkage has springs: their tendons) and ``mj_rnePostConstraint``, captured and
-    read at once (:meth:`.linkage_rig.LinkageRig.values`). The wall time reported per
-    pose is the sweep's share."""
+    then, with the batch's forces imposed, ``mj_rnePostConstraint``
+    (:func:`post_constraint`), read at once (:meth:`.linkage_rig.LinkageRig.values`). The
+    wall time reported per pose is the sweep's share."""
     start = time.perf_counter()
-    qpos, qvel, qacc = rig.joint_states(results.pose)
+    state = rig.joint_states(results.pose)
     clear_friction(rig)
-    loads = rig.wrenches(*rig.load_points(qpos), qvel)
-    jac, rhs, gaps = constraint_equations(rig, (qpos, qvel, qacc), results.pose.drivers,
-                                          loads)
+    # A rig may be reused (:func:`sweep_rig`): MuJoCo warns once per MjData, so its
+    # warnings are reset with the rest of the data, to be raised again where they apply.
+    mujoco.mj_resetData(rig.model, rig.data)
+    sites, centres = rig.load_points(state[0])
+    loads = rig.wrenches(sites, centres, state[1])
+    jac, rhs, efc_pos = constraint_equations(rig, state, results.pose.drivers, loads)
     forces, residual = batch_rigid_forces(jac, rhs)
-    snapshot = rig.snapshot(len(qpos))
+    known = {"qpos": state[0], "qvel": state[1], "qacc": state[2], "efc_force": forces,
+             "efc_pos": efc_pos, "site_xpos": sites}
+    columns = rig.values(post_constraint(rig, state, loads, known))
+    share = (time.perf_counter() - start) / max(len(state[0]), 1)
+    common = RunDiagnostics("constraint_solve", 0, share, 0.0, 0.0, 0.0).as_dict()
+    return Solution.batch(
+        case.name, "mujoco_solve", tuple(columns),
+        np.column_stack(list(columns.values())).tolist(),
+        ({**common, "loop_violation": gap, "equation_residual": r}
+         for gap, r in zip(rig.loop_gaps(efc_pos).tolist(), residual.tolist(), strict=True)),
+        rig.units or {})
+
+
+def post_constraint(rig: LinkageRig, state: tuple[np.ndarray, ...], loads: np.ndarray,
+                    known: dict[str, np.ndarray]) -> Snapshot:
+    """The read-out arrays of every pose of ``state`` (qpos, qvel, qacc) with the
+    constraint forces ``known["efc_force"]`` imposed: MuJoCo's kinematics (the whole
+    forward pass if the linkage has springs: their tendons' lengths and pull on their
+    sites), then ``mj_rnePostConstraint`` with ``loads`` as xfrc_applied. The arrays
+    ``known`` already (the state, the constraint arrays, the sites' positions from the
+    same kinematics) are taken as they are; of the rest, only what the read-out reads is
+    copied per pose (:attr:`.linkage_rig.LinkageRig.derived`)."""
     m, d = rig.model, rig.data
+    qpos, qvel, qacc = state
+    snapshot = rig.snapshot(len(qpos))
+    for field, given in known.items():
+        getattr(snapshot, field)[:] = given
+    copies = [(getattr(snapshot, field), source) for field, source in rig.derived
+              if field not in known]
+    nefc, tendons, rolling = rig.nefc, bool(m.ntendon), bool(qvel.any())
+    forces = known["efc_force"]
+    # qacc is written at each pose where a forward pass overwrites it or the poses accelerate.
+    steady = not (tendons or qacc.any())
+    d_qpos, d_qvel, d_qacc, d_xfrc = d.qpos, d.qvel, d.qacc, d.xfrc_applied
+    d_qacc[:] = 0.0
     for i in range(len(qpos)):
-        rig.set_state(qpos[i], qvel[i])
-        d.xfrc_applied[:] = loads[i]
-        if m.ntendon:  # the tendons' lengths and pull on their sites: the whole pass
+        d_qpos[:] = qpos[i]
+        if rolling:  # else qvel is 0 since the data was reset (:func:`exact_sweep`)
+            d_qvel[:] = qvel[i]
+        d_xfrc[:] = loads[i]
+        if tendons:
             mujoco.mj_forward(m, d)
         else:  # what the RNE reads
             mujoco.mj_kinematics(m, d)
             mujoco.mj_comPos(m, d)
             mujoco.mj_comVel(m, d)
-        d.efc_force[:rig.nefc] = forces[i]
-        d.qacc[:] = qacc[i]
+        d.efc_force[:nefc] = forces[i]
+        if not steady:
+            d_qacc[:] = qacc[i]
         mujoco.mj_rnePostConstraint(m, d)
-        rig.capture(snapshot, i)
-    columns = rig.values(snapshot)
-    share = (time.perf_counter() - start) / max(len(qpos), 1)
-    common = RunDiagnostics("constraint_solve", 0, share, 0.0, 0.0, 0.0).as_dict()
-    rows = zip(*(c.tolist() for c in columns.values()), strict=True)
-    return [Solution(case.name, "mujoco_solve", dict(zip(columns, row, strict=True)),
-                     diagnostics={**common, "loop_violation": gap, "equation_residual": r},
-                     units=rig.units or {})
-            for row, gap, r in zip(rows, gaps.tolist(), residual.tolist(), strict=True)]
+        for target, source in copies:
+            target[i] = source
+    return snapshot
 
 
 def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets: np.ndarray,
@@ -242,27 +290,38 @@ def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets
     """MuJoCo's forward pass at each pose of ``state`` (qpos, qvel, qacc: (N, nv) each),
     drivers at ``targets``, with ``loads`` as xfrc_applied: the constraint Jacobians J
     (N, nefc, nv), the right-hand sides M·qacc − qfrc_smooth of Jᵀ f = rhs (armature
-    excluded, as :func:`.solve.impose_rigid_forces`) and the loop gaps (N,)."""
+    excluded, as :func:`.solve.impose_rigid_forces`) and the constraints' efc_pos
+    (N, nefc)."""
     m, d = rig.model, rig.data
     qpos, qvel, qacc = state
     n, nefc = len(qpos), rig.nefc
-    jac = np.empty((n, nefc, m.nv))
-    rhs = np.empty((n, m.nv))
+    size = nefc * m.nv
+    jac = np.empty((n, size))
+    smooth = np.empty((n, m.nv))
+    inertial = np.zeros((n, m.nv))
     efc_pos = np.empty((n, nefc))
-    inertial = np.zeros(m.nv)
-    moving = bool(qacc.any())
+    moving, rolling = bool(qacc.any()), bool(qvel.any())
+    d_qpos, d_qvel, d_xfrc, d_smooth = d.qpos, d.qvel, d.xfrc_applied, d.qfrc_smooth
+    d_qvel[:] = 0.0
+    # The drivers' targets (:meth:`.linkage_rig.LinkageRig.set_targets`) as whole columns of
+    # eq_data, one per pose: one copy each instead of a scatter.
+    held = m.eq_data[:, 0]
+    columns = np.repeat(held[None], n, axis=0)
+    columns[:, rig.driver_eqs] = targets
     for i in range(n):
-        rig.set_state(qpos[i], qvel[i])
-        rig.set_targets(targets[i])
-        d.xfrc_applied[:] = loads[i]
+        d_qpos[:] = qpos[i]
+        if rolling:
+            d_qvel[:] = qvel[i]
+        held[:] = columns[i]
+        d_xfrc[:] = loads[i]
         mujoco.mj_forward(m, d)
-        jac[i] = d.efc_J[:nefc * m.nv].reshape(nefc, m.nv)
+        jac[i] = d.efc_J[:size]
         efc_pos[i] = d.efc_pos[:nefc]
+        smooth[i] = d_smooth
         if moving:
-            mujoco.mj_mulM(m, d, inertial, qacc[i])
-            inertial -= m.dof_armature * qacc[i]
-        rhs[i] = inertial - d.qfrc_smooth
-    return jac, rhs, rig.loop_gaps(efc_pos)
+            mujoco.mj_mulM(m, d, inertial[i], qacc[i])
+    rhs = inertial - m.dof_armature * qacc - smooth
+    return jac.reshape(n, nefc, m.nv), rhs, efc_pos
 
 
 def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
@@ -293,9 +352,10 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
         results = analytic_results(case, np.asarray(first, dtype=float))
     if backend == "mujoco":
         return settled_sweep(case, first, results, continuation)
-    rig = exact_linkage_rig(case)
     if not coulomb_terms(results.pose):
-        return exact_sweep(case, rig, results)
+        with SWEEP_RIG_LOCK:
+            return exact_sweep(case, sweep_rig(case), results)
+    rig = exact_linkage_rig(case)
     states = rig.joint_states(results.pose)
     targets = results.pose.drivers
     out = []

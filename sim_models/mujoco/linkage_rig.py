@@ -212,6 +212,12 @@ class LinkageRig:
         self.origins = {link: origin_of(self.tree, linkage, link)
                         for link in (GROUND, *self.moving_links)}
         self.plan = self._read_plan()
+        #: The arrays of ``data`` the read-out reads besides the state and the constraint
+        #: forces: all a sweep copies per pose (:meth:`capture`, :func:`.linkage.exact_sweep`).
+        self.derived = [(field, source) for field, source in self.sources
+                        if field in self._derived_fields()]
+        self.captured = [(field, source) for field, source in self.sources
+                         if field in ("qpos", "qvel", "qacc")] + self.derived
 
     def _id(self, kind: mujoco.mjtObj, name: str) -> int:
         found = int(mujoco.mj_name2id(self.model, kind, name))
@@ -411,7 +417,7 @@ class LinkageRig:
         ``mj_rnePostConstraint``) into row ``i`` of ``snapshot``; the equality forces with
         the carried ones."""
         d = self.data
-        for field, source in self.sources:
+        for field, source in self.captured:  # the rest is never read (:meth:`values`)
             getattr(snapshot, field)[i] = source
         # The constraint arrays live in MuJoCo's arena, laid out anew by each forward pass.
         snapshot.efc_force[i] = d.efc_force
@@ -475,6 +481,16 @@ class LinkageRig:
         along = self.sliding.get(name, 0.0) - (0.0 if effort is None else effort)
         f = t.sign * f + np.asarray(along)[..., None] * u
         return {f"M_{name}": moment, f"F_{name}_x": f[:, 0], f"F_{name}_y": f[:, 1]}
+
+    def _derived_fields(self) -> set[str]:
+        """What :meth:`values` reads of ``data`` besides qpos, qvel, qacc and the constraint
+        arrays: the pins' cfrc_int, the points' sites, a slide's frames and subtree centre,
+        the tendons' lengths and speeds."""
+        plan = self.plan
+        fields = {"cfrc_int"} if plan.pin_names or plan.slides else set()
+        fields |= {"site_xpos"} if plan.point_names else set()
+        fields |= {"xpos", "xmat", "subtree_com"} if plan.slides else set()
+        return fields | ({"ten_length", "ten_velocity"} if self.springs else set())
 
     def _read_plan(self) -> ReadPlan:
         linkage = self.linkage

@@ -56,6 +56,6 @@ def sweep(case: Case, grid: ArrayLike, backend: str = "pymunk") -> list[Solution
     (rad) of a four-bar or slider-crank."""
     if case.mechanism != "linkage":
         return sweep_through_linkage(case, np.asarray(grid, dtype=float), backend,
-                                     lambda linkage, offsets: sweep(linkage, offsets, backend),
+                                     lambda linkage, offsets, _: sweep(linkage, offsets, backend),
                                      settle if backend == "pymunk" else solve_at_pose)
     return linkage_sweep.sweep(case, grid, backend)

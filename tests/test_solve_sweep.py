@@ -1,0 +1,162 @@
+"""``mujoco_solve`` over a sweep (issue 13): the batch is the pose-by-pose solve, the model
+kept for the next sweep carries nothing over, and the preset path's shortcuts (the branch
+check on the sweep's own analysis, renaming as columns, Solutions made as a batch) give what
+the one-by-one path gives.
+
+Expected values come from another path doing the same work (the pose-by-pose solve, the
+generic engine's continuation, one Solution at a time): identities, judged exactly or
+by the one tolerance policy (:func:`mechcheck.testing.assert_solution_close`, the exact
+solve's 1e-9).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from types import MappingProxyType
+
+import numpy as np
+import pytest
+
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.linkage_forces import coulomb_terms
+from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco.linkage import (
+    solve_linkage_at_pose,
+    sweep_linkage,
+    sweep_rig,
+    unbuildable,
+)
+from mechcheck.sim_models.presets import (
+    Renaming,
+    as_linkage,
+    driver_offsets,
+    follows_branch,
+    through_drive,
+)
+from mechcheck.testing import assert_solution_close
+
+from .builtin import builtin_cases
+
+
+def linkage_cases() -> dict[str, Case]:
+    return {n: c for n, c in builtin_cases().items() if c.mechanism == "linkage"}
+
+
+def exact_sweepable(case: Case) -> bool:
+    """A linkage the batch solves: buildable, driven, without Coulomb friction, with forces
+    at its drawn pose."""
+    return (bool(case.linkage.drivers) and unbuildable(case) is None
+            and not case.has_coulomb_friction and not analytic_results(case).withheld[0])
+
+
+def around(case: Case) -> np.ndarray:
+    """The first driver at its value and a little either side (rad, or m)."""
+    driver = case.linkage.drivers[0]
+    revolute = case.linkage.joint(driver.joint).kind == "revolute"
+    step = 0.01 if revolute else 0.01 * case.linkage.scale
+    return driver.value + np.array([-step, 0.0, step])
+
+
+@pytest.mark.parametrize("name", sorted(n for n, c in linkage_cases().items()
+                                        if exact_sweepable(c)))
+def test_the_batch_is_the_pose_by_pose_solve(name: str) -> None:
+    """Every built-in linkage the batch solves: each pose of the batch agrees with the exact
+    solve of that pose alone (its own forward pass and solve), every quantity, within the
+    policy's tolerance for the exact solve."""
+    case = linkage_cases()[name]
+    first = around(case)
+    # Only poses with forces, as the pose gate lets through (:func:`mechcheck.sweep.gated_poses`).
+    first = first[~analytic_results(case, first).withheld]
+    results = analytic_results(case, first)
+    batch = sweep_linkage(case, first, "mujoco_solve", results)
+    assert len(batch) == first.size
+    for i, solved in enumerate(batch):
+        assert_solution_close(case, solved, solve_linkage_at_pose(case, results=results, index=i),
+                              complete=True)
+
+
+def test_a_kept_model_carries_nothing_into_the_next_sweep() -> None:
+    """The Watt six-bar swept twice with its model kept, then with it built anew: the same
+    numbers and diagnostics (but the wall time), and the drivers' targets left at the last
+    pose's, as set pose by pose."""
+    case = linkage_cases()["watt-ii-demo"]
+    assert not coulomb_terms(analytic_results(case).pose)
+    first = np.radians(np.linspace(-20.0, 20.0, 9))
+    results = analytic_results(case, first)
+    sweep_rig.cache_clear()
+    runs = [sweep_linkage(case, first, "mujoco_solve", results) for _ in range(2)]
+    assert sweep_rig.cache_info().hits == 1
+    sweep_rig.cache_clear()
+    runs.append(sweep_linkage(case, first, "mujoco_solve", results))
+
+    def without_time(s: Solution) -> tuple[dict[str, float], dict[str, object]]:
+        return dict(s.values), {k: v for k, v in s.diagnostics.items() if k != "wall_time_s"}
+
+    assert [without_time(s) for s in runs[1]] == [without_time(s) for s in runs[0]]
+    assert [without_time(s) for s in runs[2]] == [without_time(s) for s in runs[0]]
+    rig = sweep_rig(case)
+    assert rig.model.eq_data[rig.driver_eqs, 0].tolist() == results.pose.drivers[-1].tolist()
+
+
+def test_batch_solutions_are_made_as_one_by_one() -> None:
+    """Solution.batch: equal to Solutions made one at a time, read-only, and refusing a name
+    that is no quantity, as one by one."""
+    names = ("F_A_x", "F_A_y", "phi_crank")
+    units = {"F_A_x": "N", "F_A_y": "N", "phi_crank": "deg"}
+    rows = [(1.0, 2.0, 0.5), (3.0, -4.0, 0.25)]
+    diagnostics = [{"loop_violation": 0.0}, {"loop_violation": 1e-17}]
+    batch = Solution.batch("c", "mujoco_solve", names, rows,
+                           (dict(d) for d in diagnostics), units)
+    one_by_one = [Solution("c", "mujoco_solve", dict(zip(names, r, strict=True)),
+                           diagnostics=d, units=units) for r, d in zip(rows, diagnostics,
+                                                                       strict=True)]
+    assert batch == one_by_one
+    assert all(isinstance(getattr(s, f), MappingProxyType) for s in batch
+               for f in ("values", "diagnostics", "units"))
+    with pytest.raises(TypeError):
+        batch[0].values["F_A_x"] = 0.0  # type: ignore[index]
+    with pytest.raises(ValueError, match="unknown quantities"):
+        Solution.batch("c", "mujoco_solve", ("F_A_x", "bogus"), [(1.0, 2.0)], [{}], units)
+
+
+def preset_stretches() -> list[tuple[Case, np.ndarray]]:
+    """Seed E1 from 1° over a whole turn (its linkage leaves the preset's branch at the
+    change point) and every built-in slider-crank swept as held statics (the others are
+    driven pose by pose), each from its own pose."""
+    cases = builtin_cases()
+    e1 = cases["seed-E1-as-stated"]
+    grid = np.radians(np.arange(1.0, 360.0))
+    out = [(dataclasses.replace(e1, theta12=float(grid[0])), grid)]
+    out += [(c, c.theta12 + np.radians(np.arange(0.0, 360.0, 3.0)))
+            for c in cases.values() if c.mechanism == "slider_crank" and not through_drive(c)]
+    return out
+
+
+@pytest.mark.parametrize("index", range(len(preset_stretches())))
+def test_the_branch_ends_where_either_continuation_leaves_it(index: int) -> None:
+    """follows_branch on the sweep's own analysis (the closed-form dyads of the Assur
+    path, or its Newton continuation) finds the branch's end where the generic engine's
+    Newton continuation (:func:`mechcheck.analytic.linkage_kinematics.solve_pose`) does;
+    seed E1 leaves it at its change point, half a turn on."""
+    case, grid = preset_stretches()[index]
+    offsets = driver_offsets(case, grid)
+    linkage = as_linkage(case)
+    end = follows_branch(case, grid, analytic_results(linkage, offsets).pose)
+    assert end == follows_branch(case, grid, solve_pose(linkage.linkage, offsets[:, None]))
+    if index == 0:
+        assert 0 < end < grid.size
+
+
+@pytest.mark.parametrize("index", range(len(preset_stretches())))
+def test_a_renamed_sweep_is_each_solution_renamed(index: int) -> None:
+    """Renaming.solutions (columns, one batch) equals Renaming.solution of each, exactly."""
+    case, grid = preset_stretches()[index]
+    linkage = as_linkage(case)
+    offsets = driver_offsets(case, grid)
+    n = max(1, follows_branch(case, grid, analytic_results(linkage, offsets).pose))
+    solutions = sweep_linkage(linkage, offsets[:n], "mujoco_solve")
+    renaming = Renaming.of(case)
+    assert renaming.solutions(solutions, case.name) == [renaming.solution(s, case.name)
+                                                        for s in solutions]
