@@ -139,7 +139,8 @@ class BatchSettler:
         self.rig = rig
         self.qpos = qpos
         m, d = rig.model, rig.data
-        self.pool = [copy.copy(m) for _ in range(POOL)]
+        # No more copies than poses: a short stretch of a sweep needs fewer.
+        self.pool = [copy.copy(m) for _ in range(min(POOL, len(qpos)))]
         self.datas = [mujoco.MjData(m) for _ in range(THREADS)]
         self.runner: rollout.Rollout | None = None  # during :meth:`settle`
         # Sensor columns: (fx, fy, fz, tx, ty, tz) per tree joint; the stop rule reads the
