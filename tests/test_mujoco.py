@@ -358,6 +358,22 @@ def test_settled_statics_reach_condition_number_ten_thousand() -> None:
         assert_solution_close(case, sim, complete=True)
 
 
+def test_sweep_next_to_the_change_point_settles_as_its_poses_alone() -> None:
+    """A batched sweep of seed E1 towards its change point, δ from 0.2° to 0.0164°
+    (condition numbers 590–7200, all within the static target's range): every pose settles
+    within the static target, as each does alone. The poses between every 8th start from
+    their settled neighbours' forces, and from condition number ~4200 on such a start ran
+    its first pass out of steps (``not_settled``); such a pose is now settled again from
+    nothing carried."""
+    case = fourbar_e1()
+    theta = math.pi - np.radians(np.geomspace(0.2, 0.0164, 15))
+    for t, sim in zip(theta, sweep(case, theta), strict=True):
+        at = case.with_(theta12=float(t))
+        assert mechcheck.solve(at, "analytic").diagnostics["condition_number"] < 1e4
+        assert sim.status == "ok", f"θ12 = {np.degrees(t):.4f}°: {sim.message}"
+        assert_solution_close(at, sim, complete=True)
+
+
 #: Seed E1 at θ12 = 180° − δ, δ from the near-toggle study (condition numbers 59, 145, 357, 880).
 NEAR_TOGGLE_DELTAS = np.geomspace(30.0, 1e-4, 15)[3:7]
 

@@ -34,7 +34,7 @@ import copy
 import os
 from collections import deque
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
@@ -247,7 +247,27 @@ class BatchSettler:
             starts = {i: start for i in fine
                       if (start := interpolated(i, coarse, forces, first)) is not None}
             rest, _ = self.settle_poses(targets, fine, starts)
+            rest = self.again_from_nothing(targets, rest, starts)
         return complete([o if o is not None else r for o, r in zip(out, rest, strict=True)])
+
+    def again_from_nothing(self, targets: Array, results: list[Settled | None],
+                           starts: dict[int, Array]) -> list[Settled | None]:
+        """``results`` with every pose that started from its neighbours' forces and did not
+        settle settled again from nothing carried, as alone, its steps counting both runs.
+
+        Next to a change point the forces change too fast from pose to pose for a linear
+        interpolation: measured on seed E1 between condition numbers 4 200 and 8 600, such
+        a start held its first pass past the 3000 steps a pass from nothing needs."""
+        again = [i for i in starts if (r := results[i]) is not None and not r.settled]
+        if not again:
+            return results
+        retried, _ = self.settle_poses(targets, again, {})
+        out = list(results)
+        for i in again:
+            first, second = results[i], retried[i]
+            assert first is not None and second is not None
+            out[i] = replace(second, steps=first.steps + second.steps)
+        return out
 
     def settle_poses(self, targets: Array, which: Iterable[int], starts: dict[int, Array]
                      ) -> tuple[list[Settled | None], dict[int, Array]]:
