@@ -50,6 +50,14 @@ PIVOT_FIELDS = {"anchorA": 104, "anchorB": 120, "jAcc": 200}
 GROOVE_FIELDS = {"grv_a": 120, "grv_b": 136, "anchorB": 152, "jAcc": 256}
 GEAR_FIELDS = {"phase": 104, "ratio": 112, "jAcc": 144}
 MOTOR_FIELDS = {"rate": 104, "jAcc": 120}
+#: Springs: anchors (or rest angle), rest length, stiffness, damping, the force function,
+#: then working fields; jAcc is what ``Constraint.impulse`` returns, signed.
+DAMPED_SPRING_FIELDS = {"restLength": 136, "stiffness": 144, "damping": 152, "jAcc": 240}
+ROTARY_SPRING_FIELDS = {"restAngle": 104, "stiffness": 112, "damping": 120, "jAcc": 160}
+#: ``cpBody``: two function pointers, then mass, 1/mass, moment, 1/moment, centre of
+#: gravity, position, velocity, force, angle, angular velocity, torque (doubles), read and
+#: written by the compiled settling loop (:mod:`.compiled`).
+BODY_FIELDS = {"m": 16, "i": 32, "cog": 48, "v": 80, "f": 96, "a": 112, "w": 120, "t": 128}
 
 #: Relative agreement demanded of the layout check: the fields are copied
 #: doubles, so a right offset matches exactly; a wrong one reads an unrelated
@@ -84,7 +92,8 @@ Cell = tuple[object, int]
 
 
 def impulse_cells(constraint: pymunk.Constraint) -> list[Cell]:
-    """Where the constraint's jAcc lives: two cells (pivot, groove) or one (gear, motor).
+    """Where the constraint's jAcc lives: two cells (pivot, groove) or one (gear, motor,
+    spring).
 
     A cell points into the constraint's C struct and stays valid while the constraint
     exists; reading it costs one cffi index, which is what a loop reading every step needs.
@@ -94,7 +103,9 @@ def impulse_cells(constraint: pymunk.Constraint) -> list[Cell]:
     for kind, fields, size in ((pymunk.PivotJoint, PIVOT_FIELDS, 2),
                                (pymunk.GrooveJoint, GROOVE_FIELDS, 2),
                                (pymunk.GearJoint, GEAR_FIELDS, 1),
-                               (pymunk.SimpleMotor, MOTOR_FIELDS, 1)):
+                               (pymunk.SimpleMotor, MOTOR_FIELDS, 1),
+                               (pymunk.DampedSpring, DAMPED_SPRING_FIELDS, 1),
+                               (pymunk.DampedRotarySpring, ROTARY_SPRING_FIELDS, 1)):
         if isinstance(constraint, kind):
             d, k = _doubles(constraint), fields["jAcc"] // _DOUBLE
             return [(d, k + i) for i in range(size)]
@@ -159,8 +170,35 @@ def _check_fields(c: pymunk.Constraint, fields: dict[str, int],
             _expect(f"{type(c).__name__}.{name}.y", got[1], float(value[1]))
 
 
+def address(cell: Cell) -> int:
+    """The memory address of a cell's double, for compiled code (:mod:`.compiled`)."""
+    d, k = cell
+    return int(ffi.cast("uintptr_t", d)) + _DOUBLE * k
+
+
+def body_address(body: pymunk.Body) -> int:
+    """The address of a body's C struct (its fields at :data:`BODY_FIELDS`); checked by
+    :func:`check_layout`."""
+    if not _checked:
+        check_layout()
+    return int(ffi.cast("uintptr_t", body._body))
+
+
+def _check_body(body: pymunk.Body) -> None:
+    d = ffi.cast("double *", body._body)
+    public = {"m": body.mass, "i": body.moment, "cog": body.center_of_gravity.x,
+              "v": body.velocity.x, "f": body.force.x, "a": body.angle,
+              "w": body.angular_velocity, "t": body.torque}
+    for name, value in public.items():
+        _expect(f"cpBody.{name}", float(d[BODY_FIELDS[name] // _DOUBLE]), float(value))
+    for name, value in (("cog", body.center_of_gravity.y), ("v", body.velocity.y),
+                        ("f", body.force.y)):
+        _expect(f"cpBody.{name}.y", float(d[BODY_FIELDS[name] // _DOUBLE + 1]), float(value))
+
+
 def _probe_space() -> tuple[pymunk.Space, list[pymunk.Constraint]]:
-    """A loaded pendulum-on-a-slide with one joint of every kind we read."""
+    """A loaded pendulum-on-a-slide with one joint of every kind we read, and a linear and
+    a torsional spring between its bodies."""
     space = pymunk.Space()
     space.gravity = (0.3, -9.0)
     s = space.static_body
@@ -174,8 +212,10 @@ def _probe_space() -> tuple[pymunk.Space, list[pymunk.Constraint]]:
     groove = pymunk.GrooveJoint(s, slider, (-1.1, -0.05), (2.3, -0.05), (0.0, 0.0))
     motor = pymunk.SimpleMotor(s, slider, 0.0)
     link = pymunk.PivotJoint(crank, slider, (0.6, -0.25), (0.0, 0.0))
-    space.add(crank, slider, pivot, gear, groove, motor, link)
-    return space, [pivot, gear, groove, motor, link]
+    spring = pymunk.DampedSpring(crank, slider, (0.0, 0.0), (0.1, 0.0), 0.45, 35.0, 0.5)
+    rotary = pymunk.DampedRotarySpring(crank, slider, 0.2, 4.5, 0.25)
+    space.add(crank, slider, pivot, gear, groove, motor, link, spring, rotary)
+    return space, [pivot, gear, groove, motor, link, spring, rotary]
 
 
 def check_layout() -> None:
@@ -184,8 +224,8 @@ def check_layout() -> None:
     Runs once per process (the first force read calls it).
     """
     global _checked
-    space, (pivot, gear, groove, motor, link) = _probe_space()
-    for c in (pivot, gear, groove, motor, link):
+    space, (pivot, gear, groove, motor, link, spring, rotary) = _probe_space()
+    for c in (pivot, gear, groove, motor, link, spring, rotary):
         _check_base(c)
     _check_fields(pivot, PIVOT_FIELDS, {"anchorA": lambda: pivot.anchor_a,
                                         "anchorB": lambda: pivot.anchor_b})
@@ -194,8 +234,20 @@ def check_layout() -> None:
                                           "anchorB": lambda: groove.anchor_b})
     _check_fields(gear, GEAR_FIELDS, {"phase": lambda: gear.phase, "ratio": lambda: gear.ratio})
     _check_fields(motor, MOTOR_FIELDS, {"rate": lambda: motor.rate})
+    _check_fields(spring, DAMPED_SPRING_FIELDS, {"restLength": lambda: spring.rest_length,
+                                                 "stiffness": lambda: spring.stiffness,
+                                                 "damping": lambda: spring.damping})
+    _check_fields(rotary, ROTARY_SPRING_FIELDS, {"restAngle": lambda: rotary.rest_angle,
+                                                 "stiffness": lambda: rotary.stiffness,
+                                                 "damping": lambda: rotary.damping})
     motor.max_force = 0.7  # a saturated motor: nonzero, known-magnitude jAcc
+    # Every body field distinct and nonzero, so a wrong offset cannot read an equal value.
+    crank = pivot.b
+    crank.velocity, crank.angular_velocity, crank.angle = (0.3, -0.2), 0.7, 0.05
+    crank.force, crank.torque = (0.25, -0.5), 0.125
+    _check_body(crank)
     space.step(1e-3)
+    _check_body(crank)
     for c, offset in ((pivot, PIVOT_FIELDS["jAcc"]), (link, PIVOT_FIELDS["jAcc"]),
                       (groove, GROOVE_FIELDS["jAcc"])):
         jx, jy = read_vect(c, offset)
@@ -206,4 +258,8 @@ def check_layout() -> None:
         if c.impulse <= 0.0:
             raise LayoutError(f"layout probe: {type(c).__name__} carried no impulse")
         _expect(f"{type(c).__name__}.|jAcc|", abs(read_double(c, offset)), c.impulse)
+    for c, offset in ((spring, DAMPED_SPRING_FIELDS["jAcc"]), (rotary, ROTARY_SPRING_FIELDS["jAcc"])):
+        if c.impulse == 0.0:
+            raise LayoutError(f"layout probe: {type(c).__name__} carried no impulse")
+        _expect(f"{type(c).__name__}.jAcc", read_double(c, offset), c.impulse)
     _checked = True

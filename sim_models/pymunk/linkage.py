@@ -44,6 +44,7 @@ from mechcheck.analytic.linkage_kinematics import (
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.linkage_motion import is_driven
+from mechcheck.sim_models.pymunk import compiled
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
     build_linkage_model,
@@ -60,7 +61,7 @@ from mechcheck.sim_models.pymunk.settings import (
     SolverSettings,
     near_change_point,
 )
-from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled
+from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled, slow_window
 from mechcheck.sim_models.pymunk.slow_mode import SlowMode
 
 #: A held linkage that comes to rest farther than this × its size from the pose it was
@@ -172,8 +173,16 @@ def settle_run(model: LinkageModel, contraction: float = 0.0) -> Run:
     the stop rule needs: the impulses, and the residual velocity when the rule asks.
     ``contraction``: the slowest mode's shrinking per step, measured by the constraint
     solve that primed the run (:class:`~.slow_mode.SlowMode`), which adds a window to the
-    stop rule (:func:`~.settle.slow_window`).
+    stop rule (:func:`~.settle.slow_window`). Without a window the run is compiled where
+    numba is installed (:mod:`.compiled`: the same steps and readings).
     """
+    if slow_window(contraction) == 0 and compiled.available():
+        return compiled.settle_run(model, rounding_floor(model) * model.settings.dt)
+    return python_settle_run(model, contraction)
+
+
+def python_settle_run(model: LinkageModel, contraction: float = 0.0) -> Run:
+    """:func:`settle_run` stepped from Python (with or without a slow window)."""
     s, bodies, impulses = model.settings, model.bulk, model.readout.impulses
     prepare, radii, dt = damped_and_loaded(model), model.radii.tolist(), s.dt
     state = bodies.read_flat()

@@ -39,6 +39,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pymunk
@@ -54,6 +56,9 @@ from mechcheck.sim_models.pymunk.forces import Cell, impulse_cells
 from mechcheck.sim_models.pymunk.loads import LoadTerms, apply_forces
 from mechcheck.sim_models.pymunk.readout import HeldSlide, Readout
 from mechcheck.sim_models.pymunk.settings import SolverSettings
+
+if TYPE_CHECKING:
+    from mechcheck.sim_models.pymunk.compiled import Plan
 
 Vec = tuple[float, float]
 Spring = pymunk.DampedSpring | pymunk.DampedRotarySpring
@@ -119,6 +124,13 @@ class LinkageModel:
     def constraints(self) -> list[pymunk.Constraint]:
         return [*self.pins.values(), *self.grooves.values(), *self.held.values(),
                 *self.locks.values(), *self.drives.values(), *self.springs.values()]
+
+    @cached_property
+    def plan(self) -> Plan:
+        """Where the compiled settling loop reads and writes (:mod:`.compiled`)."""
+        from mechcheck.sim_models.pymunk.compiled import plan
+
+        return plan(self)
 
 
 def centroid(linkage: Linkage, link: str) -> Vec:

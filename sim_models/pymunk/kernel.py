@@ -1,0 +1,144 @@
+"""The settling loop of :func:`.linkage.settle_run` in numba (imported by :mod:`.compiled`
+only when numba is installed: the ``fast`` extra).
+
+Step for step it does what the Python loop does, in the same floating-point operations
+(:func:`.linkage.damped_and_loaded`, :meth:`~.readout.Readout.impulses`,
+:func:`~.settle.run_until_settled` without a slow window), on the bodies' and
+constraints' C structs themselves: their fields are read and written at addresses whose
+offsets :func:`~.forces.check_layout` verified against pymunk's public API, and
+Chipmunk's own ``cpSpaceStep`` is called through its function pointer.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, cast
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
+
+from mechcheck.sim_models.pymunk.forces import BODY_FIELDS
+
+Array = np.ndarray
+#: Byte offsets of a body's velocity, force, angle, angular velocity and torque.
+V, F, A, W, T = (BODY_FIELDS[name] for name in ("v", "f", "a", "w", "t"))
+
+
+@intrinsic
+def _load(typingctx: Any, address: Any) -> tuple[Any, Callable[..., Any]]:
+    """The double at ``address``."""
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        return builder.load(builder.inttoptr(args[0], ir.DoubleType().as_pointer()))
+    return types.float64(types.int64), codegen
+
+
+@intrinsic
+def _store(typingctx: Any, address: Any, value: Any) -> tuple[Any, Callable[..., Any]]:
+    """Write the double ``value`` at ``address``."""
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        builder.store(args[1], builder.inttoptr(args[0], ir.DoubleType().as_pointer()))
+        return context.get_dummy_value()
+    return types.void(types.int64, types.float64), codegen
+
+
+# The intrinsics as what they do, for the type checker (numba calls the same objects).
+load = cast(Callable[[int], float], _load)
+store = cast(Callable[[int, float], None], _store)
+
+
+@njit(cache=True)
+def push(bodies: Array, keep: float, forces: Array, turning: Array) -> None:
+    """Velocities × ``keep`` (damping^dt), the loads' force and their torque at the body's
+    angle (:class:`~.loads.LoadTerms`: columns has-torque, R, δ, T), body after body."""
+    for b in range(bodies.size):
+        base = bodies[b]
+        store(base + V, load(base + V) * keep)
+        store(base + V + 8, load(base + V + 8) * keep)
+        store(base + W, load(base + W) * keep)
+        store(base + F, forces[b, 0])
+        store(base + F + 8, forces[b, 1])
+        torque = 0.0
+        if turning[b, 0] != 0.0:
+            torque = turning[b, 1] * math.cos(load(base + A) + turning[b, 2]) + turning[b, 3]
+        store(base + T, torque)
+
+
+@njit(cache=True)
+def read(plain: Array, divisors: Array, held: Array, axes: Array, out: Array) -> None:
+    """The stop rule's reading into ``out``: each plain cell ÷ its divisor, then each held
+    slide's impulse split along and across its axis turned with its body."""
+    m = plain.size
+    for i in range(m):
+        out[i] = load(plain[i]) / divisors[i]
+    for j in range(held.shape[0]):
+        x, y, phi = load(held[j, 0]), load(held[j, 1]), load(held[j, 2] + A)
+        c, s = math.cos(phi), math.sin(phi)
+        ux, uy = c * axes[j, 0] - s * axes[j, 1], s * axes[j, 0] + c * axes[j, 1]
+        along = x * ux + y * uy
+        out[m + 3 * j] = along
+        out[m + 3 * j + 1] = x - along * ux
+        out[m + 3 * j + 2] = y - along * uy
+
+
+@njit(cache=True)
+def speed(bodies: Array, radii: Array) -> float:
+    """The largest point speed |v| + |ω|·radius of any body, m/s; NaN if any is."""
+    fastest = -math.inf
+    for b in range(bodies.size):
+        base = bodies[b]
+        point = math.hypot(load(base + V), load(base + V + 8)) + abs(load(base + W)) * radii[b]
+        if point > fastest or point != point:
+            fastest = point
+    return fastest
+
+
+@njit(cache=True)
+def size(reading: Array, floor: float) -> float:
+    """The reading's largest entry in size, at least ``floor``; NaN if any entry is."""
+    largest = floor
+    for x in reading:
+        if abs(x) > largest or x != x:
+            largest = abs(x)
+    return largest
+
+
+@njit(cache=True)
+def largest_change(new: Array, old: Array) -> float:
+    """The largest change of any entry; NaN if any entry is (a NaN never settles)."""
+    largest = 0.0
+    for k in range(new.size):
+        change = abs(new[k] - old[k])
+        if change > largest or change != change:
+            largest = change
+    return largest
+
+
+@njit(cache=True)
+def settle(step: Callable[[int, float], None], space: int, dt: float, bodies: Array, keep: float,
+           forces: Array, turning: Array, radii: Array, plain: Array, divisors: Array,
+           held: Array, axes: Array, still: float, calm_change: float, floor: float,
+           patience: int, max_steps: int) -> tuple[int, bool, float, float]:
+    """Step until settled or ``max_steps``: (steps, settled, residual velocity, relative
+    force change), as :func:`~.settle.run_until_settled` decides them."""
+    new = np.empty(plain.size + 3 * held.shape[0])
+    old = np.empty_like(new)
+    calm = 0
+    for n in range(1, max_steps + 1):
+        push(bodies, keep, forces, turning)
+        step(space, dt)
+        read(plain, divisors, held, axes, new)
+        if n > 1:
+            scale = size(new, floor)
+            change = largest_change(new, old)
+            if change <= calm_change * scale and speed(bodies, radii) <= still:
+                calm += 1
+                if calm >= patience:
+                    return n, True, speed(bodies, radii), change / scale
+            else:
+                calm = 0
+        old, new = new, old
+    change = largest_change(old, new) / size(old, floor) if max_steps > 1 else math.inf
+    return max_steps, False, speed(bodies, radii), change
