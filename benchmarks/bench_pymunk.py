@@ -15,7 +15,9 @@ pose and the worst relative force error against the analytic backend, for ``pymu
 its **C floor**: the same pymunk Space, loaded, stepped pose after pose as many steps as
 the sweep's run at that pose took, with nothing but Chipmunk's ``cpSpaceStep`` in the loop
 (:func:`c_floor`), and the ratio sweep / floor (median, min, max over the repeats).
-Target (issue 13): ratio ≤ 2 for the settled sweeps.
+Target (issue 13): ratio ≤ 2 for the settled sweeps. With numba installed (the ``fast``
+extra) the settled runs are compiled (:mod:`mechcheck.sim_models.pymunk.compiled`); the
+row "pymunk, Python loop" is the same sweep with the loop stepped from Python.
 
 Run: /work/venv/bin/python benchmarks/bench_pymunk.py [--repeats 3] [--stride 10]
 """
@@ -27,7 +29,8 @@ import math
 import platform
 import statistics
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
@@ -40,7 +43,7 @@ from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
 from mechcheck.sim_models.presets import as_linkage
-from mechcheck.sim_models.pymunk import backend as backends
+from mechcheck.sim_models.pymunk import backend as backends, compiled
 from mechcheck.sim_models.pymunk.backend import sweep
 from mechcheck.sim_models.pymunk.linkage import hold_without_correction
 from mechcheck.sim_models.pymunk.linkage_model import build_linkage_model
@@ -49,6 +52,28 @@ from mechcheck.sweep import gated_poses
 
 #: (median, min, max) of a measurement over the repeats.
 Stats = tuple[float, float, float]
+
+
+#: The rows of each table: (label, backend, the settling loop stepped from Python).
+ROWS = [("pymunk", "pymunk", False), ("pymunk, Python loop", "pymunk", True),
+        ("pymunk_solve", "pymunk_solve", False)]
+
+
+def rows() -> list[tuple[str, str, bool]]:
+    """:data:`ROWS`; without numba the plain row is the Python loop already."""
+    return ROWS if compiled.available() else [r for r in ROWS if not r[2]]
+
+
+@contextmanager
+def loop(python: bool) -> Iterator[None]:
+    """Settle with the Python loop (``python``) or whichever is available."""
+    available = compiled.available
+    if python:
+        compiled.available = lambda: False  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        compiled.available = available
 
 
 def worst_error(solutions: list[Solution], reference: dict[str, np.ndarray]) -> float:
@@ -86,15 +111,16 @@ def four_bar_sweep(repeats: int) -> None:
     print("| backend | poses | ok | gated (singular) | ms/pose (min, max) | C floor ms/pose "
           "(min, max) | ratio to floor (min, max) | steps/pose | worst rel. error |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
-    for backend in ("pymunk", "pymunk_solve"):
-        sweep(case, theta[:10], backend)  # warm-up (imports, layout check)
-        sols, gated = harness_sweep(case, theta, backend)
-        time_ms, floor_ms, ratio = against_floor(
-            lambda b=backend: harness_sweep(case, theta, b)[0],  # type: ignore[misc]
-            linkage, backend, len(theta), repeats)
+    for label, backend, python in rows():
+        with loop(python):
+            sweep(case, theta[:10], backend)  # warm-up (imports, layout check, compiling)
+            sols, gated = harness_sweep(case, theta, backend)
+            time_ms, floor_ms, ratio = against_floor(
+                lambda b=backend: harness_sweep(case, theta, b)[0],  # type: ignore[misc]
+                linkage, backend, len(theta), repeats)
         ok = sum(s.status == "ok" for s in sols)
         steps = np.mean([s.diagnostics.get("steps", 0) for s in sols if s.status == "ok"])
-        print(f"| {backend} | {len(theta)} | {ok} | {gated} | {cell(time_ms)} | {cell(floor_ms)} | "
+        print(f"| {label} | {len(theta)} | {ok} | {gated} | {cell(time_ms)} | {cell(floor_ms)} | "
               f"{cell(ratio, '×')} | {steps:.1f} | {worst_error(sols, kept):.1e} |")
 
 
@@ -210,17 +236,18 @@ def watt_sweep(repeats: int, stride: int) -> None:
           "| ratio to floor (min, max) | one by one ms/pose (min, max) | sweep speed-up | "
           "steps/pose | worst rel. error |")
     print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")
-    for backend in ("pymunk", "pymunk_solve"):
-        sweep(case, values[:5], backend)  # warm-up
-        sols = sweep(case, values, backend)
-        fast, floor_ms, ratio = against_floor(
-            lambda b=backend: sweep(case, values, b), case, backend, len(values), repeats)  # type: ignore[misc]
-        slow = per_pose(lambda b=backend: one_by_one(case, sparse, b), len(sparse), repeats)  # type: ignore[misc]
+    for label, backend, python in rows():
+        with loop(python):
+            sweep(case, values[:5], backend)  # warm-up
+            sols = sweep(case, values, backend)
+            fast, floor_ms, ratio = against_floor(
+                lambda b=backend: sweep(case, values, b), case, backend, len(values), repeats)  # type: ignore[misc]
+            slow = per_pose(lambda b=backend: one_by_one(case, sparse, b), len(sparse), repeats)  # type: ignore[misc]
         ok = [s for s in sols if s.status == "ok"]
         others = {s.status for s in sols} - {"ok"}
         other = ", ".join(f"{sum(s.status == v for s in sols)} {v}" for v in sorted(others)) or "-"
         steps = np.mean([s.diagnostics["steps"] for s in ok])
-        print(f"| {backend} | {len(ok)} | {other} | {cell(fast)} | {cell(floor_ms)} | "
+        print(f"| {label} | {len(ok)} | {other} | {cell(fast)} | {cell(floor_ms)} | "
               f"{cell(ratio, '×')} | {cell(slow)} | {slow[0] / fast[0]:.1f}× | {steps:.1f} | "
               f"{linkage_error(case, sols, values):.1e} |")
 
@@ -230,7 +257,8 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--stride", type=int, default=10)
     args = parser.parse_args()
-    print(f"pymunk {pymunk.version}, Python {platform.python_version()}, {platform.machine()}\n")
+    print(f"pymunk {pymunk.version}, Python {platform.python_version()}, {platform.machine()}; "
+          f"settling loop {'compiled (numba)' if compiled.available() else 'Python (numba not installed)'}\n")
     four_bar_sweep(args.repeats)
     watt_sweep(args.repeats, args.stride)
 
