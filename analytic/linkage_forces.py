@@ -242,6 +242,14 @@ class LinkageResults:
         """The condition number of the scaled equilibrium matrix per pose (:func:`condition`)."""
         return self.condition_of()
 
+    def head(self, n: int) -> LinkageResults:
+        """The first ``n`` poses' results (each pose's condition number is its own: computed
+        for all, if asked for, and cut)."""
+        return LinkageResults(self.pose.head(n), {k: v[:n] for k, v in self.values.items()},
+                              lambda: self.condition[:n], self.ill_conditioned[:n],
+                              self.converged[:n], self.reversing[:n],
+                              None if self.stable is None else self.stable[:n])
+
     @property
     def singular(self) -> NDArray[np.bool_]:
         return self.ill_conditioned & self.pose.assembled

@@ -88,6 +88,11 @@ class LinkagePose:
     qddot: Array
     locked_at: Array
 
+    def head(self, n: int) -> LinkagePose:
+        """The first ``n`` poses."""
+        return LinkagePose(self.linkage, self.drivers[:n], self.q[:n], self.qdot[:n],
+                           self.qddot[:n], self.locked_at[:n])
+
     def link_state(self, link: str, which: Array) -> tuple[Array, Array]:
         """(t (N, 2), φ (N,)) of ``link`` from one of q, q̇, q̈."""
         k = Layout(self.linkage).index(link)

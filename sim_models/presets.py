@@ -22,7 +22,7 @@ from mechcheck.analytic.case import Case, Load
 from mechcheck.analytic.forces import solve_poses, verdict_at
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_backends import analytic_results
-from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
+from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.presets import link_name, linkage_of, names_of
 from mechcheck.analytic.solution import Solution
@@ -130,17 +130,17 @@ def follows_branch(case: Case, theta12: np.ndarray, pose: LinkagePose) -> int:
     The closed form keeps its branch by definition (``open``/``crossed``, ``right``/``left``),
     also through a change point, where the two branches meet; continuation goes straight on
     and ends on the other one, as it does after poses that do not assemble."""
-    values = pose_quantities(pose)
     closed = pose_of(case, theta12)
     phi = {3: link_name(case, 3), 4: link_name(case, 4)}
     gap = np.zeros(theta12.size)
     for link in (3, 4) if case.mechanism == "four_bar" else (3,):
         turned = closed.links[link].angle - closed.links[link].angle[0]
-        gap = np.maximum(gap, np.abs(np.sin(0.5 * (turned - values[f"phi_{phi[link]}"]))))
+        gap = np.maximum(gap, np.abs(np.sin(0.5 * (turned - pose.angle(phi[link])[0]))))
     if case.mechanism == "slider_crank":
         u = np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
         s14 = closed.joints["B"] @ u
-        gap = np.maximum(gap, np.abs(s14 - s14[0] - values["q_slide"]) / pose.linkage.scale)
+        slide = pose.joint_coordinate(pose.linkage.joint("slide"))[0]
+        gap = np.maximum(gap, np.abs(s14 - s14[0] - slide) / pose.linkage.scale)
     off = np.flatnonzero(~(gap <= SAME_BRANCH))
     return int(off[0]) if off.size else theta12.size
 
@@ -162,18 +162,35 @@ def verdicts(case: Case, theta12: np.ndarray, backend: str) -> list[Solution | N
     return out
 
 
+@dataclass(frozen=True)
+class Stretch:
+    """A stretch of a preset sweep, for a linkage backend's sweep: the ``linkage`` drawn at
+    its first pose, the driver's values (``offsets``) and their analytic pose analysis
+    (``results``), and how its Solutions read under the preset's names, as case ``name``."""
+
+    linkage: Case
+    offsets: np.ndarray
+    results: LinkageResults
+    renaming: Renaming
+    name: str
+
+    def rename(self, solutions: list[Solution]) -> list[Solution]:
+        """The linkage's Solutions under the preset's names (:meth:`Renaming.solutions`)."""
+        return self.renaming.solutions(solutions, self.name)
+
+
 def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, backend: str,
-                          sweep: Callable[[Case, np.ndarray, LinkageResults], list[Solution]],
+                          sweep: Callable[[Stretch], list[Solution]],
                           solve: Callable[[Case], Solution]) -> list[Solution]:
     """A preset θ12 sweep through a linkage backend, each pose read under the preset's
     names.
 
     Poses with a verdict of their own get it (:func:`verdicts`). Held statics run as the
-    linkage's driver sweep (``sweep``: the linkage, its driver's values and their analytic
-    pose analysis, done once here; continuation from pose to pose), in stretches on the
-    preset's branch (:func:`follows_branch`) between verdicts, each drawn at its first pose.
-    A moving or friction case is driven pose by pose (``solve``): with a drive on the
-    rocker, each pose has its own rocker rates."""
+    linkage's driver sweep (``sweep``: a :class:`Stretch`, its analytic pose analysis done
+    once here, to its Solutions under the preset's names; continuation from pose to pose),
+    in stretches on the preset's branch (:func:`follows_branch`) between verdicts, each
+    drawn at its first pose. A moving or friction case is driven pose by pose (``solve``):
+    with a drive on the rocker, each pose has its own rocker rates."""
     grid = np.asarray(theta12, dtype=float)
 
     def pose(i: int) -> Case:
@@ -197,13 +214,23 @@ def sweep_through_linkage(case: Case, theta12: Sequence[float] | np.ndarray, bac
         results = analytic_results(linkage, offsets)
         n = max(1, follows_branch(first, grid[i:stop], results.pose))
         if n < offsets.size:
-            # The stretch's own analysis, as its sweep would make it: a pose's rounding in a
-            # vectorised Newton iteration depends on the poses iterated with it.
-            results = analytic_results(linkage, offsets[:n])
-        solved = sweep(linkage, offsets[:n], results)
-        out += Renaming.of(first).solutions(solved, case.name)
+            results = stretch_results(linkage, offsets[:n], results)
+        out += sweep(Stretch(linkage, offsets[:n], results, Renaming.of(first), case.name))
         i += n
     return out
+
+
+def stretch_results(linkage: Case, offsets: np.ndarray, longer: LinkageResults) -> LinkageResults:
+    """The analysis of a stretch's ``offsets``, as its own sweep would make it, given that of
+    a longer sweep starting with them (``longer``).
+
+    With an Assur plan each pose is placed in closed form and its branch carried from the
+    poses before it, so the first poses' results are the same, bit for bit, whatever
+    follows (``tests/test_solve_sweep.py``): they are cut from ``longer``. The Newton path's
+    rounding at a pose depends on the poses iterated with it: analysed anew."""
+    if linkage.linkage.assur_plan is not None:
+        return longer.head(offsets.size)
+    return analytic_results(linkage, offsets)
 
 
 def through_drive(case: Case) -> bool:

@@ -1,7 +1,7 @@
 """``mujoco_solve`` over a sweep (issue 13): the batch is the pose-by-pose solve, the model
 kept for the next sweep carries nothing over, and the preset path's shortcuts (the branch
 check on the sweep's own analysis, renaming as columns, Solutions made as a batch) give what
-the one-by-one path gives.
+the one-by-one path gives; a stretch's analysis cut from a longer one is its own.
 
 Expected values come from another path doing the same work (the pose-by-pose solve, the
 generic engine's continuation, one Solution at a time): identities, judged exactly or
@@ -30,9 +30,11 @@ from mechcheck.sim_models.mujoco.linkage import (
 )
 from mechcheck.sim_models.presets import (
     Renaming,
+    Stretch,
     as_linkage,
     driver_offsets,
     follows_branch,
+    stretch_results,
     through_drive,
 )
 from mechcheck.testing import assert_solution_close
@@ -160,3 +162,49 @@ def test_a_renamed_sweep_is_each_solution_renamed(index: int) -> None:
     renaming = Renaming.of(case)
     assert renaming.solutions(solutions, case.name) == [renaming.solution(s, case.name)
                                                         for s in solutions]
+
+
+@pytest.mark.parametrize("index", range(len(preset_stretches())))
+def test_a_cut_stretch_is_analysed_as_its_own_sweep(index: int) -> None:
+    """stretch_results: a stretch's analysis, cut from a longer one with an Assur plan or
+    made anew without, is the stretch's own analysis, bit for bit (cut at the branch's
+    end, or halfway where the preset's branch never ends)."""
+    case, grid = preset_stretches()[index]
+    linkage = as_linkage(case)
+    offsets = driver_offsets(case, grid)
+    longer = analytic_results(linkage, offsets)
+    n = follows_branch(case, grid, longer.pose)
+    n = n if n < grid.size else grid.size // 2
+    cut, own = stretch_results(linkage, offsets[:n], longer), analytic_results(linkage, offsets[:n])
+    assert cut.values.keys() == own.values.keys()
+    for name, column in own.values.items():
+        np.testing.assert_array_equal(cut.values[name], column, err_msg=name, strict=True)
+    for field in ("drivers", "q", "qdot", "qddot", "locked_at"):
+        np.testing.assert_array_equal(getattr(cut.pose, field), getattr(own.pose, field),
+                                      err_msg=field, strict=True)
+    for field in ("condition", "ill_conditioned", "converged", "reversing"):
+        np.testing.assert_array_equal(getattr(cut, field), getattr(own, field), err_msg=field,
+                                      strict=True)
+    assert (cut.stable is None) == (own.stable is None)
+
+
+@pytest.mark.parametrize("index", range(len(preset_stretches())))
+def test_a_renamed_batch_is_the_batch_renamed(index: int) -> None:
+    """The exact solve renaming its columns before it makes Solutions (a preset's stretch)
+    gives what renaming the linkage's Solutions gives, exactly (wall time aside)."""
+    case, grid = preset_stretches()[index]
+    linkage = as_linkage(case)
+    offsets = driver_offsets(case, grid)
+    results = analytic_results(linkage, offsets)
+    n = max(1, follows_branch(case, grid, results.pose))
+    offsets, results = offsets[:n], stretch_results(linkage, offsets[:n], results)
+    stretch = Stretch(linkage, offsets, results, Renaming.of(case), case.name)
+    direct = sweep_linkage(linkage, offsets, "mujoco_solve", results, stretch=stretch)
+    renamed = stretch.rename(sweep_linkage(linkage, offsets, "mujoco_solve", results))
+
+    def timeless(solutions: list[Solution]) -> list[Solution]:
+        return [dataclasses.replace(s, diagnostics={k: v for k, v in s.diagnostics.items()
+                                                    if k != "wall_time_s"}) for s in solutions]
+
+    assert direct[0].case == case.name and "F12_x" in direct[0].values
+    assert timeless(direct) == timeless(renamed)

@@ -45,6 +45,7 @@ def sweep(case: Case, grid: ArrayLike, backend: str = "mujoco") -> list[Solution
     if case.mechanism != "linkage":
         return sweep_through_linkage(
             case, np.asarray(grid, dtype=float), backend,
-            lambda linkage, offsets, results: sweep_linkage(linkage, offsets, backend, results),
+            lambda stretch: sweep_linkage(stretch.linkage, stretch.offsets, backend, stretch.results,
+                                          stretch=stretch),
             settle if backend == "mujoco" else solve_at_pose)
     return sweep_linkage(case, np.asarray(grid, dtype=float), backend)

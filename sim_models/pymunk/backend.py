@@ -55,7 +55,8 @@ def sweep(case: Case, grid: ArrayLike, backend: str = "pymunk") -> list[Solution
     the drawn pose, :func:`mechcheck.sim_models.pymunk.linkage_sweep.sweep`), or of θ12
     (rad) of a four-bar or slider-crank."""
     if case.mechanism != "linkage":
-        return sweep_through_linkage(case, np.asarray(grid, dtype=float), backend,
-                                     lambda linkage, offsets, _: sweep(linkage, offsets, backend),
-                                     settle if backend == "pymunk" else solve_at_pose)
+        return sweep_through_linkage(
+            case, np.asarray(grid, dtype=float), backend,
+            lambda s: s.rename(linkage_sweep.sweep(s.linkage, s.offsets, backend, s.results)),
+            settle if backend == "pymunk" else solve_at_pose)
     return linkage_sweep.sweep(case, grid, backend)

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, driver_values
+from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
 from mechcheck.sim_models.pymunk.linkage import (
@@ -58,8 +59,10 @@ def hold_first_driver(model: LinkageModel, value: float) -> None:
         model.held[joint.name].anchor_a = along(joint, linkage.points[joint.at], value)
 
 
-def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solution]:
-    """One Solution per value of the first driver, in order (``pymunk`` or ``pymunk_solve``)."""
+def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
+          results: LinkageResults | None = None) -> list[Solution]:
+    """One Solution per value of the first driver, in order (``pymunk`` or ``pymunk_solve``);
+    ``results``: the analytic pose analysis of those values, if already made."""
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if not case.linkage.drivers:
@@ -73,7 +76,7 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk") -> list[Solutio
     refused = refusal(case, backend)
     if refused is not None:
         return [refused] * len(values)
-    results = analytic_results(case, values)
+    results = results if results is not None else analytic_results(case, values)
     drivers = driver_values(case, values)
     assert drivers is not None
     free = has_free_coordinates(case)
