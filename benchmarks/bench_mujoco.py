@@ -74,10 +74,10 @@ def forget_rigs(label):
 
 
 def timed(label, backend, sweep_once):
-    """ms per pose of ``sweep_once()`` (360 poses) over the repeats; ``mujoco_solve`` with
-    its models kept is warmed up first (untimed), so that every repeat finds them."""
-    if backend == "mujoco_solve" and label != COLD:
-        sweep_once()
+    """ms per pose of ``sweep_once()`` (360 poses) over the repeats, after one untimed run
+    (imports; numba's compiled stop rules, if installed, compiled or loaded); ``mujoco_solve``
+    with its models kept then finds them in every repeat."""
+    sweep_once()
     times = []
     for _ in range(LINKAGE_REPEATS):
         forget_rigs(label)

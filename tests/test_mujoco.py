@@ -29,7 +29,13 @@ from mechcheck.analytic.presets import linkage_of
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
 from mechcheck.sim_models.mujoco.backend import settle, solve_at_pose, sweep
-from mechcheck.sim_models.mujoco.batch_settle import CHUNK, REFINE_CHUNK, RULES, first_stops
+from mechcheck.sim_models.mujoco.batch_settle import (
+    CHUNK,
+    REFINE_CHUNK,
+    RULES,
+    first_stops,
+    vectorised_stops,
+)
 from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
 from mechcheck.sim_models.mujoco.linkage_model import model_xml
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
@@ -213,22 +219,61 @@ def watch_until_settled(forces: np.ndarray) -> tuple[int, str]:
     return -1, ""
 
 
-def batch_until_settled(forces: np.ndarray) -> tuple[int, str]:
-    """The same from the batch settler's vectorised rule (:func:`.batch_settle.first_stops`),
-    fed chunk by chunk with the pass's history as the settler feeds it: a refinement pass's
-    first chunk short, then whole ones."""
+def batch_until_settled(forces: np.ndarray, stops: Any = first_stops) -> tuple[int, str]:
+    """The same from the batch settler's rule (:func:`.batch_settle.first_stops`: compiled
+    where numba is installed; ``stops``: another implementation), fed chunk by chunk with
+    the pass's history as the settler feeds it: a refinement pass's first chunk short,
+    then whole ones."""
     history = np.full((1, FLOOR_WINDOW - 1, forces.shape[1]), np.nan)
     starts = [0, *range(REFINE_CHUNK, len(forces), CHUNK)]
     for start, end in zip(starts, [*starts[1:], len(forces)], strict=True):
         chunk = forces[start:end][None]
-        first, rule = first_stops(history, chunk, np.zeros(chunk.shape[:2]))
+        first, rule = stops(history, chunk, np.zeros(chunk.shape[:2]))
         if first[0] >= 0:
             return start + int(first[0]), RULES[rule[0]]
         history = np.concatenate([history, chunk], axis=1)[:, -(FLOOR_WINDOW - 1):]
     return -1, ""
 
 
-STOP_RULES = {"per step": watch_until_settled, "batch": batch_until_settled}
+STOP_RULES = {"per step": watch_until_settled, "batch": batch_until_settled,
+              "batch, numpy": lambda forces: batch_until_settled(forces, vectorised_stops)}
+
+
+def random_passes(rng: np.random.Generator, kind: int) -> tuple[np.ndarray, ...]:
+    """A wave of up to 8 poses' pass readings (history, chunk, speed) around a random force
+    vector: decaying (kind 0), on a rounding floor (1), with NaNs (2), rounded to a few
+    digits (3); each pose's pass started somewhere in its history (NaN before)."""
+    poses, steps, m = (int(v) for v in (rng.integers(1, 9), rng.integers(1, 17), rng.integers(1, 7)))
+    base = rng.normal(size=(1, 1, m)) * 10 ** rng.uniform(-3, 3)
+    k = np.arange(FLOOR_WINDOW - 1 + steps)[None, :, None]
+    x = base + base * rng.normal(size=(poses, 1, m)) * 10.0 ** rng.uniform(-12, -4) \
+        * rng.uniform(0.1, 1.0) ** k
+    if kind == 1:
+        x = x + 10.0 ** rng.uniform(-14, -8) * rng.choice([-1, 1], size=x.shape) * np.abs(base)
+    elif kind == 2:
+        x[rng.random(x.shape) < 0.02] = np.nan
+    elif kind == 3:
+        x = np.round(x, int(rng.integers(3, 12)))
+    for p, cut in enumerate(rng.integers(0, FLOOR_WINDOW - 1, size=poses)):
+        x[p, :cut] = np.nan
+    speed = np.where(rng.random((poses, steps)) < 0.8, 0.0, 1.0)
+    return x[:, :FLOOR_WINDOW - 1], x[:, FLOOR_WINDOW - 1:], speed
+
+
+def test_the_compiled_stop_rules_are_the_vectorised_ones() -> None:
+    """:mod:`.stop_kernel` (numba) gives :func:`.batch_settle.vectorised_stops`'s first stop
+    and rule exactly, on 2 000 random waves in which every rule fires."""
+    stop_kernel = pytest.importorskip("mechcheck.sim_models.mujoco.stop_kernel")
+    rng = np.random.default_rng(13)
+    fired = np.zeros(len(RULES), dtype=int)
+    for trial in range(2000):
+        history, readings, speed = random_passes(rng, trial % 4)
+        first, rule = vectorised_stops(history, readings, speed)
+        compiled = stop_kernel.first_stops(history, readings, speed)
+        np.testing.assert_array_equal(compiled[0], first, err_msg=f"trial {trial}")
+        np.testing.assert_array_equal(compiled[1], rule, err_msg=f"trial {trial}")
+        np.add.at(fired, rule[first >= 0], 1)
+    assert fired.min() > 20, fired
 
 
 #: Forces of the size of seed E1's next to its change point, N (F34 and the drive torque / scale).

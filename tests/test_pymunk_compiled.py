@@ -16,6 +16,7 @@ from hypothesis import given
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.compiled import kernel
 from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sim_models.pymunk import backend as pm, compiled, forces, linkage as pl
 from mechcheck.sim_models.pymunk.backend import sweep as backend_sweep
@@ -142,13 +143,13 @@ def test_random_linkages_run_alike(table: dict[str, Any]) -> None:
 
 
 def test_the_environment_switches_the_compiled_loop_off(monkeypatch: pytest.MonkeyPatch) -> None:
-    compiled.available.cache_clear()
+    kernel.cache_clear()
     monkeypatch.setenv("MECHCHECK_PURE_PYTHON", "1")
     assert not compiled.available()
-    compiled.available.cache_clear()
+    kernel.cache_clear()
     monkeypatch.delenv("MECHCHECK_PURE_PYTHON")
     assert compiled.available()
-    compiled.available.cache_clear()
+    kernel.cache_clear()
 
 
 @pytest.mark.parametrize(("fields", "name"), [(forces.BODY_FIELDS, "w"), (forces.BODY_FIELDS, "f"),

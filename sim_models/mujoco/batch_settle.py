@@ -44,6 +44,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
+from mechcheck.sim_models.compiled import kernel
 from mechcheck.sim_models.mujoco.linkage_model import body_name, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.settle import (
@@ -80,6 +81,8 @@ STRIDE = 8
 THREADS = os.cpu_count() or 1
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 CONTROLS = mujoco.mjtState.mjSTATE_XFRC_APPLIED | mujoco.mjtState.mjSTATE_QFRC_APPLIED
+#: The compiled stop rules (:func:`first_stops`).
+STOP_KERNEL = "mechcheck.sim_models.mujoco.stop_kernel"
 
 
 def add_reaction_sensors(spec: mujoco.MjSpec, linkage: Linkage) -> None:
@@ -398,6 +401,15 @@ def interpolated(i: int, coarse: list[int], forces: dict[int, Array],
 
 
 def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, Array]:
+    """:func:`vectorised_stops`, compiled where numba is installed (:mod:`.stop_kernel`: the
+    same answers, without numpy's overhead on arrays this small)."""
+    compiled = kernel(STOP_KERNEL)
+    if compiled is not None:
+        return compiled.first_stops(history, readings, speed)
+    return vectorised_stops(history, readings, speed)
+
+
+def vectorised_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, Array]:
     """For each pose of a wave, the first of its ``readings`` (P, T, m) at which
     :class:`.settle.DecayWatch` would say settled with the joints slower than
     :data:`.settle.VELOCITY_TOL` (``speed`` (P, T) at each reading): its index (−1 if

@@ -11,13 +11,13 @@ whole sweeps.
 
 It runs where the stop rule has no slow window (:func:`~.settle.slow_window`: next to a
 change point the Python loop keeps the window's readings). Without numba, or with
-``MECHCHECK_PURE_PYTHON=1`` in the environment, every run is the Python loop's.
+``MECHCHECK_PURE_PYTHON=1`` in the environment (:mod:`mechcheck.sim_models.compiled`),
+every run is the Python loop's.
 """
 
 from __future__ import annotations
 
 import ctypes
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
@@ -26,25 +26,20 @@ from typing import cast
 import numpy as np
 from pymunk._chipmunk_cffi import ffi, lib
 
+from mechcheck.sim_models.compiled import kernel
 from mechcheck.sim_models.pymunk.forces import address, body_address, impulse_cells
 from mechcheck.sim_models.pymunk.linkage_model import LinkageModel
 from mechcheck.sim_models.pymunk.settle import Run
 
+KERNEL = "mechcheck.sim_models.pymunk.kernel"
 #: ``cpSpaceStep(cpSpace *, cpFloat)``; the pointer passed as an integer of its size
 #: (the same register on every 64-bit ABI numba runs on).
 STEP = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_double)
 
 
-@cache
 def available() -> bool:
-    """Whether runs are compiled: numba installed and not switched off by the environment."""
-    if os.environ.get("MECHCHECK_PURE_PYTHON", "") not in ("", "0"):
-        return False
-    try:  # numba missing, or unable to compile or cache here: the Python loop, same runs
-        from mechcheck.sim_models.pymunk import kernel  # noqa: F401
-    except (ImportError, RuntimeError):
-        return False
-    return True
+    """Whether runs are compiled (:func:`mechcheck.sim_models.compiled.kernel`)."""
+    return kernel(KERNEL) is not None
 
 
 @cache
@@ -99,10 +94,10 @@ def plan(model: LinkageModel) -> Plan:
 def settle_run(model: LinkageModel, impulse_floor: float) -> Run:
     """:func:`.linkage.settle_run` without a slow window, compiled: the same steps, the
     same readings (``impulse_floor``: the rounding floor × dt)."""
-    from mechcheck.sim_models.pymunk import kernel
-
+    loop = kernel(KERNEL)
+    assert loop is not None, "compiled runs only where available()"
     s, p = model.settings, model.plan
-    steps, settled, speed, change = kernel.settle(
+    steps, settled, speed, change = loop.settle(
         space_step(), p.space, s.dt, p.bodies, s.damping ** s.dt, p.forces, p.turning, p.radii,
         p.plain, p.divisors, p.held, p.axes, s.settle_speed * model.scale, s.settle_force_change,
         impulse_floor, s.settle_patience, s.max_steps)
