@@ -32,6 +32,7 @@ per pose against the C floor of as many steps (``--near-toggle``: that table alo
 Run: /work/venv/bin/python benchmarks/bench_mujoco.py [--linkage | --near-toggle]
 """
 
+import contextlib
 import dataclasses
 import math
 import statistics
@@ -65,6 +66,38 @@ RUNS = (("mujoco", "mujoco"), ("mujoco_solve", "mujoco_solve"),
         (COLD := "mujoco_solve, model built", "mujoco_solve"))
 
 
+#: A row timing the settled sweep with numpy's stop rules, where numba compiles them
+#: (:func:`mechcheck.sim_models.mujoco.batch_settle.first_stops`): the same sweep, the same
+#: steps; the difference is the rules' overhead.
+NUMPY = "numpy stop rules"
+
+
+def compiled_rules() -> bool:
+    from mechcheck.sim_models.compiled import kernel
+    from mechcheck.sim_models.mujoco.batch_settle import STOP_KERNEL
+
+    return kernel(STOP_KERNEL) is not None
+
+
+def runs():
+    """:data:`RUNS`, with the settled sweep again on numpy's stop rules if numba compiled them."""
+    return (RUNS[0], (f"mujoco, {NUMPY}", "mujoco"), *RUNS[1:]) if compiled_rules() else RUNS
+
+
+@contextlib.contextmanager
+def stop_rules(label):
+    """Within: the batched settling's stop rules numpy's if ``label`` names them."""
+    from mechcheck.sim_models.mujoco import batch_settle
+
+    compiled = batch_settle.first_stops
+    if NUMPY in label:
+        batch_settle.first_stops = batch_settle.vectorised_stops
+    try:
+        yield
+    finally:
+        batch_settle.first_stops = compiled
+
+
 def forget_rigs(label):
     """Before a repeat of the run ``label``: the kept models forgotten if it builds them."""
     from mechcheck.sim_models.mujoco.linkage import sweep_rig
@@ -77,13 +110,14 @@ def timed(label, backend, sweep_once):
     """ms per pose of ``sweep_once()`` (360 poses) over the repeats, after one untimed run
     (imports; numba's compiled stop rules, if installed, compiled or loaded); ``mujoco_solve``
     with its models kept then finds them in every repeat."""
-    sweep_once()
-    times = []
-    for _ in range(LINKAGE_REPEATS):
-        forget_rigs(label)
-        start = time.perf_counter()
-        out = sweep_once()
-        times.append((time.perf_counter() - start) / 360 * 1e3)
+    with stop_rules(label):
+        sweep_once()
+        times = []
+        for _ in range(LINKAGE_REPEATS):
+            forget_rigs(label)
+            start = time.perf_counter()
+            out = sweep_once()
+            times.append((time.perf_counter() - start) / 360 * 1e3)
     return times, out
 
 
@@ -124,7 +158,7 @@ def main() -> None:
           "outside tolerance | median steps | max steps |")
     print("|---|---|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
     linkage = as_linkage(case)
-    for label, backend in RUNS:
+    for label, backend in runs():
         times, (sols, kept, gated) = timed(label, backend,
                                            lambda b=backend: harness_sweep(case, theta, b))
         status = [s.status for s in sols]
@@ -260,11 +294,13 @@ def linkage_sweep_table(cases) -> None:
     print("| backend | ms/pose | reference ms/pose | ratio | floor alone ms/pose | ratio | "
           "poses ok | worst rel. error | outside tolerance | median steps | max steps |")
     print("|---|---|---|---|---|---|---:|---:|---:|---:|---:|")
-    runs = {"mujoco (each pose alone)": ("mujoco", False), "mujoco (continued)": ("mujoco", True),
-            **{label: (backend, True) for label, backend in RUNS[1:]}}
+    continued = ["mujoco (continued)", *([f"mujoco (continued), {NUMPY}"] if compiled_rules() else [])]
+    table = {"mujoco (each pose alone)": ("mujoco", False),
+             **{label: ("mujoco", True) for label in continued},
+             **{label: (backend, True) for label, backend in RUNS[1:]}}
     floor_alone: list[float] = []
     rows = {}
-    for label, (backend, continuation) in runs.items():
+    for label, (backend, continuation) in table.items():
         times, sols = timed(label, backend, lambda b=backend, c=continuation: sweep_linkage(
             case, first, b, results, continuation=c))
         worst, failing = linkage_errors(case, results, sols)
@@ -280,7 +316,7 @@ def linkage_sweep_table(cases) -> None:
                        f"{spread(reference, '.4f')} | "
                        f"{ratio(times, reference)} | {alone_cells} | {ok} | {worst:.2e} | "
                        f"{failing} | {np.median(steps):.0f} | {max(steps)} |")
-    for label in ("mujoco (continued)", "mujoco (each pose alone)", *dict(RUNS[1:])):
+    for label in (*continued, "mujoco (each pose alone)", *dict(RUNS[1:])):
         print(rows[label])
 
 

@@ -1,8 +1,8 @@
-"""The compiled settling loop (:mod:`mechcheck.sim_models.pymunk.compiled`, numba) is the
-Python loop it replaces: the same steps and the same forces, bit for bit, on every built-in
-static case, every moving one held still, whole sweeps of seed E1 and the Watt six-bar,
-and random linkages; and it reads the bodies' and springs' C structs only where the layout
-check has verified them."""
+"""The compiled loops (:mod:`mechcheck.sim_models.pymunk.compiled`, numba: settling, and
+the constraint solve's re-posed steps) are the Python loops they replace: the same steps
+and the same forces, bit for bit, on every built-in static case, every moving one held
+still, whole sweeps of seed E1 and the Watt six-bar, and random linkages; and they read
+the bodies' and springs' C structs only where the layout check has verified them."""
 
 from __future__ import annotations
 
@@ -42,18 +42,22 @@ def held(name: str) -> Case:
     return case if case.kind == "static" else at_rest(case)
 
 
+#: The held model's two runs: settling, and the constraint solve at the analytic pose.
+BACKENDS = {"pymunk": (pl.settle, "pymunk"), "pymunk_solve": (pl.solve_at_pose, "pymunk_solve")}
+
+
 @pytest.fixture
 def compiled_runs(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[int]]:
     """Counts the runs the compiled loop made (each appends its steps)."""
     runs: list[int] = []
-    run = compiled.settle_run
+    run = compiled.run
 
     def counted(*args: Any) -> Any:
         out = run(*args)
         runs.append(out.steps)
         return out
 
-    monkeypatch.setattr(compiled, "settle_run", counted)
+    monkeypatch.setattr(compiled, "run", counted)
     yield runs
 
 
@@ -95,11 +99,13 @@ def assert_same_runs(fast: list[Solution], slow: list[Solution]) -> None:
             assert identical(a, b) or math.isclose(a, b, rel_tol=HYPOT_RTOL), k
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("name", STATIC + MOVING)
-def test_a_compiled_run_is_the_python_run(name: str, monkeypatch: pytest.MonkeyPatch,
+def test_a_compiled_run_is_the_python_run(name: str, backend: str,
+                                           monkeypatch: pytest.MonkeyPatch,
                                            compiled_runs: list[int]) -> None:
-    case = held(name)
-    assert_same_runs(*both(lambda: [pl.settle(case)], monkeypatch, compiled_runs))
+    case, solve = held(name), BACKENDS[backend][0]
+    assert_same_runs(*both(lambda: [solve(case)], monkeypatch, compiled_runs))
 
 
 def test_a_run_that_never_settles_ends_alike(monkeypatch: pytest.MonkeyPatch,
@@ -123,10 +129,11 @@ def test_whole_sweeps_are_the_python_sweeps(monkeypatch: pytest.MonkeyPatch,
     theta = theta[[v == "" for v in verdicts]]
     watt, crank = held("watt-ii-demo"), np.linspace(-3.95, 1.86, 120)
     for case, values in ((e1, theta), (watt, crank)):
-        fast, slow = both(lambda c=case, v=values: backend_sweep(c, v), monkeypatch,  # type: ignore[misc]
-                          compiled_runs)
-        assert sum(s.status == "ok" for s in fast) >= 118
-        assert_same_runs(fast, slow)
+        for backend in BACKENDS:
+            fast, slow = both(lambda c=case, v=values, b=backend: backend_sweep(c, v, b),  # type: ignore[misc]
+                              monkeypatch, compiled_runs)
+            assert sum(s.status == "ok" for s in fast) >= 118
+            assert_same_runs(fast, slow)
 
 
 @SETTINGS
@@ -135,11 +142,12 @@ def test_random_linkages_run_alike(table: dict[str, Any]) -> None:
     """Random assemblable four-bars, slider-cranks and six-bars with loads, weights and
     springs (those of ``test_pymunk_linkage``'s settling test)."""
     case = loaded_case(table)
-    fast = pm.settle(case)
-    with pytest.MonkeyPatch.context() as m:
-        m.setattr(compiled, "available", lambda: False)
-        slow = pm.settle(case)
-    assert_same_runs([fast], [slow])
+    for solve in (pm.settle, pm.solve_at_pose):
+        fast = solve(case)
+        with pytest.MonkeyPatch.context() as m:
+            m.setattr(compiled, "available", lambda: False)
+            slow = solve(case)
+        assert_same_runs([fast], [slow])
 
 
 def test_the_environment_switches_the_compiled_loop_off(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -153,6 +161,8 @@ def test_the_environment_switches_the_compiled_loop_off(monkeypatch: pytest.Monk
 
 
 @pytest.mark.parametrize(("fields", "name"), [(forces.BODY_FIELDS, "w"), (forces.BODY_FIELDS, "f"),
+                                              (forces.BODY_FIELDS, "p"),
+                                              (forces.BODY_FIELDS, "transform"),
                                               (forces.DAMPED_SPRING_FIELDS, "jAcc"),
                                               (forces.ROTARY_SPRING_FIELDS, "jAcc")])
 def test_a_wrong_body_or_spring_offset_fails_the_layout_check(

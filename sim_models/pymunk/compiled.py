@@ -27,7 +27,12 @@ import numpy as np
 from pymunk._chipmunk_cffi import ffi, lib
 
 from mechcheck.sim_models.compiled import kernel
-from mechcheck.sim_models.pymunk.forces import address, body_address, impulse_cells
+from mechcheck.sim_models.pymunk.forces import (
+    POSE_FIELDS,
+    address,
+    body_address,
+    impulse_cells,
+)
 from mechcheck.sim_models.pymunk.linkage_model import LinkageModel
 from mechcheck.sim_models.pymunk.settle import Run
 
@@ -94,11 +99,27 @@ def plan(model: LinkageModel) -> Plan:
 def settle_run(model: LinkageModel, impulse_floor: float) -> Run:
     """:func:`.linkage.settle_run` without a slow window, compiled: the same steps, the
     same readings (``impulse_floor``: the rounding floor × dt)."""
+    return run(model, impulse_floor, np.zeros((0, 0)))
+
+
+def solve_run(model: LinkageModel, impulse_floor: float) -> Run:
+    """:func:`.linkage.solve_run` without a slow mode watched, compiled, once the bodies are
+    staged and re-posed (:meth:`~.bulk.Bodies.repose`): every step starts from the doubles
+    that left in each body's struct (position … transform), the same steps and readings."""
+    start, end = POSE_FIELDS
+    saved = np.array([np.frombuffer(ffi.buffer(ffi.cast("char *", b._body) + start, end - start))
+                      for b in model.bodies.values()])
+    return run(model, impulse_floor, saved)
+
+
+def run(model: LinkageModel, impulse_floor: float, saved: np.ndarray) -> Run:
+    """The compiled loop (:func:`.kernel.settle`) on ``model``; re-posed from ``saved``
+    rows, if any."""
     loop = kernel(KERNEL)
     assert loop is not None, "compiled runs only where available()"
     s, p = model.settings, model.plan
     steps, settled, speed, change = loop.settle(
         space_step(), p.space, s.dt, p.bodies, s.damping ** s.dt, p.forces, p.turning, p.radii,
-        p.plain, p.divisors, p.held, p.axes, s.settle_speed * model.scale, s.settle_force_change,
-        impulse_floor, s.settle_patience, s.max_steps)
+        saved, p.plain, p.divisors, p.held, p.axes, s.settle_speed * model.scale,
+        s.settle_force_change, impulse_floor, s.settle_patience, s.max_steps)
     return Run(model.readout.values(), int(steps), bool(settled), float(speed), float(change))

@@ -55,9 +55,13 @@ MOTOR_FIELDS = {"rate": 104, "jAcc": 120}
 DAMPED_SPRING_FIELDS = {"restLength": 136, "stiffness": 144, "damping": 152, "jAcc": 240}
 ROTARY_SPRING_FIELDS = {"restAngle": 104, "stiffness": 112, "damping": 120, "jAcc": 160}
 #: ``cpBody``: two function pointers, then mass, 1/mass, moment, 1/moment, centre of
-#: gravity, position, velocity, force, angle, angular velocity, torque (doubles), read and
-#: written by the compiled settling loop (:mod:`.compiled`).
-BODY_FIELDS = {"m": 16, "i": 32, "cog": 48, "v": 80, "f": 96, "a": 112, "w": 120, "t": 128}
+#: gravity, position (of the centre of gravity), velocity, force, angle, angular velocity,
+#: torque and the transform (a, b, c, d, tx, ty), doubles, read and written by the compiled
+#: loops (:mod:`.compiled`); a re-posed step restores p … transform, 15 doubles.
+BODY_FIELDS = {"m": 16, "i": 32, "cog": 48, "p": 64, "v": 80, "f": 96, "a": 112, "w": 120,
+               "t": 128, "transform": 136}
+#: The doubles a re-posed step sets (:meth:`.bulk.Bodies.repose`): p through the transform.
+POSE_FIELDS = (BODY_FIELDS["p"], BODY_FIELDS["transform"] + 6 * _DOUBLE)
 
 #: Relative agreement demanded of the layout check: the fields are copied
 #: doubles, so a right offset matches exactly; a wrong one reads an unrelated
@@ -194,6 +198,16 @@ def _check_body(body: pymunk.Body) -> None:
     for name, value in (("cog", body.center_of_gravity.y), ("v", body.velocity.y),
                         ("f", body.force.y)):
         _expect(f"cpBody.{name}.y", float(d[BODY_FIELDS[name] // _DOUBLE + 1]), float(value))
+    # p is the centre of gravity in the world; the transform, the rotation (cos, sin) as
+    # cpTransformNewTranspose lays it out, then the origin.
+    p = body.local_to_world(body.center_of_gravity)
+    k = BODY_FIELDS["p"] // _DOUBLE
+    _expect("cpBody.p.x", float(d[k]), p.x)
+    _expect("cpBody.p.y", float(d[k + 1]), p.y)
+    (cos, sin), (tx, ty) = body.rotation_vector, body.local_to_world((0.0, 0.0))
+    k = BODY_FIELDS["transform"] // _DOUBLE
+    for i, value in enumerate((cos, sin, -sin, cos, tx, ty)):
+        _expect(f"cpBody.transform[{i}]", float(d[k + i]), value)
 
 
 def _probe_space() -> tuple[pymunk.Space, list[pymunk.Constraint]]:
@@ -243,7 +257,7 @@ def check_layout() -> None:
     motor.max_force = 0.7  # a saturated motor: nonzero, known-magnitude jAcc
     # Every body field distinct and nonzero, so a wrong offset cannot read an equal value.
     crank = pivot.b
-    crank.velocity, crank.angular_velocity, crank.angle = (0.3, -0.2), 0.7, 0.05
+    crank.velocity, crank.angular_velocity, crank.angle = (0.3, -0.2), 0.7, 0.35
     crank.force, crank.torque = (0.25, -0.5), 0.125
     _check_body(crank)
     space.step(1e-3)

@@ -23,8 +23,8 @@ from numba.extending import intrinsic
 from mechcheck.sim_models.pymunk.forces import BODY_FIELDS
 
 Array = np.ndarray
-#: Byte offsets of a body's velocity, force, angle, angular velocity and torque.
-V, F, A, W, T = (BODY_FIELDS[name] for name in ("v", "f", "a", "w", "t"))
+#: Byte offsets of a body's position, velocity, force, angle, angular velocity and torque.
+P, V, F, A, W, T = (BODY_FIELDS[name] for name in ("p", "v", "f", "a", "w", "t"))
 
 
 @intrinsic
@@ -64,6 +64,17 @@ def push(bodies: Array, keep: float, forces: Array, turning: Array) -> None:
         if turning[b, 0] != 0.0:
             torque = turning[b, 1] * math.cos(load(base + A) + turning[b, 2]) + turning[b, 3]
         store(base + T, torque)
+
+
+@njit(cache=True)
+def repose(bodies: Array, saved: Array) -> None:
+    """Every body back to the pose, rest and loads a re-posed step starts from: its
+    position … transform as :meth:`~.bulk.Bodies.repose` left them (``saved``, a row per
+    body of the doubles from :data:`~.forces.POSE_FIELDS`)."""
+    for b in range(bodies.size):
+        base = bodies[b] + P
+        for k in range(saved.shape[1]):
+            store(base + 8 * k, saved[b, k])
 
 
 @njit(cache=True)
@@ -118,27 +129,39 @@ def largest_change(new: Array, old: Array) -> float:
 
 @njit(cache=True)
 def settle(step: Callable[[int, float], None], space: int, dt: float, bodies: Array, keep: float,
-           forces: Array, turning: Array, radii: Array, plain: Array, divisors: Array,
-           held: Array, axes: Array, still: float, calm_change: float, floor: float,
-           patience: int, max_steps: int) -> tuple[int, bool, float, float]:
+           forces: Array, turning: Array, radii: Array, saved: Array, plain: Array,
+           divisors: Array, held: Array, axes: Array, still: float, calm_change: float,
+           floor: float, patience: int, max_steps: int) -> tuple[int, bool, float, float]:
     """Step until settled or ``max_steps``: (steps, settled, residual velocity, relative
-    force change), as :func:`~.settle.run_until_settled` decides them."""
+    force change), as :func:`~.settle.run_until_settled` decides them. Each step starts
+    damped and loaded (:func:`push`), or, given ``saved`` rows, re-posed (:func:`repose`,
+    the constraint solve: residual velocity 0)."""
     new = np.empty(plain.size + 3 * held.shape[0])
     old = np.empty_like(new)
+    reposed = saved.shape[0] > 0
     calm = 0
     for n in range(1, max_steps + 1):
-        push(bodies, keep, forces, turning)
+        if reposed:
+            repose(bodies, saved)
+        else:
+            push(bodies, keep, forces, turning)
         step(space, dt)
         read(plain, divisors, held, axes, new)
         if n > 1:
             scale = size(new, floor)
             change = largest_change(new, old)
-            if change <= calm_change * scale and speed(bodies, radii) <= still:
+            if change <= calm_change * scale and residual(bodies, radii, reposed) <= still:
                 calm += 1
                 if calm >= patience:
-                    return n, True, speed(bodies, radii), change / scale
+                    return n, True, residual(bodies, radii, reposed), change / scale
             else:
                 calm = 0
         old, new = new, old
     change = largest_change(old, new) / size(old, floor) if max_steps > 1 else math.inf
-    return max_steps, False, speed(bodies, radii), change
+    return max_steps, False, residual(bodies, radii, reposed), change
+
+
+@njit(cache=True)
+def residual(bodies: Array, radii: Array, reposed: bool) -> float:
+    """The residual velocity the stop rule reads: none in a re-posed step."""
+    return 0.0 if reposed else speed(bodies, radii)

@@ -291,15 +291,19 @@ def at_rest() -> float:
 def solve_run(model: LinkageModel, q: Array, slow: SlowMode | None = None) -> Run:
     """Re-pose at q, with the loads there, and step until the impulses stop changing;
     ``slow``: watch the slow mode and extrapolate it (:class:`~.slow_mode.SlowMode`), its
-    measured contraction adding a window to the stop rule."""
+    measured contraction adding a window to the stop rule. Without it the run is compiled
+    where numba is installed (:func:`.compiled.solve_run`: the same steps and readings)."""
     stage(model, q, loaded=True)
+    if slow is None and compiled.available():
+        model.bulk.repose()
+        run = compiled.solve_run(model, FORCE_FLOOR_N * model.settings.dt)
+    else:
+        def step() -> Reading:
+            reposed_step(model, slow)
+            return model.readout.impulses(), at_rest
 
-    def step() -> Reading:
-        reposed_step(model, slow)
-        return model.readout.impulses(), at_rest
-
-    run = run_until_settled(step, model.settings, model.scale, model.readout.values,
-                            slowest=(lambda: slow.contraction) if slow is not None else None)
+        run = run_until_settled(step, model.settings, model.scale, model.readout.values,
+                                slowest=(lambda: slow.contraction) if slow is not None else None)
     place(model, q)  # report the pose the forces belong to
     return run
 
