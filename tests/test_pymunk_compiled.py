@@ -158,6 +158,10 @@ def test_the_environment_switches_the_compiled_loop_off(monkeypatch: pytest.Monk
     monkeypatch.delenv("MECHCHECK_PURE_PYTHON")
     assert compiled.available()
     kernel.cache_clear()
+    # numba's own switch: its kernels would run as Python, where raw memory access fails.
+    monkeypatch.setattr(pytest.importorskip("numba").config, "DISABLE_JIT", True)
+    assert not compiled.available()
+    kernel.cache_clear()
 
 
 @pytest.mark.parametrize(("fields", "name"), [(forces.BODY_FIELDS, "w"), (forces.BODY_FIELDS, "f"),
