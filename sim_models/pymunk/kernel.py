@@ -1,9 +1,10 @@
-"""The settling loop of :func:`.linkage.settle_run` in numba (imported by :mod:`.compiled`
-only when numba is installed: the ``fast`` extra).
+"""The loops of :func:`.linkage.settle_run` and :func:`.linkage.solve_run` in numba
+(imported by :mod:`.compiled` only when numba is installed: the ``fast`` extra).
 
 Step for step it does what the Python loop does, in the same floating-point operations
-(:func:`.linkage.damped_and_loaded`, :meth:`~.readout.Readout.impulses`,
-:func:`~.settle.run_until_settled` without a slow window), on the bodies' and
+(:func:`.linkage.damped_and_loaded` or :meth:`~.bulk.Bodies.repose`,
+:meth:`~.readout.Readout.impulses`, :func:`~.settle.run_until_settled` without a slow
+window), on the bodies' and
 constraints' C structs themselves: their fields are read and written at addresses whose
 offsets :func:`~.forces.check_layout` verified against pymunk's public API, and
 Chipmunk's own ``cpSpaceStep`` is called through its function pointer.
