@@ -40,6 +40,7 @@ from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
 from mechcheck.sim_models.mujoco.linkage_model import model_xml
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.settle import (
+    EXTRAPOLATE_AFTER,
     FLOOR_WINDOW,
     REFINE_RTOL,
     SETTLE_RTOL,
@@ -385,6 +386,42 @@ def test_passes_are_extrapolated_only_when_plain_ones_would_crawl() -> None:
         assert not refinement.converged(0.0) or expected == 1.0
     # Passes left at c = 0.5 from a pass holding 1e-4: 0.5ⁿ·1e-4 ≤ 1e-7 → n = log2(1000).
     assert plain_passes_left(1e-4, 0.5) == pytest.approx(math.log2(1000.0))
+
+
+def test_steady_plain_passes_are_extrapolated_by_their_ratio() -> None:
+    """Where no secant is measured (every carry below MEASURABLE_CARRY of the forces), plain
+    passes whose differences shrink steadily, 0.77 a pass here, are extrapolated by
+    1/(1 − 0.77) once three in a row show it (Aitken's Δ² on the differences); a ratio
+    still changing (0.38, then 0.77) does not, and the count starts again after an
+    extrapolated carry."""
+    scale = np.ones(2)
+    carried = np.array([0.0, 1.0])  # the same every pass: no carry to measure a secant across
+    total = carried + np.array([3e-7, 0.0])  # held: 3e-7 of the largest force
+    refinement = Refinement()
+    factors = []
+    for d in (1.7e-6, 6.6e-7, 5.1e-7, 3.9e-7):
+        refinement.converged(d)
+        factors.append(refinement.factor(carried, total, scale))
+    assert factors[:3] == [1.0, 1.0, 1.0]  # 0.39 then 0.77: not steady yet
+    c = 3.9e-7 / 5.1e-7
+    assert factors[3] == pytest.approx(1.0 / (1.0 - c), rel=1e-12)
+    assert refinement.contraction == pytest.approx(c) and refinement.extrapolated
+    assert not refinement.converged(3.0e-7)  # across the extrapolated carry: no pass's
+    assert refinement.steady_ratio() is None
+    assert plain_passes_left(3e-7, c) > EXTRAPOLATE_AFTER  # why it was extrapolated
+
+
+def test_a_batched_sweep_to_condition_number_ten_thousand_settles_every_pose() -> None:
+    """Seed E1 batched towards its change point, δ from 0.2° to 0.0115° (condition numbers
+    590 to 10 300): every pose settles within its tolerance. The pose at condition number
+    8 600 was ``not_settled`` after 16 passes (its secant misread the contraction once,
+    then its carries were too small to measure one; :data:`.settle.STEADY_RATIO`)."""
+    case = fourbar_e1()
+    theta = math.pi - np.radians(np.geomspace(0.2, 0.0115, 17))
+    for t, sim in zip(theta, sweep(case, theta), strict=True):
+        at = case.with_(theta12=float(t))
+        assert sim.status == "ok", f"θ12 = {np.degrees(t):.4f}°: {sim.message}"
+        assert_solution_close(at, sim, complete=True)
 
 
 #: Seed E1 1.15e-2° from its change point: condition number 1.03e4 (issue 13's target 1e4).
