@@ -79,6 +79,13 @@ def slide_self_locks(case: Case) -> bool:
     return bool(f.slide_coefficient() * abs(math.tan(rod - case.ground_angle)) >= 1.0)
 
 
+#: rad/s at the crank: below it pymunk's measured joint rates are at the level of its joints'
+#: error correction, and the friction sense taken from them is noise (README, open finding;
+#: a random slider-crank read a reversed slide friction at 1.2e-7 rad/s, erratic values up to
+#: 1e-6, and right from 3e-6 on).
+SENSED_RATE = 1e-5
+
+
 def timestep_stops_at_first_order(solution: mechcheck.Solution) -> bool:
     """A ``not_settled`` verdict whose reason is that readings at successive time steps
     still differ (MuJoCo's and pymunk's wordings), not start-up noise."""
@@ -252,9 +259,12 @@ def test_random_driven_friction_cases_agree(case: Case, backend: str) -> None:
     lag one step, in both simulators), and a slider-crank whose rod is within
     the friction angle of the slide's normal (:func:`slide_self_locks`; README, open
     finding: both simulators emulate Coulomb friction from the last reactions, and there
-    that loop's gain μ·|tan φ| exceeds 1, so the run does not settle)."""
+    that loop's gain μ·|tan φ| exceeds 1, so the run does not settle), and a pymunk draw
+    driven below :data:`SENSED_RATE` (README, open finding: its measured joint rates, from
+    which each Coulomb term takes its sense, are noise there)."""
     assume(case.has_friction and not case.motion.is_static)
     assume(not slide_self_locks(case))
+    assume(backend != "pymunk" or abs(case.motion.omega) >= SENSED_RATE)
     reference = mechcheck.solve(case, "analytic")
     assume(any(abs(v) > FORCE_FLOOR_N for q, v in reference.values.items()
                if quantity_kind(q) != "pose"))
