@@ -44,6 +44,10 @@ TIMESTEP_AGREEMENT_RTOL = 1e-4
 #: 6.7° from a rocker dead point, needed four with massless links at 1e-5 of the
 #: real masses, and needs one at 1e-2 (:data:`~.model.FICTITIOUS_MASS_FRACTION`).
 MAX_TIMESTEP_HALVINGS = 5
+#: A reading whose last step, solved again with more solver iterations, moves by more than
+#: this fraction of the largest force (or torque/scale) is not yet the constraint solve's
+#: answer (pymunk's Gauss–Seidel; the time step's bound, for the same reason).
+SOLVER_AGREEMENT_RTOL = TIMESTEP_AGREEMENT_RTOL
 
 def massless_limit(base: dict[str, float], doubled: dict[str, float],
                    units: dict[str, str] | None = None) -> dict[str, float]:
@@ -90,11 +94,14 @@ class Convergence:
     lead_disagreement: float = np.inf
     timestep_disagreement: float = np.inf
     lead_limit: str = ""
+    #: How far the reading moves when its last step is solved with more iterations.
+    solver_disagreement: float = 0.0
 
     @property
     def converged(self) -> bool:
         return (self.lead_disagreement <= LEAD_AGREEMENT_RTOL
-                and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL)
+                and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL
+                and self.solver_disagreement <= SOLVER_AGREEMENT_RTOL)
 
     def verdict(self) -> str:
         """Why the run is not converged (empty when it is)."""
@@ -106,6 +113,10 @@ class Convergence:
             return (f"time step not converged: runs with dt = {2.0 * self.dt:.3g} s and "
                     f"{self.dt:.3g} s still differ by {self.timestep_disagreement:.1e} "
                     "of the forces")
+        if not self.solver_disagreement <= SOLVER_AGREEMENT_RTOL:
+            return (f"constraint solve not converged: the last step solved again with more "
+                    f"iterations moves the reading by {self.solver_disagreement:.1e} of the "
+                    "forces")
         return ""
 
 

@@ -64,10 +64,12 @@ def coulomb_joints(case: Case) -> list[Joint]:
                                         if j.kind == "revolute" else 1.0) > 0.0]
 
 
-def at_rest_reason(case: Case, window: float) -> str:
+def at_rest_reason(case: Case, window: float, rest_speed: float = REST_SPEED) -> str:
     """Why a simulator cannot measure a moving linkage's Coulomb friction, or ``""``: the
-    relative motion of a Coulomb joint is at rest at the reading, or reverses within
-    ``window`` (s, the simulator's longest time step) before it. A simulator takes each
+    relative motion of a Coulomb joint is at rest at the reading (slower than
+    ``rest_speed``, rad/s, a prismatic joint's m/s taken per the linkage's length scale),
+    or reverses within ``window`` (s, the simulator's longest time step) before it. A
+    simulator takes each
     Coulomb sense from its own joint rates, which a step's velocity error or a step across
     the reversal can turn over, while the analytic sense there is the prescribed one (or,
     at rest, the case's convention). Found by the random driven-friction test (2026-11-25):
@@ -81,12 +83,14 @@ def at_rest_reason(case: Case, window: float) -> str:
     for joint in joints:
         _, rate, _ = pose.joint_coordinate(joint)
         before, now = float(rate[0]), float(rate[1])
-        if abs(now) <= REST_SPEED or before * now <= 0.0:
+        per_length = case.linkage.scale if joint.kind == "prismatic" else 1.0
+        if abs(now) <= rest_speed * per_length or before * now <= 0.0:
             return (f"the relative motion at the Coulomb joint {joint.name} is at rest at the "
-                    f"reading or reverses within {window:g} s of it (rate {now:.3g} at the "
-                    f"reading, {before:.3g} {window:g} s before): the sense its friction "
-                    "opposes there is not a property of the simulated motion, so a simulator "
-                    "cannot measure it")
+                    f"reading (slower than {rest_speed * per_length:g}, the speed this "
+                    f"simulator's joint rates resolve) or reverses within {window:g} s of it "
+                    f"(rate {now:.3g} at the reading, {before:.3g} {window:g} s before): the "
+                    "sense its friction opposes there is not a property of the simulated "
+                    "motion, so a simulator cannot measure it")
     return ""
 
 

@@ -64,12 +64,17 @@ def test_a_driven_preset_reaches_the_closed_form_pose_and_motion(case: Case) -> 
     # isosceles slider-crank's B through A0) the branches meet and either may follow.
     path = forces.solve_poses(case, np.linspace(case.theta12, later.theta12, 81))
     assume(bool(np.all(path.condition < MAX_CONDITION)))
-    # A change-point geometry (s + l = p + q) folds flat at one pose, where the branches
-    # cross: sampled conditions can step over that one pose.
+    # A change-point geometry folds flat at one pose, where the branches cross: sampled
+    # conditions can step over that one pose. For a four-bar that is s + l = p + q; for a
+    # slider-crank a3 = a2 + |e|, where the rod's reach of the slide line just touches its
+    # limit (the rod stands square to the slide) instead of crossing it (isosceles, e = 0:
+    # B passes through A0). Seen: a2 = a3 = 1 m, θ12 = 1 rad followed the other branch.
     g = case.geometry
     if isinstance(g, FourBarGeometry):
         s, p, q, l_ = sorted((g.a1, g.a2, g.a3, g.a4))
         assume(abs(s + l_ - p - q) > 1e-3 * l_)
+    else:
+        assume(abs(g.a3 - g.a2 - abs(g.offset)) > 1e-3 * g.scale)
     linkage = linkage_of(case)
     moved = solve_pose(linkage, [math.radians(40.0)])
     start, end = pose_of(case), pose_of(later)

@@ -110,6 +110,48 @@ def test_exam_q2_with_friction_is_the_hand_calculation() -> None:
     assert sim.values["F_slide_y"] == pytest.approx(2.0 * 9.81, rel=1e-3)
 
 
+def off_line_masses_slider_crank() -> Case:
+    """CI's derandomized draw (2026-11-26): an unloaded slider-crank, horizontal coupler,
+    under g = 1 m/s² along +x, every point mass at the origin (off its link), slide μ = 0.25:
+    a static friction case, driven quasi-statically."""
+    table = {
+        "name": "off-line-masses", "mechanism": "linkage", "gravity": [1.0, 0.0],
+        "points": {"O2": [0.0, 0.0], "A": [-0.1040367091367856, 0.22732435670642043],
+                   "B": [-0.6040367091367856, 0.22732435670642043]},
+        "links": [{"name": "ground", "points": ["O2"]},
+                  {"name": "crank", "points": ["O2", "A"]},
+                  {"name": "coupler", "points": ["A", "B"]},
+                  {"name": "slider", "points": ["B"]}],
+        "joints": [{"name": "O2", "kind": "revolute", "links": ["ground", "crank"], "at": "O2"},
+                   {"name": "A", "kind": "revolute", "links": ["crank", "coupler"], "at": "A"},
+                   {"name": "B", "kind": "revolute", "links": ["coupler", "slider"], "at": "B"},
+                   {"name": "slide", "kind": "prismatic", "links": ["ground", "slider"],
+                    "at": "B", "axis": [1.0, 0.0]}],
+        "drivers": [{"joint": "O2", "rotation": 0.0, "sense": "increasing"}],
+        "masses": [{"link": "crank", "mass": 0.25, "com": [0.0, 0.0], "inertia": 0.0},
+                   {"link": "coupler", "mass": 1.0, "com": [0.0, 0.0], "inertia": 0.0},
+                   {"link": "slider", "mass": 1.0, "com": [0.0, 0.0], "inertia": 0.0}],
+        "friction": {"mu": 0.25}}
+    return linkage_case(LinkageCaseSpec.model_validate(table))
+
+
+def test_a_reading_the_solver_has_not_converged_goes_to_more_iterations() -> None:
+    """At 100 Gauss–Seidel iterations this case read the slide's normal force 0.070 N and
+    its friction 0.043 N (not μ·N) against the analytic 0.455 and 0.114, status ``ok``: the
+    same at every lead-in and time step, as warm starting carried each short solve into the
+    next. Solving the last step again with more iterations exposes it, and the run goes on
+    to 400: every quantity within the friction tolerance, and the friction is μ·|N| of
+    pymunk's own normal force."""
+    case = off_line_masses_slider_crank()
+    assert case.kind == "friction"
+    solution = mechcheck.solve(case, "pymunk")
+    assert_solution_close(case, solution, complete=True)
+    assert solution.diagnostics["iterations"] > pld.ITERATIONS[0]
+    assert solution.diagnostics["solver_disagreement"] <= 1e-4
+    normal, along = solution.values["F_slide_y"], solution.values["F_slide_x"]
+    assert abs(along) == pytest.approx(0.25 * abs(normal), rel=1e-3)
+
+
 def assert_reading_or_reason(case: Case, solution: Solution) -> None:
     """Every quantity within the policy's tolerance, or (README, pymunk, open findings) a
     ``not_settled`` verdict with its reason and no force."""

@@ -45,6 +45,7 @@ from mechcheck.analytic.solution import Solution, quantity_kind
 from mechcheck.sim_models.convergence import (
     LEAD_AGREEMENT_RTOL,
     Convergence,
+    disagreement,
     halve_timestep,
     inertia_correction,
     left_assembly,
@@ -84,10 +85,23 @@ from mechcheck.sim_models.pymunk.settings import SolverSettings
 
 BACKEND = "pymunk"
 
-#: rad/s (or m/s) of the quasi-static drive of a static case with Coulomb friction. Slow
-#: enough that the inertia forces of the bodies, m·ω²·L, are ~1e-10 of the loads, fast
-#: enough that every joint keeps a definite sense of relative motion.
+#: rad/s (or m/s) of the quasi-static drive of a static case with Coulomb friction, fast
+#: enough that every joint keeps a definite sense of relative motion. Every link's inertia
+#: is fictitious in such a run and extrapolated away (:func:`.linkage_model.driven_inertial`):
+#: with the real masses' inertia kept, m·ω²·L was the size of a random six-bar's 5e-4 N
+#: reactions (read twice as large, 2026-11-26).
 QUASI_STATIC_OMEGA = 0.01
+
+#: rad/s (a prismatic joint's m/s per the linkage's length scale): a Coulomb joint slower
+#: than this at the reading is at rest for pymunk. Its joint rates are measured on bodies
+#: whose velocities also carry the error correction of its constraints (``error_bias`` 0:
+#: the whole residual joint error, over one step), so below this the sense each Coulomb
+#: term takes from them is noise. Measured (2026-11-26): random friction cases driven at
+#: 1.2e-7 rad/s read joint rates 1e-13 to 3e-3 rad/s off the prescribed ones; a four-bar
+#: with μ = 0.25 at B0 read T12 = +0.0367 at ω = −1e-8 rad/s and −0.0592 at −1.2e-7
+#: against −0.0451 (MuJoCo right at both), right from 1e-6 on; a slider-crank was erratic
+#: up to 1e-6 and right from 3e-6 on.
+SENSED_RATE = 1e-5
 
 #: Settings of driven runs. dt is small because here, unlike in statics, the integration
 #: error is part of the force (the reactions carry m·a); the reading is checked against
@@ -200,6 +214,9 @@ class DriveEnd:
     rate_error: float
     #: What the massless extrapolation removed from the base model's reading, N.
     correction: float = 0.0
+    #: How far the last step's reading moves when that step is solved again with
+    #: :data:`SOLVER_CHECK_FACTOR` times the iterations (relative, as the convergence checks).
+    solver_disagreement: float = 0.0
 
 
 @dataclass
@@ -264,7 +281,9 @@ class Twins:
 
 
 def run_drive(twins: Twins, motion: Motion, steps: int, dt: float) -> DriveEnd:
-    """Step from ``steps·dt`` before the instant to it; how the last step ended."""
+    """Step from ``steps·dt`` before the instant to it; how the last step ended, and how far
+    its reading moves when that step is solved again with more iterations
+    (:func:`resolve_last_step`)."""
     linkage = twins.base.linkage
     times = dt * np.arange(-steps, 2, dtype=float)  # t0 … t* + dt
     values, _, _ = motion.at(times)
@@ -274,22 +293,57 @@ def run_drive(twins: Twins, motion: Motion, steps: int, dt: float) -> DriveEnd:
         place(model, start.q[0])
         set_velocities(model, half.qdot[0])
     history: list[Values] = []
+    before_last: tuple[list[list[BodyState]], list[Values]] = ([], [])
     for n in range(steps):
         for model in twins.models:
             drive_to(model, values[n + 2])  # the position the next update must reach
-        if linkage.friction is None:
-            for model in twins.models:
-                model.space.step(dt)
-        else:
-            twins.step_with_friction(history, dt)
+        if n == steps - 1:
+            before_last = [snapshot(m.bodies.values()) for m in twins.models], list(history)
+        step_once(twins, history, dt)
     base = twins.base
     # The velocities now are those of half a step past the instant.
     _, prescribed, _ = motion.at(np.array([0.5 * dt]))
     q = coordinates(base)
     pose = {k: float(v[0]) for k, v in pose_table(linkage, q[None, :]).items()}
     reactions_now, correction = twins.reading()
-    return DriveEnd(pose | reactions_now, q,
-                    float(np.abs(driver_rates(base) - prescribed[0]).max(initial=0.0)), correction)
+    rate_error = float(np.abs(driver_rates(base) - prescribed[0]).max(initial=0.0))
+    unsolved = resolve_last_step(twins, *before_last, reactions_now, dt)
+    return DriveEnd(pose | reactions_now, q, rate_error, correction, unsolved)
+
+
+def step_once(twins: Twins, history: list[Values], dt: float) -> None:
+    """One step of every model (with friction, :meth:`Twins.step_with_friction`)."""
+    if twins.base.linkage.friction is None:
+        for model in twins.models:
+            model.space.step(dt)
+    else:
+        twins.step_with_friction(history, dt)
+
+
+#: The last step of a driven run is solved again with this many times the iterations. In a
+#: moving run warm starting carries the impulses of a step that stopped short into the next
+#: one, which stops short again: a random slider-crank (quasi-static, slide friction, point
+#: masses off their links) read its slide's normal force 0.070 N against 0.455 at 100
+#: iterations, the same at every lead-in and time step; 400 read it right (2026-11-26).
+SOLVER_CHECK_FACTOR = 4
+
+
+def resolve_last_step(twins: Twins, saved: list[list[BodyState]], history: list[Values],
+                      reading: dict[str, float], dt: float) -> float:
+    """How far ``reading`` moves when the last step is taken again from the same state
+    (``saved`` bodies, friction ``history``) with :data:`SOLVER_CHECK_FACTOR` times the
+    iterations, relative to the largest force (torques over the length scale); the
+    models are left as that step leaves them."""
+    for model, bodies in zip(twins.models, saved, strict=True):
+        restore(bodies)
+        model.space.iterations *= SOLVER_CHECK_FACTOR
+    try:
+        step_once(twins, history, dt)
+    finally:
+        for model in twins.models:
+            model.space.iterations //= SOLVER_CHECK_FACTOR
+    linkage = twins.base.linkage
+    return disagreement(twins.reading()[0], reading, linkage.scale, quantity_units(linkage))
 
 
 def driver_rates(model: LinkageModel) -> Array:
@@ -306,8 +360,9 @@ ITERATIONS = (100, 400, 1600)
 
 
 def build(case: Case, scale: float, dt: float, iterations: int,
-          friction: JointLoads) -> LinkageModel:
-    settings = replace(DRIVEN, fictitious_scale=scale, dt=dt, iterations=iterations)
+          friction: JointLoads, quasi_static: bool) -> LinkageModel:
+    settings = replace(DRIVEN, fictitious_scale=scale, dt=dt, iterations=iterations,
+                       quasi_static=quasi_static)
     model = build_linkage_model(case, settings, np.zeros(3 * len(case.linkage.moving_links)),
                                 driven=True)
     install_loads(model, friction)
@@ -317,9 +372,10 @@ def build(case: Case, scale: float, dt: float, iterations: int,
 def build_twins(case: Case, motion: Motion, dt: float, iterations: int) -> Twins:
     """Fresh models (the step is part of the settings every impulse is divided by)."""
     friction: JointLoads = {}
-    scales = (1.0, 2.0) if has_fictitious_inertia(case.linkage) else (1.0,)
-    return Twins([build(case, k, dt, iterations, friction) for k in scales], friction,
-                 viscous=not motion.quasi_static)
+    slow = motion.quasi_static
+    scales = (1.0, 2.0) if has_fictitious_inertia(case.linkage, slow) else (1.0,)
+    return Twins([build(case, k, dt, iterations, friction, slow) for k in scales], friction,
+                 viscous=not slow)
 
 
 def read_drive(case: Case, motion: Motion, steps: int, dt: float, iterations: int) -> DriveEnd:
@@ -354,12 +410,12 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     if why is not None:
         return Solution(case.name, BACKEND, {}, status="not_applicable", units=units,
                         message=f"a {case.kind} linkage case: {why}")
-    at_rest = at_rest_reason(case, DRIVEN.dt)
+    at_rest = at_rest_reason(case, DRIVEN.dt, SENSED_RATE)
     if at_rest:
         return Solution(case.name, BACKEND, {}, status="indeterminate", message=at_rest,
                         diagnostics={"method": "driven"}, units=units)
     motion = driven_motion(case, QUASI_STATIC_OMEGA)
-    runs = 2 if has_fictitious_inertia(case.linkage) else 1
+    runs = 2 if has_fictitious_inertia(case.linkage, motion.quasi_static) else 1
     scale = case.linkage.scale
     last: list[DriveEnd] = []
     limit = lead_limit(case, motion, float(results.condition[0]))
@@ -373,6 +429,7 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
         out = lengthen_lead(read, limit, DRIVEN.dt, scale, runs, units)
         if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
             out = halve_timestep(read, out, scale, runs, units)
+        out.solver_disagreement = last[0].solver_disagreement
         steps += out.total_steps
         if out.converged:
             break
@@ -393,7 +450,8 @@ def driven_solution(case: Case, results: LinkageResults, out: Convergence, end: 
     ).as_dict(lead_disagreement=out.lead_disagreement, lead_steps=out.lead_steps,
               timestep=out.dt, timestep_disagreement=out.timestep_disagreement,
               fictitious_runs=runs, iterations=iterations,
-              fictitious_inertia_correction=end.correction)
+              fictitious_inertia_correction=end.correction,
+              solver_disagreement=end.solver_disagreement)
     pose = {k: v for k, v in out.values.items() if quantity_kind(k, units.get(k)) == "pose"}
     if not out.converged:
         return Solution(case.name, BACKEND, pose, status="not_settled", message=out.verdict(),

@@ -181,7 +181,8 @@ def driven_inertial(linkage: Linkage, link: str, settings: SolverSettings
     (m·r²/3) at its centroid; a real mass whose moment is below ``MOMENT_FLOOR`` × m·r²
     (a point mass: pymunk needs a positive moment) gets that much more. Both are ×
     ``fictitious_scale``, so a reading removes them by extrapolation to zero
-    (:func:`mechcheck.sim_models.convergence.massless_limit`).
+    (:func:`mechcheck.sim_models.convergence.massless_limit`). In a quasi-static run every
+    link's inertia is fictitious, real masses' included.
     """
     k, r = settings.fictitious_scale, gyration_radius(linkage, link)
     real = real_inertial(linkage, link)
@@ -189,6 +190,8 @@ def driven_inertial(linkage: Linkage, link: str, settings: SolverSettings
         m = k * FICTITIOUS_FRACTION * max((m.mass for m in linkage.masses), default=1.0)
         return m, m * r * r / 3.0, centroid(linkage, link)
     floor = moment_floor(linkage, link, real)
+    if settings.quasi_static:
+        return k * real.mass, k * max(real.inertia, floor), real.com
     moment = real.inertia + (k * floor if real.inertia < floor else 0.0)
     return real.mass, moment, real.com
 
@@ -201,8 +204,11 @@ def moment_floor(linkage: Linkage, link: str, real: Inertial) -> float:
     return MOMENT_FLOOR * real.mass * reach(linkage, link, real.com) ** 2
 
 
-def has_fictitious_inertia(linkage: Linkage) -> bool:
-    """True when a driven model gives some link inertia the Case does not."""
+def has_fictitious_inertia(linkage: Linkage, quasi_static: bool = False) -> bool:
+    """True when a driven model gives some link inertia the Case does not (a quasi-static
+    run: every link's, :func:`driven_inertial`)."""
+    if quasi_static:
+        return True
     for link in linkage.moving_links:
         real = real_inertial(linkage, link)
         if real is None or real.inertia < moment_floor(linkage, link, real):

@@ -50,6 +50,9 @@ class SolverSettings:
         massless links' and what near-point links get, see
         :func:`mechcheck.sim_models.pymunk.linkage_model.driven_inertial`); the twin run
         that removes it by extrapolation has 2.
+    quasi_static : a quasi-static run of a static case: the real masses' inertia is
+        fictitious too (× ``fictitious_scale``), since statics has none; their weights
+        stay explicit forces of the real masses.
     settle_speed : 1/s, settled when every body's largest point speed
         (|v| + |ω|·L), divided by the mechanism's length scale L, is below
         this. Relative, so that a case in metres and one of centimetre links
@@ -72,6 +75,7 @@ class SolverSettings:
     damping: float = 0.01
     fictitious_mass: float = 1000.0
     fictitious_scale: float = 1.0
+    quasi_static: bool = False
     settle_speed: float = 1.0e-9
     settle_force_change: float = 1.0e-10
     settle_patience: int = 3
