@@ -69,12 +69,11 @@ def at_rest_reason(case: Case, window: float, rest_speed: float = REST_SPEED) ->
     relative motion of a Coulomb joint is at rest at the reading (slower than
     ``rest_speed``, rad/s, a prismatic joint's m/s taken per the linkage's length scale),
     or reverses within ``window`` (s, the simulator's longest time step) before it. A
-    simulator takes each
-    Coulomb sense from its own joint rates, which a step's velocity error or a step across
-    the reversal can turn over, while the analytic sense there is the prescribed one (or,
-    at rest, the case's convention). Found by the random driven-friction test (2026-11-25):
-    ω = 6e-8 rad/s with α = 1 rad/s² at the reading, the crank reversing 6e-8 s before it;
-    MuJoCo read the pin friction with the other sign."""
+    simulator takes each Coulomb sense from its own joint rates, which a step's velocity
+    error or a step across the reversal can turn over, while the analytic sense there is
+    the prescribed one (or, at rest, the case's convention). Found by the random
+    driven-friction test (2026-11-25): ω = 6e-8 rad/s with α = 1 rad/s² at the reading, the
+    crank reversing 6e-8 s before it; MuJoCo read the pin friction with the other sign."""
     joints = coulomb_joints(case)
     if not (case.linkage.is_moving and joints):
         return ""
