@@ -309,15 +309,16 @@ def _dyad_links(plan: AssurPlan) -> Iterator[str]:
 
 
 def _unwrap_from(raw: Array, zero: int) -> Array:
-    """Carry an angle continuously outward from node ``zero`` (where it is ~0)."""
+    """Carry an angle continuously outward from node ``zero`` (where it is ~0), each way up
+    to the first node that does not close: each node turned by the whole turns that bring
+    it nearest the one before (node steps turn a link far less than half a turn, so the
+    turns add up from the raw angles' differences)."""
     out = raw.copy()
-    for order in (range(zero + 1, raw.size), range(zero - 1, -1, -1)):
-        previous = out[zero]
-        for k in order:
-            if not np.isfinite(out[k]):
-                break
-            out[k] += math.tau * round((previous - out[k]) / math.tau)
-            previous = out[k]
+    for side in (out[zero:], out[zero::-1]):  # views: written through
+        finite = np.isfinite(side)
+        n = side.size if finite.all() else int(np.argmin(finite))
+        if n > 1:
+            side[1:n] += math.tau * np.cumsum(np.rint((side[:n - 1] - side[1:n]) / math.tau))
     return out
 
 

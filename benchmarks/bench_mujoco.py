@@ -103,9 +103,11 @@ def stop_rules(label):
 def forget_rigs(label):
     """Before a repeat of the run ``label``: the kept models forgotten if it builds them."""
     from mechcheck.sim_models.mujoco.linkage import sweep_rig
+    from mechcheck.sim_models.presets import kept_linkage
 
     if label == COLD:
         sweep_rig.cache_clear()
+        kept_linkage.cache_clear()
 
 
 def timed(label, backend, sweep_once):

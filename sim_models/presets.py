@@ -11,6 +11,7 @@ adds is only this translation, in both directions.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -32,9 +33,23 @@ T = TypeVar("T", float, np.ndarray)
 
 
 def as_linkage(case: Case) -> Case:
-    """The preset ``case`` as a ``mechanism = "linkage"`` case drawn at its pose."""
+    """The preset ``case`` as a ``mechanism = "linkage"`` case drawn at its pose; the last
+    few are kept (:func:`kept_linkage`), as every backend of a sweep translates the same
+    stretches again and building a Linkage checks it whole (0.5 ms for a four-bar)."""
+    try:
+        return kept_linkage(case)
+    except TypeError:  # should a Case ever hold an unhashable value: translated each time
+        return translated(case)
+
+
+def translated(case: Case) -> Case:
+    """:func:`as_linkage`, built anew."""
     return Case(name=case.name, geometry=linkage_of(case), theta12=0.0,
                 tolerance=case.tolerance, source=case.source)
+
+
+#: :func:`translated`, kept for the same Case (immutable, and so is its translation).
+kept_linkage = functools.lru_cache(maxsize=16)(translated)
 
 
 @dataclass(frozen=True)

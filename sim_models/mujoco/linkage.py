@@ -31,6 +31,7 @@ from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
+from mechcheck.sim_models.mujoco import exact_compiled
 from mechcheck.sim_models.mujoco.batch_settle import BatchSettler, sensing_rig
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
@@ -274,6 +275,23 @@ def post_constraint(rig: LinkageRig, state: tuple[np.ndarray, ...], loads: np.nd
     # qacc is written at each pose where a forward pass overwrites it or the poses accelerate.
     steady = not (tendons or qacc.any())
     d_qpos, d_qvel, d_qacc, d_xfrc = d.qpos, d.qvel, d.qacc, d.xfrc_applied
+    loop = exact_compiled.loops()
+    if loop is not None and len(qpos) and copies:
+        try:
+            views = first_pass(rig, qpos[0], qvel[0] if rolling else d_qvel, m.eq_data[:, 0],
+                               loads[0])
+            f = exact_compiled.functions()
+            loop.post(f["mj_forward"], f["mj_kinematics"], f["mj_comPos"], f["mj_comVel"],
+                      f["mj_rnePostConstraint"], m._address, d._address, qpos, qvel,
+                      np.ascontiguousarray(known["qacc"]), loads, forces, d_qpos, d_qvel,
+                      d_qacc, d_xfrc, views[2],
+                      tuple(t.reshape(len(qpos), -1) for t, _ in copies),
+                      tuple(source.reshape(-1) for _, source in copies), rolling, tendons,
+                      steady)
+            exact_compiled.check_arena(d, views, nefc, m.nv)
+            return snapshot
+        except exact_compiled.ArenaMoved:
+            pass
     d_qacc[:] = 0.0
     for i in range(len(qpos)):
         d_qpos[:] = qpos[i]
@@ -318,6 +336,19 @@ def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets
     held = m.eq_data[:, 0]
     columns = np.repeat(held[None], n, axis=0)
     columns[:, rig.driver_eqs] = targets
+    loop = exact_compiled.loops()
+    if loop is not None and n:
+        try:
+            views = first_pass(rig, qpos[0], qvel[0], columns[0], loads[0])
+            loop.equations(exact_compiled.functions()["mj_forward"],
+                           exact_compiled.functions()["mj_mulM"], m._address, d._address,
+                           qpos, qvel, qacc, columns, loads, d_qpos, d_qvel, held, d_xfrc,
+                           views[0], views[1], d_smooth, jac, efc_pos, smooth, inertial,
+                           rolling, moving)
+            exact_compiled.check_arena(d, views, nefc, m.nv)
+            return finish_equations(rig, jac, inertial, smooth, qacc, efc_pos)
+        except exact_compiled.ArenaMoved:
+            pass
     for i in range(n):
         d_qpos[:] = qpos[i]
         if rolling:
@@ -330,8 +361,26 @@ def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets
         smooth[i] = d_smooth
         if moving:
             mujoco.mj_mulM(m, d, inertial[i], qacc[i])
+    return finish_equations(rig, jac, inertial, smooth, qacc, efc_pos)
+
+
+def finish_equations(rig: LinkageRig, jac: np.ndarray, inertial: np.ndarray,
+                     smooth: np.ndarray, qacc: np.ndarray, efc_pos: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(J, rhs, efc_pos) of :func:`constraint_equations` from its per-pose arrays."""
+    m = rig.model
     rhs = inertial - m.dof_armature * qacc - smooth
-    return jac.reshape(n, nefc, m.nv), rhs, efc_pos
+    return jac.reshape(len(jac), rig.nefc, m.nv), rhs, efc_pos
+
+
+def first_pass(rig: LinkageRig, qpos: np.ndarray, qvel: np.ndarray, held: np.ndarray,
+               loads: np.ndarray) -> tuple[np.ndarray, ...]:
+    """A forward pass at one pose, so that MjData's constraint arrays are laid out; views
+    of them (:func:`.exact_compiled.constraint_views`)."""
+    m, d = rig.model, rig.data
+    d.qpos[:], d.qvel[:], m.eq_data[:, 0], d.xfrc_applied[:] = qpos, qvel, held, loads
+    mujoco.mj_forward(m, d)
+    return exact_compiled.constraint_views(d, rig.nefc, m.nv)
 
 
 def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",

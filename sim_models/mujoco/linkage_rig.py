@@ -39,6 +39,7 @@ from mechcheck.analytic.linkage import Joint, LinearSpring, TorsionSpring
 from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.mujoco import exact_compiled
 from mechcheck.sim_models.mujoco.linkage_model import (
     CLOCK,
     LinkageTree,
@@ -365,8 +366,12 @@ class LinkageRig:
         return xfrc, carried[..., self.drive_first_rows]
 
     def load_points(self, qpos: Array) -> tuple[Array, Array]:
-        """(site_xpos, xipos) of MuJoCo's kinematics at each pose of ``qpos`` (N, nq)."""
+        """(site_xpos, xipos) of MuJoCo's kinematics at each pose of ``qpos`` (N, nq);
+        compiled where it can be (:mod:`.exact_compiled`)."""
         m, d = self.model, self.data
+        loop = exact_compiled.loops()
+        if loop is not None:
+            return exact_compiled.load_points(loop, m, d, qpos)
         sites = np.empty((len(qpos), *d.site_xpos.shape))
         centres = np.empty((len(qpos), *d.xipos.shape))
         for i, q in enumerate(qpos):

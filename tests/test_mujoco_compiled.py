@@ -1,0 +1,99 @@
+"""``mujoco_solve``'s compiled per-pose loops (:mod:`mechcheck.sim_models.mujoco.exact_kernel`)
+against its Python loops: the same MuJoCo functions on the same MjData, so the same numbers
+to the last bit; and the Python loops wherever the compiled ones cannot run."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.mujoco import exact_compiled
+from mechcheck.sim_models.mujoco.backend import sweep
+from mechcheck.sim_models.presets import as_linkage, kept_linkage, translated
+from mechcheck.sweep import gated_poses
+
+from .builtin import builtin, builtin_cases
+
+pytest.importorskip("numba")
+
+#: Built-in linkages whose driver sweeps ±0.1 (rad or m) stay exact solves (no friction,
+#: no free coordinates), and the presets' θ12 sweeps.
+LINKAGES = sorted(n for n, c in builtin_cases().items()
+                  if c.mechanism == "linkage" and not c.has_friction
+                  and n not in ("bonnet-hold", "bonnet-free", "exam-q1-slider-bar"))
+
+
+def grid(name: str) -> np.ndarray:
+    case = builtin(name)
+    if case.mechanism == "linkage":
+        return np.linspace(-0.1, 0.1, 25)
+    theta = np.radians(np.arange(0.0, 360.0, 7.0))
+    verdicts, _ = gated_poses(case, theta)
+    return theta[[v == "" for v in verdicts]]
+
+
+def counted(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """Records each compiled loop that runs."""
+    ran: list[str] = []
+    loop = exact_compiled.loops()
+    assert loop is not None, "numba is installed: the loops compile"
+    for name in ("load_points", "equations", "post"):
+        original = getattr(loop, name)
+
+        def wrapper(*args: object, _f: Callable[..., None] = original, _n: str = name) -> None:
+            ran.append(_n)
+            _f(*args)
+
+        monkeypatch.setattr(loop, name, wrapper)
+    return ran
+
+
+def identical(a: list[Solution], b: list[Solution]) -> bool:
+    return len(a) == len(b) and all(
+        x.status == y.status and x.values.keys() == y.values.keys()
+        and all(x.values[q] == y.values[q] or (math.isnan(x.values[q]) and math.isnan(y.values[q]))
+                for q in x.values)
+        for x, y in zip(a, b, strict=True))
+
+
+@pytest.mark.parametrize("name", [*LINKAGES, "seed-E1-as-stated", "seed-E2-frictionless"])
+def test_the_compiled_loops_give_the_python_loops_numbers(name: str,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    case, values = builtin(name), grid(name)
+    ran = counted(monkeypatch)
+    fast = sweep(case, values, "mujoco_solve")
+    assert {"load_points", "equations", "post"} <= set(ran)
+    with monkeypatch.context() as m:
+        m.setattr(exact_compiled, "loops", lambda: None)
+        count = len(ran)
+        slow = sweep(case, values, "mujoco_solve")
+        assert len(ran) == count
+    assert sum(s.status == "ok" for s in fast) >= 10
+    assert identical(fast, slow)
+
+
+def test_an_arena_laid_out_elsewhere_falls_back_to_python(monkeypatch: pytest.MonkeyPatch) -> None:
+    """If a forward pass put the constraint arrays elsewhere, the Python loops redo the work:
+    the same numbers as without the compiled loops."""
+    case, values = builtin("seed-E1-as-stated"), grid("seed-E1-as-stated")
+    expected = sweep(case, values, "mujoco_solve")
+
+    def moved(*args: object) -> None:
+        raise exact_compiled.ArenaMoved("test")
+
+    monkeypatch.setattr(exact_compiled, "check_arena", moved)
+    assert identical(sweep(case, values, "mujoco_solve"), expected)
+
+
+def test_a_kept_translation_is_the_translation() -> None:
+    """:func:`as_linkage` keeps the last translations (the same object again for the same
+    Case), equal to one made anew; another pose is another translation."""
+    e1 = builtin("seed-E1-as-stated")
+    kept_linkage.cache_clear()
+    assert as_linkage(e1) is as_linkage(e1)
+    assert as_linkage(e1) == translated(e1) and as_linkage(e1) is not translated(e1)
+    assert as_linkage(e1.with_(theta12=e1.theta12 + 0.1)) != as_linkage(e1)
