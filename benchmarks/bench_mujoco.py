@@ -61,17 +61,25 @@ NEAR_TOGGLE_DELTAS = np.sort(np.r_[np.geomspace(30.0, 1e-4, 15)[2:10],
 NEAR_TOGGLE_REPEATS = 3
 
 
-#: (row label, backend). ``mujoco_solve`` keeps its model for the next sweep of the same
-#: linkage (:func:`mechcheck.sim_models.mujoco.linkage.sweep_rig`): timed with the model
-#: kept from the warm-up run, and with it built anew in every repeat (as a sweep run once).
-RUNS = (("mujoco", "mujoco"), ("mujoco_solve", "mujoco_solve"),
-        (COLD := "mujoco_solve, model built", "mujoco_solve"))
+#: (row label, backend). Both keep their models for the next sweep of the same linkage
+#: (:func:`mechcheck.sim_models.mujoco.linkage.sweep_rig`,
+#: :func:`mechcheck.sim_models.mujoco.batch_settle.kept_models`, and the presets'
+#: translation, :func:`mechcheck.sim_models.presets.kept_linkage`) and the settled
+#: sweep's model copies for models of the same sizes
+#: (:func:`mechcheck.sim_models.mujoco.batch_settle.model_copies`): timed with them kept
+#: from the warm-up run, and with them all built anew in every repeat (a sweep run once in
+#: a fresh process).
+RUNS = (("mujoco", "mujoco"), (COLD_SETTLED := "mujoco, models built", "mujoco"),
+        ("mujoco_solve", "mujoco_solve"), (COLD := "mujoco_solve, model built", "mujoco_solve"))
 
 
 #: A row timing the settled sweep with numpy's stop rules, where numba compiles them
 #: (:func:`mechcheck.sim_models.mujoco.batch_settle.first_stops`): the same sweep, the same
 #: steps; the difference is the rules' overhead.
 NUMPY = "numpy stop rules"
+#: Rows with the per-pose loops in Python where numba compiles them
+#: (:mod:`mechcheck.sim_models.mujoco.exact_compiled`: the settled reads, the exact solve).
+PYTHON_LOOPS = "Python per-pose loops"
 
 
 def compiled_rules() -> bool:
@@ -82,32 +90,42 @@ def compiled_rules() -> bool:
 
 
 def runs():
-    """:data:`RUNS`, with the settled sweep again on numpy's stop rules if numba compiled them."""
-    return (RUNS[0], (f"mujoco, {NUMPY}", "mujoco"), *RUNS[1:]) if compiled_rules() else RUNS
+    """:data:`RUNS`, with the settled sweep again on numpy's stop rules and both again with
+    Python's per-pose loops, if numba compiled them."""
+    if not compiled_rules():
+        return RUNS
+    return (RUNS[0], (f"mujoco, {NUMPY}", "mujoco"), (f"mujoco, {PYTHON_LOOPS}", "mujoco"),
+            *RUNS[1:3], (f"mujoco_solve, {PYTHON_LOOPS}", "mujoco_solve"), *RUNS[3:])
 
 
 @contextlib.contextmanager
 def stop_rules(label):
-    """Within: the batched settling's stop rules numpy's if ``label`` names them."""
-    from mechcheck.sim_models.mujoco import batch_settle
+    """Within: the batched settling's stop rules numpy's, or the per-pose loops Python's,
+    if ``label`` names them."""
+    from mechcheck.sim_models.mujoco import batch_settle, exact_compiled
 
-    compiled = batch_settle.first_stops
+    compiled, loops = batch_settle.first_stops, exact_compiled.loops
     if NUMPY in label:
         batch_settle.first_stops = batch_settle.vectorised_stops
+    if PYTHON_LOOPS in label:
+        exact_compiled.loops = lambda: None
     try:
         yield
     finally:
-        batch_settle.first_stops = compiled
+        batch_settle.first_stops, exact_compiled.loops = compiled, loops
 
 
 def forget_rigs(label):
     """Before a repeat of the run ``label``: the kept models forgotten if it builds them."""
+    from mechcheck.sim_models.mujoco.batch_settle import COPIES, kept_models
     from mechcheck.sim_models.mujoco.linkage import sweep_rig
     from mechcheck.sim_models.presets import kept_linkage
 
-    if label == COLD:
+    if label in (COLD, COLD_SETTLED):  # as in a fresh process
         sweep_rig.cache_clear()
+        kept_models.cache_clear()
         kept_linkage.cache_clear()
+        COPIES.clear()
 
 
 def timed(label, backend, sweep_once):

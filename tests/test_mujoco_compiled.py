@@ -1,6 +1,8 @@
-"""``mujoco_solve``'s compiled per-pose loops (:mod:`mechcheck.sim_models.mujoco.exact_kernel`)
-against its Python loops: the same MuJoCo functions on the same MjData, so the same numbers
-to the last bit; and the Python loops wherever the compiled ones cannot run."""
+"""MuJoCo's compiled per-pose loops (:mod:`mechcheck.sim_models.mujoco.exact_kernel`:
+``mujoco_solve``'s batch and the settled sweep's reads) against the Python loops: the same
+MuJoCo functions on the same MjData, so the same numbers to the last bit; the Python loops
+wherever the compiled ones cannot run; and models kept from one sweep to the next give the
+numbers of models built anew."""
 
 from __future__ import annotations
 
@@ -11,12 +13,13 @@ import numpy as np
 import pytest
 
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.mujoco import exact_compiled
+from mechcheck.sim_models.mujoco import batch_settle, exact_compiled
 from mechcheck.sim_models.mujoco.backend import sweep
 from mechcheck.sim_models.presets import as_linkage, kept_linkage, translated
 from mechcheck.sweep import gated_poses
 
 from .builtin import builtin, builtin_cases
+from .test_pymunk_linkage import at_rest
 
 pytest.importorskip("numba")
 
@@ -41,7 +44,7 @@ def counted(monkeypatch: pytest.MonkeyPatch) -> list[str]:
     ran: list[str] = []
     loop = exact_compiled.loops()
     assert loop is not None, "numba is installed: the loops compile"
-    for name in ("load_points", "equations", "post"):
+    for name in ("load_points", "equations", "post", "reads"):
         original = getattr(loop, name)
 
         def wrapper(*args: object, _f: Callable[..., None] = original, _n: str = name) -> None:
@@ -97,3 +100,67 @@ def test_a_kept_translation_is_the_translation() -> None:
     assert as_linkage(e1) is as_linkage(e1)
     assert as_linkage(e1) == translated(e1) and as_linkage(e1) is not translated(e1)
     assert as_linkage(e1.with_(theta12=e1.theta12 + 0.1)) != as_linkage(e1)
+
+
+def settled_sweep(name: str) -> list[Solution]:
+    """The built-in case's settled sweep, a moving linkage's with its drivers held."""
+    case = builtin(name)
+    case = at_rest(case) if case.mechanism == "linkage" and case.kind != "static" else case
+    values = np.linspace(-0.5, 0.5, 41) if case.mechanism == "linkage" else grid(name)
+    return sweep(case, values, "mujoco")
+
+
+def assert_same_settling(a: list[Solution], b: list[Solution]) -> None:
+    """Same verdicts, steps and numbers, to the last bit."""
+    assert [s.diagnostics.get("steps") for s in a] == [s.diagnostics.get("steps") for s in b]
+    assert identical(a, b)
+
+
+@pytest.mark.parametrize("name", ["seed-E1-as-stated", "watt-ii-demo"])
+def test_settled_reads_compiled_are_the_python_reads(name: str,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """A settled sweep, batched: the pass-end reads compiled and in Python, every pose's
+    steps and numbers alike (each pose's next pass starts from what its read carried, so one
+    differing bit would change what follows)."""
+    ran = counted(monkeypatch)
+    fast = settled_sweep(name)
+    assert ran.count("reads") >= 5
+    with monkeypatch.context() as m:
+        m.setattr(exact_compiled, "loops", lambda: None)
+        slow = settled_sweep(name)
+    assert sum(s.status == "ok" for s in fast) >= 30
+    assert_same_settling(fast, slow)
+
+
+def test_kept_settling_models_give_the_numbers_of_new_ones() -> None:
+    """The second settled sweep of a Case reuses the first's rig, model copies and rollout
+    data (:func:`~mechcheck.sim_models.mujoco.batch_settle.kept_models`): the same steps
+    and numbers as a sweep with models built anew, and the same models again."""
+    batch_settle.kept_models.cache_clear()
+    first = settled_sweep("seed-E1-as-stated")
+    kept = batch_settle.kept_models.cache_info().currsize
+    again = settled_sweep("seed-E1-as-stated")
+    assert batch_settle.kept_models.cache_info().currsize == kept > 0
+    assert batch_settle.kept_models.cache_info().hits >= kept
+    batch_settle.kept_models.cache_clear()
+    assert_same_settling(first, again)
+    assert_same_settling(again, settled_sweep("seed-E1-as-stated"))
+
+
+def test_copies_refreshed_in_place_give_the_numbers_of_new_copies(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A settled sweep after another of a linkage of the same sizes (seed E1 drawn at
+    another pose: another Case, another rig) steps the copies that sweep left, refreshed in
+    place (:func:`~mechcheck.sim_models.mujoco.batch_settle.model_copies`): the same
+    numbers as with new copies."""
+    e1 = builtin("seed-E1-as-stated")
+    theta = grid("seed-E1-as-stated")
+    batch_settle.COPIES.clear()
+    sweep(e1, theta, "mujoco")
+    ((_, kept),) = batch_settle.COPIES.values()
+    before = [id(m) for m in kept]
+    in_place = sweep(e1, theta[3:], "mujoco")  # drawn at its own first pose
+    assert [id(m) for m in kept[:len(before)]] == before and len(batch_settle.COPIES) == 1
+    monkeypatch.setattr(exact_compiled, "copy_model", lambda: None)
+    batch_settle.kept_models.cache_clear()
+    assert_same_settling(in_place, sweep(e1, theta[3:], "mujoco"))

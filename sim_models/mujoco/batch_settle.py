@@ -30,10 +30,13 @@ a model of its own: ``POOL`` copies of the rig's model take turns.
 from __future__ import annotations
 
 import bisect
+import contextlib
 import copy
+import functools
 import os
+import threading
 from collections import deque
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field, replace
 
 import mujoco
@@ -45,8 +48,9 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
 from mechcheck.sim_models.compiled import kernel
+from mechcheck.sim_models.mujoco import exact_compiled
 from mechcheck.sim_models.mujoco.linkage_model import body_name, spanning_tree
-from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
 from mechcheck.sim_models.mujoco.settle import (
     FLOOR_WINDOW,
     MAX_PASSES,
@@ -135,16 +139,77 @@ def sensing_rig(case: Case) -> LinkageRig:
     return LinkageRig(case, customize=lambda spec: add_reaction_sensors(spec, case.linkage))
 
 
-class BatchSettler:
-    """Settles the poses ``qpos`` (N, nq) of one linkage rig (:func:`sensing_rig`)."""
+@dataclass
+class Models:
+    """What a batch settles with, besides its model copies (:func:`model_copies`): a sensing
+    rig (:func:`sensing_rig`), one MjData per rollout thread, and the lock one sweep at a
+    time holds while it uses them."""
 
-    def __init__(self, rig: LinkageRig, qpos: Array) -> None:
-        self.rig = rig
+    rig: LinkageRig
+    datas: list[mujoco.MjData]
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+
+def built_models(case: Case) -> Models:
+    """:class:`Models` for ``case``."""
+    rig = sensing_rig(case)
+    return Models(rig, [mujoco.MjData(rig.model) for _ in range(THREADS)])
+
+
+@functools.lru_cache(maxsize=8)
+def kept_models(case: Case) -> Models:
+    """:func:`built_models`, kept for the next settled sweep of the same Case (immutable, and
+    so are the models built from it). A sweep sets everything it reads: the drivers'
+    targets of each model it steps, and the rig's data it reads in (reset by
+    :class:`BatchSettler`); the rollout sets each trajectory's whole state."""
+    return built_models(case)
+
+
+#: Copies of models, by their sizes (:func:`sizes`), and the lock a sweep holds while it
+#: steps them (:func:`model_copies`).
+COPIES: dict[tuple[int, ...], tuple[threading.Lock, list[mujoco.MjModel]]] = {}
+COPIES_LOCK = threading.Lock()
+
+
+def sizes(model: mujoco.MjModel) -> tuple[int, ...]:
+    """Every size of ``model`` (its integer fields n…, the buffer's included): two models
+    with the same sizes have the same layout, so one can be copied into the other."""
+    return tuple(getattr(model, name) for name in dir(model)
+                 if name.startswith("n") and isinstance(getattr(model, name), int))
+
+
+@contextlib.contextmanager
+def model_copies(model: mujoco.MjModel, n: int) -> Iterator[list[mujoco.MjModel]]:
+    """``n`` copies of ``model`` for a batch's poses in flight (each its own drivers'
+    targets), held while within. Models of the same sizes are copied into the ones the last
+    such batch used, in place (``mj_copyModel``: 14 µs against 180 µs for a new copy through
+    the Python binding, a tenth of a seed E1 sweep); where MuJoCo's library is not at a
+    known place, new copies are made."""
+    copy_into = exact_compiled.copy_model()
+    if copy_into is None:
+        yield [copy.copy(model) for _ in range(n)]
+        return
+    with COPIES_LOCK:
+        lock, kept = COPIES.setdefault(sizes(model), (threading.Lock(), []))
+    with lock:
+        kept += [copy.copy(model) for _ in range(n - len(kept))]
+        for dest in kept[:n]:
+            copy_into(dest._address, model._address)
+        yield kept[:n]
+
+
+class BatchSettler:
+    """Settles the poses ``qpos`` (N, nq) with ``models`` and the copies ``pool`` of the
+    rig's model (both held by the caller: their locks)."""
+
+    def __init__(self, models: Models, pool: list[mujoco.MjModel], qpos: Array) -> None:
+        rig = self.rig = models.rig
         self.qpos = qpos
         m, d = rig.model, rig.data
-        # No more copies than poses: a short stretch of a sweep needs fewer.
-        self.pool = [copy.copy(m) for _ in range(min(POOL, len(qpos)))]
-        self.datas = [mujoco.MjData(m) for _ in range(THREADS)]
+        self.pool = pool  # copies of the rig's model (:func:`model_copies`)
+        # Kept data carry nothing over: the rollout sets each trajectory's whole state
+        # (``tests/test_mujoco_compiled.py``: kept and new models, the same numbers).
+        self.datas = models.datas
         self.runner: rollout.Rollout | None = None  # during :meth:`settle`
         # Sensor columns: (fx, fy, fz, tx, ty, tz) per tree joint; the stop rule reads the
         # planar ones, torques over the size.
@@ -206,14 +271,16 @@ class BatchSettler:
         xfrc += rig.wrenches(sites, centres, states[:, self.qvel_slice])
         snapshot = rig.snapshot(len(poses))
         rig.reset_carried()  # added to the equality forces below, for all at once
-        for k, pose in enumerate(poses):
-            mujoco.mj_setState(m, d, states[k], STATE)
-            rig.set_targets(pose.targets)
-            d.xfrc_applied[:] = xfrc[k]
-            d.qfrc_applied[rig.drive_dofs] = drives[k]
-            mujoco.mj_forward(m, d)
-            mujoco.mj_rnePostConstraint(m, d)
-            rig.capture(snapshot, k)
+        targets = np.array([p.targets for p in poses]).reshape(len(poses), -1)
+        if not compiled_reads(rig, states, targets, xfrc, drives, snapshot):
+            for k in range(len(poses)):
+                mujoco.mj_setState(m, d, states[k], STATE)
+                rig.set_targets(targets[k])
+                d.xfrc_applied[:] = xfrc[k]
+                d.qfrc_applied[rig.drive_dofs] = drives[k]
+                mujoco.mj_forward(m, d)
+                mujoco.mj_rnePostConstraint(m, d)
+                rig.capture(snapshot, k)
         snapshot.efc_force[:, :rig.nefc] += carried
         columns = rig.values(snapshot)
         analytic = self.qpos[[p.index for p in poses]]
@@ -306,10 +373,16 @@ class BatchSettler:
         for model, pose in zip(self.pool, wave, strict=False):
             model.eq_data[self.rig.driver_eqs, 0] = pose.targets
         initial = np.array([p.state for p in wave])
-        control = np.array([p.control for p in wave])[:, None, :]
+        # The controls held for the chunk, and the outputs, as the wrapper would make them
+        # (tiled over the steps, allocated): its checks of every model, every call, were a
+        # twentieth of a sweep, and the models are copies of one rig's.
+        control = np.repeat(np.array([p.control for p in wave])[:, None, :], nstep, axis=1)
+        states = np.empty((len(wave), nstep, initial.shape[1]))
+        sensors = np.empty((len(wave), nstep, self.rig.model.nsensordata))
         assert self.runner is not None, "within settle()"
-        states, sensors = self.runner.rollout(self.pool[:len(wave)], self.datas, initial,
-                                              control, control_spec=CONTROLS, nstep=nstep)
+        self.runner.rollout(self.pool[:len(wave)], self.datas, initial, control,
+                            control_spec=CONTROLS, nstep=nstep, skip_checks=True, state=states,
+                            sensordata=sensors)
         readings = sensors[:, :, self.columns] * self.column_scale
         # The state each reading was taken at: the chunk's start, then each step's end.
         before = np.concatenate([initial[:, None], states[:, :-1]], axis=1)
@@ -454,3 +527,31 @@ def vectorised_stops(history: Array, readings: Array, speed: Array) -> tuple[Arr
     fired = (rule >= 0) & (speed <= VELOCITY_TOL)
     first = np.where(fired.any(axis=1), fired.argmax(axis=1), -1)
     return first, rule[np.arange(len(first)), first]
+
+
+def compiled_reads(rig: LinkageRig, states: Array, targets: Array, xfrc: Array,
+                   drives: Array, snapshot: Snapshot) -> bool:
+    """:meth:`BatchSettler.read`'s loop compiled (:func:`.exact_kernel.reads`), if it can
+    be: the same calls on the same data, so the same numbers. Not before the rig's data
+    has had a forward pass (its constraint arrays are not laid out yet), nor if a pass laid
+    them out elsewhere (then False, and the caller's loop runs again from the start)."""
+    loop = exact_compiled.loops()
+    m, d = rig.model, rig.data
+    if loop is None or d.efc_force.size != rig.nefc:
+        return False
+    views = exact_compiled.constraint_views(d, rig.nefc, m.nv)
+    f = exact_compiled.functions()
+    n = len(states)
+    loop.reads(f["mj_setState"], f["mj_forward"], f["mj_rnePostConstraint"], m._address,
+               d._address, np.ascontiguousarray(states), int(STATE), m.eq_data,
+               np.asarray(rig.driver_eqs, dtype=np.int64), targets, xfrc, d.xfrc_applied,
+               d.qfrc_applied, np.asarray(rig.drive_dofs, dtype=np.int64),
+               np.ascontiguousarray(drives).reshape(n, -1), rig.carried, views[2], views[1],
+               snapshot.efc_force, snapshot.efc_pos,
+               tuple(getattr(snapshot, field).reshape(n, -1) for field, _ in rig.captured),
+               tuple(source.reshape(-1) for _, source in rig.captured))
+    try:
+        exact_compiled.check_arena(d, views, rig.nefc, m.nv)
+    except exact_compiled.ArenaMoved:
+        return False
+    return True

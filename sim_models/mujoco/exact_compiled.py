@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import ctypes
 import sys
+from collections.abc import Callable
 from functools import cache
 from pathlib import Path
 from types import ModuleType
@@ -30,9 +31,16 @@ from mechcheck.sim_models.compiled import kernel
 KERNEL = "mechcheck.sim_models.mujoco.exact_kernel"
 #: ``void f(const mjModel *, mjData *)``, the pointers passed as integers of their size.
 PASS = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t)
+#: ``mj_setState(const mjModel *, mjData *, const mjtNum *state, int spec)``.
+SET_STATE = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t,
+                             ctypes.c_int)
 #: ``mj_mulM(const mjModel *, const mjData *, mjtNum *res, const mjtNum *vec)``.
 MUL = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t,
                        ctypes.c_ssize_t)
+
+
+#: ``mjModel *mj_copyModel(mjModel *dest, const mjModel *src)``.
+COPY_MODEL = ctypes.CFUNCTYPE(ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t)
 
 
 class ArenaMoved(RuntimeError):
@@ -49,13 +57,24 @@ def library() -> ctypes.CDLL | None:
 
 
 @cache
-def functions() -> dict[str, ctypes._CFuncPtr]:
+def functions() -> dict[str, Callable[..., None]]:
     """The MuJoCo functions the kernels call."""
     lib = library()
     assert lib is not None
-    out = {name: PASS((name, lib)) for name in
-           ("mj_forward", "mj_kinematics", "mj_comPos", "mj_comVel", "mj_rnePostConstraint")}
-    return out | {"mj_mulM": MUL(("mj_mulM", lib))}
+    out: dict[str, Callable[..., None]] = {
+        name: PASS((name, lib))
+        for name in ("mj_forward", "mj_kinematics", "mj_comPos", "mj_comVel",
+                     "mj_rnePostConstraint")}
+    return out | {"mj_mulM": MUL(("mj_mulM", lib)),
+                  "mj_setState": SET_STATE(("mj_setState", lib))}
+
+
+@cache
+def copy_model() -> Callable[[int, int], int] | None:
+    """MuJoCo's ``mj_copyModel`` (into a model of the same sizes: in place), or None where
+    its library is not at a known place. It needs no numba."""
+    lib = library()
+    return None if lib is None else COPY_MODEL(("mj_copyModel", lib))
 
 
 def loops() -> ModuleType | None:

@@ -78,3 +78,29 @@ def post(forward: Fn, kinematics: Fn, com_pos: Fn, com_vel: Fn, rne: Fn, m: int,
         rne(m, d)
         for k in range(len(targets)):
             targets[k][i] = sources[k]
+
+
+@njit(cache=True)
+def reads(set_state: Any, forward: Fn, rne: Fn, m: int, d: int, states: Array, spec: int,
+          eq_data: Array, driver_eqs: Array, targets: Array, xfrc: Array, d_xfrc: Array,
+          d_qfrc: Array, drive_dofs: Array, drives: Array, carried: Array, d_force: Array,
+          d_pos: Array, out_force: Array, out_pos: Array, outs: Any, sources: Any) -> None:
+    """:meth:`.batch_settle.BatchSettler.read`'s loop: each state set (``spec``), its drivers'
+    targets, loads and drive forces, a forward pass and mj_rnePostConstraint; the captured
+    arrays (:meth:`.linkage_rig.LinkageRig.capture`) copied into row k."""
+    nefc = carried.size
+    for k in range(states.shape[0]):
+        set_state(m, d, states[k].ctypes.data, spec)
+        for j in range(driver_eqs.size):
+            eq_data[driver_eqs[j], 0] = targets[k, j]
+        d_xfrc[:] = xfrc[k]
+        for j in range(drive_dofs.size):
+            d_qfrc[drive_dofs[j]] = drives[k, j]
+        forward(m, d)
+        rne(m, d)
+        for i in range(len(outs)):
+            outs[i][k] = sources[i]
+        out_force[k] = d_force
+        out_pos[k] = d_pos
+        for j in range(nefc):
+            out_force[k, j] += carried[j]

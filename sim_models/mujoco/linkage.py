@@ -32,7 +32,13 @@ from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
 from mechcheck.sim_models.mujoco import exact_compiled
-from mechcheck.sim_models.mujoco.batch_settle import BatchSettler, sensing_rig
+from mechcheck.sim_models.mujoco.batch_settle import (
+    POOL,
+    BatchSettler,
+    built_models,
+    kept_models,
+    model_copies,
+)
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_friction import (
@@ -43,7 +49,11 @@ from mechcheck.sim_models.mujoco.linkage_friction import (
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
 from mechcheck.sim_models.mujoco.model import EXACT
-from mechcheck.sim_models.mujoco.settle import settle_refined, settled_solution
+from mechcheck.sim_models.mujoco.settle import (
+    settle_refined,
+    settled_solution,
+    settled_solutions,
+)
 from mechcheck.sim_models.mujoco.solve import (
     FRICTION_MAX_PASSES,
     FRICTION_RTOL,
@@ -437,9 +447,14 @@ def settled_sweep(case: Case, first: np.ndarray, results: LinkageResults,
     STRIDE-th start from the constraint forces those settled at. The wall time reported
     per pose is the sweep's share."""
     start = time.perf_counter()
-    rig = sensing_rig(case)
-    qpos = rig.joint_states(results.pose)[0]
-    settled = BatchSettler(rig, qpos).settle(results.pose.drivers,
-                                             first if continuation else None)
-    share = (time.perf_counter() - start) / max(len(first), 1)
-    return [settled_solution(rig, q, result, share) for q, result in zip(qpos, settled, strict=True)]
+    try:
+        models = kept_models(case)
+    except TypeError:  # should a Case ever hold an unhashable value: built for this sweep
+        models = built_models(case)
+    rig = models.rig
+    with models.lock, model_copies(rig.model, min(POOL, len(first))) as pool:
+        qpos = rig.joint_states(results.pose)[0]
+        settled = BatchSettler(models, pool, qpos).settle(results.pose.drivers,
+                                                          first if continuation else None)
+        share = (time.perf_counter() - start) / max(len(first), 1)
+        return settled_solutions(rig, qpos, settled, share)

@@ -464,13 +464,39 @@ def refinement_left(differences: list[float], contraction: float = 0.0) -> float
     return d * max(1.0, c / (1.0 - c))
 
 
+def settle_diagnostics(rig: SettlingRig, qpos: np.ndarray, result: Settled,
+                       elapsed: float) -> dict[str, float | str]:
+    """The diagnostics of a settling run's Solution."""
+    drift = rig.pose_drift(qpos=qpos) if np.isnan(result.pose_drift) else result.pose_drift
+    return RunDiagnostics(
+        "settle", result.steps, elapsed, result.residual_velocity, result.loop_violation, drift,
+    ).as_dict(passes=result.passes, pass_disagreement=result.refinement, stop_rule=result.rule)
+
+
+def settled_solutions(rig: SettlingRig, qpos: np.ndarray, results: list[Settled],
+                      elapsed: float) -> list[Solution]:
+    """:func:`settled_solution` of each pose of a sweep, ``elapsed`` its share of the time;
+    the settled ones made as a batch (:meth:`Solution.batch`: one check of the names, one
+    copy of the units), as their quantities are the same."""
+    settled = [k for k, r in enumerate(results) if r.settled]
+    names = tuple(results[settled[0]].values) if settled else ()
+    if any(tuple(results[k].values) != names for k in settled):
+        settled = []
+    out: list[Solution | None] = [None] * len(results)
+    batch = Solution.batch(
+        rig.case.name, "mujoco", names, (list(results[k].values.values()) for k in settled),
+        (settle_diagnostics(rig, qpos[k], results[k], elapsed) for k in settled),
+        rig.units or {})
+    for k, solution in zip(settled, batch, strict=True):
+        out[k] = solution
+    return [s if s is not None else settled_solution(rig, q, r, elapsed)
+            for s, q, r in zip(out, qpos, results, strict=True)]
+
+
 def settled_solution(rig: SettlingRig, qpos: np.ndarray, result: Settled, elapsed: float) -> Solution:
     """A Solution from a settling run: forces only if it settled."""
     case = rig.case
-    drift = rig.pose_drift(qpos=qpos) if np.isnan(result.pose_drift) else result.pose_drift
-    diagnostics = RunDiagnostics(
-        "settle", result.steps, elapsed, result.residual_velocity, result.loop_violation, drift,
-    ).as_dict(passes=result.passes, pass_disagreement=result.refinement, stop_rule=result.rule)
+    diagnostics = settle_diagnostics(rig, qpos, result, elapsed)
     if not result.settled:
         units = rig.units or {}
         pose = {q: v for q, v in result.values.items()
