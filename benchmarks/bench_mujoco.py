@@ -13,8 +13,11 @@ model with nothing else done; for ``mujoco_solve`` one bare ``mj_forward`` per p
 Settled statics also get issue 13's own floor ("42 steps × 3.5 µs"): the steps each pose
 takes settled alone (the single-pose backend, nothing carried from a neighbour), stepped
 the same way; the sweep's continuation makes its own floor the lower, stricter one.
-``mujoco_solve`` keeps the model it builds for a linkage for the next sweep of the same one:
-it is timed both ways.
+Both backends keep the models they build for a linkage for the next sweep of the same one
+(and the settled sweep its model copies for a linkage of the same sizes): each is timed
+both ways, the "built" rows as a sweep run once in a fresh process. Where numba compiles
+the per-pose loops, rows with Python's loops are timed too. Each row is timed with the
+earlier rows' objects frozen out of the garbage collector.
 Targets: settled ≤ 2× the C floor; ``mujoco_solve`` ≤ 20 µs/pose.
 
 A second table times a linkage sweep (issue 12): the Watt II six-bar held statically
@@ -34,6 +37,7 @@ Run: /work/venv/bin/python benchmarks/bench_mujoco.py [--linkage | --near-toggle
 
 import contextlib
 import dataclasses
+import gc
 import math
 import statistics
 import sys
@@ -134,12 +138,17 @@ def timed(label, backend, sweep_once):
     with its models kept then finds them in every repeat."""
     with stop_rules(label):
         sweep_once()
+        # The earlier rows' objects (their Solutions, kept models) out of the collector's
+        # sight: a full collection scanning them landed in one row's repeats or another's.
+        gc.collect()
+        gc.freeze()
         times = []
         for _ in range(LINKAGE_REPEATS):
             forget_rigs(label)
             start = time.perf_counter()
             out = sweep_once()
             times.append((time.perf_counter() - start) / 360 * 1e3)
+        gc.unfreeze()
     return times, out
 
 
