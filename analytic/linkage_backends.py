@@ -24,6 +24,7 @@ from mechcheck.analytic.linkage_forces import (
 from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, perp, solve_batched, solve_pose
 from mechcheck.analytic.linkage_loads import known_vector
 from mechcheck.analytic.solution import Solution, Status
+from mechcheck.analytic.values import CaseError
 
 COULOMB_REFUSAL = ("the method applies only to linkages without Coulomb friction: friction "
                    "moments depend on the total reactions")
@@ -52,11 +53,13 @@ def quantity_units(linkage: Linkage) -> dict[str, str]:
     return units
 
 
-def lock_message(linkage: Linkage, fraction: float) -> str:
-    """Where the drivers were when the linkage locked, in the file's units."""
+def lock_message(linkage: Linkage, fraction: float, target: Array | None = None) -> str:
+    """Where the drivers were when the linkage locked on their way to ``target`` (default:
+    the case's values), in the file's units."""
     parts = []
-    for driver in linkage.drivers:
-        value = fraction * driver.value
+    values = [d.value for d in linkage.drivers] if target is None else target.tolist()
+    for driver, full in zip(linkage.drivers, values, strict=True):
+        value = fraction * full
         if linkage.joint(driver.joint).kind == "revolute":
             parts.append(f"rotation {math.degrees(value):.6g}° of {driver.joint}")
         else:
@@ -71,7 +74,8 @@ def verdict(case: Case, results: LinkageResults, index: int) -> tuple[Status, st
         return "no_solution", ("no equilibrium pose of the free coordinates was found from the "
                                "drawn pose")
     if not results.pose.assembled[index]:
-        return "no_solution", lock_message(linkage, float(results.pose.locked_at[index]))
+        return "no_solution", lock_message(linkage, float(results.pose.locked_at[index]),
+                                           results.pose.drivers[index])
     if linkage.redundant:
         return "indeterminate", ("the joints' constraints are redundant at the drawn pose "
                                  f"(rank {linkage.joint_rank} < {2 * len(linkage.joints)}): the "
@@ -80,6 +84,10 @@ def verdict(case: Case, results: LinkageResults, index: int) -> tuple[Status, st
     if results.singular[index]:
         return "singular", (f"condition number {cond:.3g} exceeds 1e+08: the pose is at or next "
                             "to a toggle or dead point, where statics is singular; forces withheld")
+    if results.undirected is not None and results.undirected[index]:
+        return "indeterminate", (f"the ends of spring {results.undirected[index]} meet at this pose "
+                                 "while it carries a tension: a force without a line of action, "
+                                 "so the forces are not unique; forces withheld")
     if results.indeterminate[index]:
         return "indeterminate", (f"the relative motion at {results.reversing[index]} reverses at "
                                  "this pose: Coulomb friction there may take any value within "
@@ -101,8 +109,11 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
         "method": method, "condition_number": float(results.condition[index]),
         "dof": linkage.dof, "gruebler": linkage.gruebler, "wall_time_s": elapsed,
     }
-    values = {q: float(v[index]) for q, v in results.values.items() if np.isfinite(v[index])}
-    pose_only = {q: v for q, v in values.items() if q.startswith(("x_", "y_", "phi_", "q_"))}
+    # Every value is kept: one that is not finite at a pose without a verdict is a failure
+    # of the method, which the harness reports as such rather than as a missing row.
+    values = {q: float(v[index]) for q, v in results.values.items()}
+    pose_only = {q: v for q, v in values.items()
+                 if q.startswith(("x_", "y_", "phi_", "q_")) and math.isfinite(v)}
     if only is not None:
         values = {q: v for q, v in values.items() if q in only or q in pose_only}
     if results.stable is not None:
@@ -116,11 +127,18 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
     return Solution(case.name, backend, values, diagnostics=diagnostics, units=units)
 
 
+#: Why a linkage without drivers cannot be swept.
+NOTHING_TO_SWEEP = ("a linkage sweep moves the first driver, and this linkage has none (its "
+                    "free coordinates are solved case by case: use `mechcheck run`)")
+
+
 def driver_values(case: Case, first: Array | None) -> Array | None:
     """Driver values (N, d) with the first driver at ``first`` (its unit: rad or m, from the
     drawn pose) and the others at the case's values; None: the case's own pose."""
     if first is None:
         return None
+    if not case.linkage.drivers:
+        raise CaseError(NOTHING_TO_SWEEP, key="drivers", case=case.name)
     own = np.array([d.value for d in case.linkage.drivers])
     values = np.tile(own, (np.size(first), 1))
     values[:, 0] = np.asarray(first, dtype=float)

@@ -40,6 +40,7 @@ from mechcheck.analytic.linkage_loads import (
     joint_frame,
     known_vector,
     spring_force,
+    undirected_springs,
 )
 
 #: Above this condition number of the scaled equilibrium matrix the pose is singular and
@@ -236,6 +237,8 @@ class LinkageResults:
     reversing: NDArray[np.str_]
     #: Free coordinates only: 1 where the equilibrium pose is stable, 0 where not.
     stable: Array | None = None
+    #: Linear springs whose ends meet while they carry a tension (:func:`undirected_springs`).
+    undirected: NDArray[np.str_] | None = None
 
     @cached_property
     def condition(self) -> Array:
@@ -243,12 +246,17 @@ class LinkageResults:
         return self.condition_of()
 
     def head(self, n: int) -> LinkageResults:
-        """The first ``n`` poses' results (each pose's condition number is its own: computed
-        for all, if asked for, and cut)."""
-        return LinkageResults(self.pose.head(n), {k: v[:n] for k, v in self.values.items()},
-                              lambda: self.condition[:n], self.ill_conditioned[:n],
-                              self.converged[:n], self.reversing[:n],
-                              None if self.stable is None else self.stable[:n])
+        """The first ``n`` poses' results."""
+        return self.take(slice(None, n))
+
+    def take(self, which: slice | NDArray[np.intp]) -> LinkageResults:
+        """The results of the poses ``which`` (a slice or indices), in that order (each
+        pose's condition number is its own: computed for all, if asked for, and cut)."""
+        return LinkageResults(self.pose.take(which), {k: v[which] for k, v in self.values.items()},
+                              lambda: self.condition[which], self.ill_conditioned[which],
+                              self.converged[which], self.reversing[which],
+                              None if self.stable is None else self.stable[which],
+                              None if self.undirected is None else self.undirected[which])
 
     @property
     def singular(self) -> NDArray[np.bool_]:
@@ -256,7 +264,10 @@ class LinkageResults:
 
     @property
     def indeterminate(self) -> NDArray[np.bool_]:
-        return self.reversing != ""
+        """Friction reversing, or a spring's tension without a line of action."""
+        if self.undirected is None:
+            return self.reversing != ""
+        return (self.reversing != "") | (self.undirected != "")
 
     @property
     def assembled(self) -> NDArray[np.bool_]:
@@ -346,12 +357,14 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
             reversing[stops] = np.where(reversing[stops] == "", t.joint.name,
                                         reversing[stops] + ", " + t.joint.name)
     reversing = reversing.astype(str)
-    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "")
+    undirected = undirected_springs(pose)
+    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "") | (undirected != "")
     x[withheld] = np.nan
     if stable is not None:  # an equilibrium not found is no pose to report forces at
         converged = converged & np.isfinite(stable)
     return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms),
-                          lambda: cond, ~(cond <= SINGULAR_CONDITION), converged, reversing, stable)
+                          lambda: cond, ~(cond <= SINGULAR_CONDITION), converged, reversing, stable,
+                          undirected)
 
 
 def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:
@@ -373,12 +386,14 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
     found = static_results(linkage.assur_plan, vals)
     pose = found.pose
     singular = _singular_by_bound(pose, found.condition_bound)
+    undirected = undirected_springs(pose)
     for name, value in found.values.items():
         if name.startswith(("F_", "Q_")):
-            value[singular] = np.nan
+            value[singular | (undirected != "")] = np.nan
     n = vals.shape[0]
     return LinkageResults(pose, found.values, lambda: condition(pose, coefficient_matrix(pose)),
-                          singular, np.ones(n, dtype=bool), np.zeros(n, dtype="<U1"))
+                          singular, np.ones(n, dtype=bool), np.zeros(n, dtype="<U1"),
+                          undirected=undirected)
 
 
 def _singular_by_bound(pose: LinkagePose, bound: Array) -> NDArray[np.bool_]:

@@ -90,8 +90,12 @@ class LinkagePose:
 
     def head(self, n: int) -> LinkagePose:
         """The first ``n`` poses."""
-        return LinkagePose(self.linkage, self.drivers[:n], self.q[:n], self.qdot[:n],
-                           self.qddot[:n], self.locked_at[:n])
+        return self.take(slice(None, n))
+
+    def take(self, which: slice | NDArray[np.intp]) -> LinkagePose:
+        """The poses ``which`` (a slice or indices), in that order."""
+        return LinkagePose(self.linkage, self.drivers[which], self.q[which], self.qdot[which],
+                           self.qddot[which], self.locked_at[which])
 
     def link_state(self, link: str, which: Array) -> tuple[Array, Array]:
         """(t (N, 2), φ (N,)) of ``link`` from one of q, q̇, q̈."""

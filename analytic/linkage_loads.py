@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, perp, rotate
@@ -99,18 +100,53 @@ def known_vector(pose: LinkagePose) -> Array:
     return b
 
 
+#: A linear spring whose ends are closer than this fraction of the linkage's size has ends
+#: that meet, to rounding: its line of action, and the rate of its length, are undefined.
+MEETING = 1e-12
+
+
+def spring_axis(linkage: Linkage, d: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
+    """(length, unit vector along ``d`` (N, 2) from a linear spring's first end to its second,
+    where the ends meet). Where they meet the unit vector is 0: a spring without tension
+    there adds nothing, and one with tension is withheld (:func:`undirected_springs`)."""
+    length = np.hypot(d[:, 0], d[:, 1])
+    meets = length <= MEETING * linkage.scale
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit = np.where(meets[:, None], 0.0, d / length[:, None])
+    return length, unit, meets
+
+
 def spring_force(pose: LinkagePose, spring: LinearSpring | TorsionSpring) -> Array:
-    """S (N,): tension k(L − L0) + c·L̇ of a linear spring, k(q − q0) + c·q̇ of a torsional one."""
+    """S (N,): tension k(L − L0) + c·L̇ of a linear spring, k(q − q0) + c·q̇ of a torsional one.
+
+    Where a linear spring's ends meet, L̇ is undefined unless they move together: there a
+    damped spring's tension is NaN."""
     if isinstance(spring, TorsionSpring):
         q, qdot, _ = pose.joint_coordinate(pose.linkage.joint(spring.joint))
         return spring.stiffness * (q - spring.free_rotation) + spring.damping * qdot
     (la, pa), (lb, pb) = spring.ends
     a, va, _ = pose.point(la, pa)
     bb, vb, _ = pose.point(lb, pb)
-    d = bb - a
-    length = np.hypot(d[:, 0], d[:, 1])
-    rate = np.einsum("ni,ni->n", d, vb - va) / length
-    return spring.stiffness * (length - spring.free_length) + spring.damping * rate
+    length, unit, meets = spring_axis(pose.linkage, bb - a)
+    tension = spring.stiffness * (length - spring.free_length)
+    if spring.damping:
+        moving = np.any(vb != va, axis=1)
+        rate = np.where(meets & moving, np.nan, np.einsum("ni,ni->n", unit, vb - va))
+        tension = tension + spring.damping * rate
+    return tension
+
+
+def undirected_springs(pose: LinkagePose) -> NDArray[np.str_]:
+    """Per pose, the linear springs (comma-separated; empty: none) whose ends meet while they
+    carry a tension: a force without a line of action, so the reactions are not unique."""
+    linear = [s for s in pose.linkage.springs if isinstance(s, LinearSpring)]
+    out = np.full(pose.q.shape[0], "", dtype=object if linear else "<U1")
+    for spring in linear:
+        (la, pa), (lb, pb) = spring.ends
+        meets = spring_axis(pose.linkage, pose.point(lb, pb)[0] - pose.point(la, pa)[0])[2]
+        loaded = meets & ~(spring_force(pose, spring) == 0.0)
+        out[loaded] = np.where(out[loaded] == "", spring.name, out[loaded] + ", " + spring.name)
+    return out.astype(str)
 
 
 def _add_spring(b: Array, layout: ForceLayout, pose: LinkagePose,
@@ -124,8 +160,7 @@ def _add_spring(b: Array, layout: ForceLayout, pose: LinkagePose,
     (la, pa), (lb, pb) = spring.ends
     a = pose.point(la, pa)[0]
     bb = pose.point(lb, pb)[0]
-    d = bb - a
-    e = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    e = spring_axis(pose.linkage, bb - a)[1]
     add_force(b, layout, la, s[:, None] * e, a)    # tension pulls a toward b
     add_force(b, layout, lb, -s[:, None] * e, bb)
 

@@ -47,6 +47,7 @@ from mechcheck.analytic.linkage_assur import (
     reachable,
 )
 from mechcheck.analytic.linkage_kinematics import Array, LinkagePose
+from mechcheck.analytic.linkage_loads import spring_axis
 from mechcheck.analytic.resultant import Resultant, resultants
 from mechcheck.analytic.values import GROUND
 
@@ -195,8 +196,9 @@ class _Chunk:
             (la, pa), (lb, pb) = spring.ends
             ax, ay = self.point(la, pa)
             bx, by = self.point(lb, pb)
-            length = np.hypot(bx - ax, by - ay)
-            fx, fy = tension * (bx - ax) / length, tension * (by - ay) / length
+            d = np.stack(np.broadcast_arrays(bx - ax, by - ay), axis=-1)
+            unit = spring_axis(self.linkage, d)[1]
+            fx, fy = tension * unit[:, 0], tension * unit[:, 1]
             _add(b, la, fx, fy, ax, ay)   # tension pulls a toward b
             _add(b, lb, -fx, -fy, bx, by)
         return b

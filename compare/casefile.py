@@ -32,6 +32,7 @@ from mechcheck.analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
+from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP
 from mechcheck.linkage_file import LinkageCaseSpec, linkage_from_spec
 from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, validated
 
@@ -218,8 +219,10 @@ def load_file(path: str | Path) -> list[tuple[Case, AnySpec]]:
     return parse_cases(parse_toml(read_case_text(path), source), source)
 
 
-def load_specs(paths: Iterable[str | Path]) -> list[tuple[Case, AnySpec]]:
-    """Every case of every file, with case names unique across the run."""
+def load_specs(paths: Iterable[str | Path], *,
+               sweep: bool = False) -> list[tuple[Case, AnySpec]]:
+    """Every case of every file, with case names unique across the run; ``sweep``: every case
+    can be swept (a linkage has a driver to move)."""
     seen: dict[str, str] = {}
     out = []
     for path in paths:
@@ -227,6 +230,8 @@ def load_specs(paths: Iterable[str | Path]) -> list[tuple[Case, AnySpec]]:
             if case.name in seen:
                 raise CaseError(f"duplicate case name (also in {seen[case.name]})",
                                 key="name", case=case.name, file=str(path))
+            if sweep and case.mechanism == "linkage" and not case.linkage.drivers:
+                raise CaseError(NOTHING_TO_SWEEP, key="drivers", case=case.name, file=str(path))
             seen[case.name] = str(path)
             out.append((case, spec))
     return out

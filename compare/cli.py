@@ -164,7 +164,7 @@ def sweep_command(
     verdicts = parse_fail_on(fail_on)
     paths = list(files) if files else builtin_sweep_files()
     try:
-        specs = load_specs(paths)
+        specs = load_specs(paths, sweep=True)
         grid = parse_range(theta12)
         driver_grid = None if driver is None else parse_range(driver, "--driver")
         names = list(backend) if backend else registry.available()

@@ -10,7 +10,8 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Joint
-from mechcheck.analytic.linkage_forces import solve_linkage
+from mechcheck.analytic.linkage_backends import analytic_results, verdict
+from mechcheck.analytic.linkage_forces import LinkageResults, solve_linkage
 from mechcheck.analytic.linkage_kinematics import Array, solve_pose
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.convergence import LEAD_CONDITION_GROWTH, LeadLimit
@@ -144,3 +145,28 @@ def driven_sweep(case: Case, first: Array, drive: Callable[[Case], Solution]) ->
     each reaching its pose with the case's rates. A run needs its own lead-in along its own
     motion, so nothing carries over from the last pose."""
     return [drive(at_first_driver(case, v)) for v in first]
+
+
+def gated_sweep(case: Case, first: Array, backend: str,
+                sweep: Callable[[Array, LinkageResults], list[Solution]]) -> list[Solution]:
+    """A sweep of ``case``'s first driver behind the pose gate, as the harness runs one
+    (:func:`mechcheck.sweep.gated_poses`): where the analytic pose analysis finds no unique
+    forces (the linkage does not assemble, is singular, redundant, or its friction reverses),
+    ``backend`` is not run and reports that verdict; ``sweep`` runs on the other values, in
+    order, given their analysis."""
+    first = np.atleast_1d(np.asarray(first, dtype=float))
+    results = analytic_results(case, first)
+    candidates = np.ones(first.size, dtype=bool) if case.linkage.redundant else results.withheld
+    given: dict[int, Solution] = {}
+    for i in np.flatnonzero(candidates).tolist():
+        found = verdict(case, results, i)
+        if found is not None:
+            given[i] = Solution(case.name, backend, {}, status=found[0],
+                                message=f"{found[1]}; not run (the pose verdict of analytic)",
+                                diagnostics={"condition_number": float(results.condition[i])})
+    if not given:
+        return sweep(first, results)
+    run = np.array([i for i in range(first.size) if i not in given], dtype=np.intp)
+    solved = iter(sweep(first[run], results.take(run)) if run.size else [])
+    return [given[i] if i in given else next(solved) for i in range(first.size)]
+

@@ -12,6 +12,7 @@ equilibrium; for Q2, the prescribed x, ẋ, ẍ at the instant read.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -277,3 +278,35 @@ def test_q2_drive_force_is_the_exam_equation(backend: str, name: str) -> None:
         assert values["F_slide_y"] == pytest.approx(mass * G, abs=tol * scale)
         assert values["F_slide_x"] == pytest.approx(-mu * mass * G * math.copysign(1.0, v),
                                                     abs=tol * scale)
+
+
+@pytest.mark.parametrize("backend", ["analytic", "superposition", "virtual_work", "mujoco",
+                                     "mujoco_solve", "pymunk", "pymunk_solve"])
+def test_q2_where_a_spring_s_ends_meet_its_force_has_no_line_of_action(backend: str) -> None:
+    """At x = −0.3 m the block reaches the left wall: k1's ends meet, its tension is
+    k1·(0 − 0.3 m) = −90 N with no direction, so the reactions are not unique. Every backend
+    says `indeterminate`, naming the spring, and gives no force (before, the analytic
+    backend said `ok`, quietly dropped the NaN forces, and the run passed on nothing)."""
+    solution = mechcheck.solve(q2(-0.3, 0.5, 3.0), backend)
+    assert solution.status == "indeterminate", solution.message
+    assert "spring k1" in solution.message
+    assert not any(q.startswith(("F_", "Q_")) for q in solution.values)
+
+
+def test_q2_a_spring_without_tension_where_its_ends_meet_adds_nothing() -> None:
+    """A k1 of free length 0 whose ends meet carries no tension: the drive force is the
+    exam equation with k2 alone, F = m·ẍ + k2·(x − 0) = 2·3 + 200·(−0.3) = −54 N (k2 is
+    unstretched at x = 0), plus μ·m·g = 1.962 N for ẋ > 0; an infinitesimal step away
+    agrees (the zero-length spring then has tension ≈ 0 along a defined line)."""
+    def case(x: float) -> Case:
+        base = q2(x, 0.5, 3.0).linkage
+        k1 = base.springs[0]
+        return Case(name="q2-slack", theta12=0.0, geometry=dataclasses.replace(
+            base, springs=(dataclasses.replace(k1, free_length=0.0), base.springs[1])))
+    at = mechcheck.solve(case(-0.3), "analytic")
+    assert at.status == "ok", at.message
+    assert at.values["S_k1"] == 0.0
+    assert at.values["Q_slide"] == pytest.approx(2.0 * 3.0 + 200.0 * -0.3 + 0.1 * 2.0 * G,
+                                                 rel=IDENTITY_TOL)
+    near = mechcheck.solve(case(-0.3 + 1e-9), "analytic")
+    assert near.values["Q_slide"] == pytest.approx(at.values["Q_slide"], rel=1e-6)

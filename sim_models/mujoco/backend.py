@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
+from mechcheck.sim_models.linkage_motion import gated_sweep
 from mechcheck.sim_models.mujoco.linkage import settle_linkage, solve_linkage_at_pose, sweep_linkage
 from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
 from mechcheck.sim_models.presets import sweep_through_linkage, through_linkage
@@ -41,11 +42,13 @@ def solve_at_pose(case: Case) -> Solution:
 
 def sweep(case: Case, grid: ArrayLike, backend: str = "mujoco") -> list[Solution]:
     """Either backend over a sweep of a linkage's first driver (rad or m from the drawn
-    pose, :func:`.linkage.sweep_linkage`), or of θ12 (rad) of a four-bar or slider-crank."""
+    pose, :func:`.linkage.sweep_linkage`), or of θ12 (rad) of a four-bar or slider-crank;
+    behind the pose gate (:func:`~mechcheck.sim_models.linkage_motion.gated_sweep`)."""
     if case.mechanism != "linkage":
         return sweep_through_linkage(
             case, np.asarray(grid, dtype=float), backend,
             lambda stretch: sweep_linkage(stretch.linkage, stretch.offsets, backend, stretch.results,
                                           stretch=stretch),
             settle if backend == "mujoco" else solve_at_pose)
-    return sweep_linkage(case, np.asarray(grid, dtype=float), backend)
+    return gated_sweep(case, np.asarray(grid, dtype=float), backend,
+                       lambda values, results: sweep_linkage(case, values, backend, results))

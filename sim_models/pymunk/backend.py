@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.linkage_motion import is_driven
+from mechcheck.sim_models.linkage_motion import gated_sweep, is_driven
 from mechcheck.sim_models.presets import sweep_through_linkage, through_linkage
 from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, linkage_sweep
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
@@ -53,10 +53,14 @@ def solve_at_pose(case: Case, settings: SolverSettings | None = None) -> Solutio
 def sweep(case: Case, grid: ArrayLike, backend: str = "pymunk") -> list[Solution]:
     """``pymunk`` or ``pymunk_solve`` over a sweep of a linkage's first driver (rad or m from
     the drawn pose, :func:`mechcheck.sim_models.pymunk.linkage_sweep.sweep`), or of θ12
-    (rad) of a four-bar or slider-crank."""
+    (rad) of a four-bar or slider-crank; behind the pose gate
+    (:func:`~mechcheck.sim_models.linkage_motion.gated_sweep`)."""
     if case.mechanism != "linkage":
         return sweep_through_linkage(
             case, np.asarray(grid, dtype=float), backend,
             lambda s: s.rename(linkage_sweep.sweep(s.linkage, s.offsets, backend, s.results)),
             settle if backend == "pymunk" else solve_at_pose)
-    return linkage_sweep.sweep(case, grid, backend)
+    if backend not in linkage_sweep.BACKENDS:
+        raise ValueError(f"backend must be one of {linkage_sweep.BACKENDS}, got {backend!r}")
+    return gated_sweep(case, np.asarray(grid, dtype=float), backend,
+                       lambda values, results: linkage_sweep.sweep(case, values, backend, results))

@@ -21,9 +21,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage_backends import analytic_results, driver_values
+from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP, analytic_results, driver_values
 from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.solution import Solution
+from mechcheck.analytic.values import CaseError
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
 from mechcheck.sim_models.pymunk.linkage import (
     Outcome,
@@ -66,8 +67,7 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if not case.linkage.drivers:
-        raise ValueError(f"case {case.name!r}: a linkage sweep moves the first driver, and this "
-                         "linkage has none")
+        raise CaseError(NOTHING_TO_SWEEP, key="drivers", case=case.name)
     values = np.atleast_1d(np.asarray(first, dtype=float))
     if backend == "pymunk" and is_driven(case):
         from mechcheck.sim_models.pymunk.linkage_dynamics import drive_linkage
