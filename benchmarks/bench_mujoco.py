@@ -77,10 +77,11 @@ RUNS = (("mujoco", "mujoco"), (COLD_SETTLED := "mujoco, models built", "mujoco")
         ("mujoco_solve", "mujoco_solve"), (COLD := "mujoco_solve, model built", "mujoco_solve"))
 
 
-#: A row timing the settled sweep with numpy's stop rules, where numba compiles them
-#: (:func:`mechcheck.sim_models.mujoco.batch_settle.first_stops`): the same sweep, the same
-#: steps; the difference is the rules' overhead.
-NUMPY = "numpy stop rules"
+#: A row timing the settled sweep stepped by MuJoCo's rollouts, 16 steps a call, where
+#: numba compiles the passes (:mod:`mechcheck.sim_models.mujoco.step_kernel`): the same
+#: sweep, the same steps; the difference is the steps past each stop and the Python
+#: between rollouts.
+ROLLOUTS = "rollouts, passes not compiled"
 #: Rows with the per-pose loops in Python where numba compiles them
 #: (:mod:`mechcheck.sim_models.mujoco.exact_compiled`: the settled reads, the exact solve).
 PYTHON_LOOPS = "Python per-pose loops"
@@ -94,29 +95,29 @@ def compiled_rules() -> bool:
 
 
 def runs():
-    """:data:`RUNS`, with the settled sweep again on numpy's stop rules and both again with
-    Python's per-pose loops, if numba compiled them."""
+    """:data:`RUNS`, with the settled sweep again through MuJoCo's rollouts and both again
+    with Python's per-pose loops, if numba compiled them."""
     if not compiled_rules():
         return RUNS
-    return (RUNS[0], (f"mujoco, {NUMPY}", "mujoco"), (f"mujoco, {PYTHON_LOOPS}", "mujoco"),
+    return (RUNS[0], (f"mujoco, {ROLLOUTS}", "mujoco"), (f"mujoco, {PYTHON_LOOPS}", "mujoco"),
             *RUNS[1:3], (f"mujoco_solve, {PYTHON_LOOPS}", "mujoco_solve"), *RUNS[3:])
 
 
 @contextlib.contextmanager
 def stop_rules(label):
-    """Within: the batched settling's stop rules numpy's, or the per-pose loops Python's,
-    if ``label`` names them."""
+    """Within: the batched settling stepped by rollouts, or the per-pose loops Python's, if
+    ``label`` names them."""
     from mechcheck.sim_models.mujoco import batch_settle, exact_compiled
 
-    compiled, loops = batch_settle.first_stops, exact_compiled.loops
-    if NUMPY in label:
-        batch_settle.first_stops = batch_settle.vectorised_stops
+    passes, loops = batch_settle.compiled_passes, exact_compiled.loops
+    if ROLLOUTS in label:
+        batch_settle.compiled_passes = lambda model: None
     if PYTHON_LOOPS in label:
         exact_compiled.loops = lambda: None
     try:
         yield
     finally:
-        batch_settle.first_stops, exact_compiled.loops = compiled, loops
+        batch_settle.compiled_passes, exact_compiled.loops = passes, loops
 
 
 def forget_rigs(label):
@@ -325,7 +326,8 @@ def linkage_sweep_table(cases) -> None:
     print("| backend | ms/pose | reference ms/pose | ratio | floor alone ms/pose | ratio | "
           "poses ok | worst rel. error | outside tolerance | median steps | max steps |")
     print("|---|---|---|---|---|---|---:|---:|---:|---:|---:|")
-    continued = ["mujoco (continued)", *([f"mujoco (continued), {NUMPY}"] if compiled_rules() else [])]
+    continued = ["mujoco (continued)",
+                 *([f"mujoco (continued), {ROLLOUTS}"] if compiled_rules() else [])]
     table = {"mujoco (each pose alone)": ("mujoco", False),
              **{label: ("mujoco", True) for label in continued},
              **{label: (backend, True) for label, backend in RUNS[1:]}}

@@ -25,6 +25,16 @@ only looks at what it recorded:
 
 A driver's value is the model's (an equality's ``eq_data``), so each pose in flight needs
 a model of its own: ``POOL`` copies of the rig's model take turns.
+
+**Compiled passes.** Where numba is installed, the same passes are stepped by
+:mod:`.step_kernel` instead (:meth:`BatchSettler.settle_compiled`): MuJoCo's step called
+through its C pointer, the rollouts' resets where each rollout would begin, the same stop
+rules read step by step, and each pass stepped to its stop and no further, with Python's
+lock released, one thread per core, each with one model copy whose drivers it sets pose
+by pose. Python then reads and reseeds every pose whose pass ended, once a round. The
+numbers and steps are the rollouts', bit for bit (``tests/test_mujoco_compiled.py``); what
+goes is the steps past each stop (a third of the rollouts' on seed E1) and a return to
+Python every chunk.
 """
 
 from __future__ import annotations
@@ -37,7 +47,9 @@ import os
 import threading
 from collections import deque
 from collections.abc import Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
+from types import ModuleType
 
 import mujoco
 import numpy as np
@@ -76,8 +88,11 @@ CHUNK = 16
 #: of seed E1 and the Watt six-bar: the median and the 10th–90th percentiles of the second
 #: passes are 4 steps), and a CHUNK would step 11 more for nothing.
 REFINE_CHUNK = STOP_WINDOW + 1
-#: Poses in flight at once, each with its own copy of the model (178 µs a copy, measured).
-POOL = 32
+#: Poses in flight at once, each with its own copy of the model (178 µs a new copy, 14 µs
+#: refreshed in place: :func:`model_copies`). Fewer, larger waves spend less Python per
+#: pose (measured, seed E1's 360-pose sweep, models kept: 32, 64 and 128 took 0.223–0.229,
+#: 0.211–0.219 and 0.206–0.210 ms/pose); 64 keeps a new copy set near 11 ms.
+POOL = 64
 #: A sweep settles every STRIDE-th pose first, and starts the others from them
 #: (:meth:`BatchSettler.settle`).
 STRIDE = 8
@@ -87,6 +102,24 @@ STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 CONTROLS = mujoco.mjtState.mjSTATE_XFRC_APPLIED | mujoco.mjtState.mjSTATE_QFRC_APPLIED
 #: The compiled stop rules (:func:`first_stops`).
 STOP_KERNEL = "mechcheck.sim_models.mujoco.stop_kernel"
+#: The passes stepped in numba (:mod:`.step_kernel`).
+STEP_KERNEL = "mechcheck.sim_models.mujoco.step_kernel"
+
+
+def compiled_passes(model: mujoco.MjModel) -> ModuleType | None:
+    """The compiled passes (:mod:`.step_kernel`) where numba is installed and MuJoCo's
+    library is at a known place, for a model that is all the kernel sets up (no actuators
+    or mocap bodies: the rollout would reset those); else None, and the rollouts run."""
+    if model.nu or model.nmocap or exact_compiled.library() is None:
+        return None
+    return kernel(STEP_KERNEL)
+
+
+def copies_needed(model: mujoco.MjModel, poses: int) -> int:
+    """Model copies a batch of ``poses`` steps with: one per pose in flight for the
+    rollouts (:data:`POOL` at most), one per thread for the compiled passes (each sets its
+    pose's drivers before stepping it)."""
+    return min(THREADS if compiled_passes(model) is not None else POOL, poses)
 
 
 def add_reaction_sensors(spec: mujoco.MjSpec, linkage: Linkage) -> None:
@@ -110,6 +143,11 @@ class Pose:
     control: Array = field(default_factory=lambda: np.zeros(0))
     passes: int = 1
     pass_steps: int = 0  # readings taken in this pass
+    #: This pass's reading budget (+1) and the readings before it may stop
+    #: (:meth:`.settle.Refinement.budget`, :meth:`~.settle.Refinement.minimum`), fixed for
+    #: the pass: the refinement changes only at a pass's end.
+    readings_left: int = 0
+    earliest: int = 0
     history: Array = field(default_factory=lambda: np.zeros((0, 0)))
     previous: Array | None = None  # the last pass's forces (:attr:`Readings.forces`)
     refinement: Refinement = field(default_factory=Refinement)  # the passes' progress, steps
@@ -207,10 +245,15 @@ class BatchSettler:
         self.qpos = qpos
         m, d = rig.model, rig.data
         self.pool = pool  # copies of the rig's model (:func:`model_copies`)
+        self.eq_data = [model.eq_data for model in pool]  # views: the drivers' targets
         # Kept data carry nothing over: the rollout sets each trajectory's whole state
         # (``tests/test_mujoco_compiled.py``: kept and new models, the same numbers).
         self.datas = models.datas
         self.runner: rollout.Rollout | None = None  # during :meth:`settle`
+        self.stepper = compiled_passes(m)
+        #: Threads stepping the compiled passes, each with its own model copy and data.
+        self.lanes = min(THREADS, len(pool), len(self.datas))
+        self.threads: ThreadPoolExecutor | None = None  # during :meth:`settle`
         # Sensor columns: (fx, fy, fz, tx, ty, tz) per tree joint; the stop rule reads the
         # planar ones, torques over the size.
         n = m.nsensordata // 6
@@ -256,6 +299,8 @@ class BatchSettler:
             pose.control = control
             pose.pass_steps = 0
             pose.history = history
+            pose.readings_left = pose.refinement.budget() + 1
+            pose.earliest = pose.refinement.minimum()
 
     def read(self, poses: list[Pose], states: Array) -> Readings:
         """MuJoCo's reading of each pose at its state: the loads applied at that state's
@@ -308,7 +353,12 @@ class BatchSettler:
         # A thread pool of this run's own: a pool kept in the process would be inherited,
         # without its threads, by a process forked from it (a sweep's workers), whose
         # rollouts then wait for ever (measured: the test suite hung).
-        with rollout.Rollout(nthread=THREADS if THREADS > 1 else 0) as self.runner:
+        with contextlib.ExitStack() as stack:
+            if self.stepper is None:
+                self.runner = stack.enter_context(
+                    rollout.Rollout(nthread=THREADS if THREADS > 1 else 0))
+            else:
+                self.threads = stack.enter_context(ThreadPoolExecutor(max_workers=self.lanes))
             if first is None:
                 return complete(self.settle_poses(targets, range(n), {})[0])
             coarse = sorted({*range(0, n, STRIDE), n - 1})
@@ -347,6 +397,8 @@ class BatchSettler:
         nefc = self.rig.nefc
         poses = [Pose(i, targets[i], starts.get(i, np.zeros(nefc))) for i in which]
         self.seed(poses)
+        if self.stepper is not None:
+            return self.settle_compiled(poses)
         # The poses waiting, by the length of their next rollout: a refinement pass's
         # first is short (:data:`REFINE_CHUNK`); a wave takes poses of one length.
         queues = {CHUNK: deque(poses), REFINE_CHUNK: deque[Pose]()}
@@ -367,11 +419,75 @@ class BatchSettler:
                     queues[REFINE_CHUNK if pose.pass_steps == 0 else CHUNK].append(pose)
         return out, forces
 
+    def settle_compiled(self, poses: list[Pose]
+                        ) -> tuple[list[Settled | None], dict[int, Array]]:
+        """:meth:`settle_poses` with each pass stepped to its end in numba, all the poses'
+        passes at once (:meth:`step_passes`): the same passes, readings and stops."""
+        out: list[Settled | None] = [None] * len(self.qpos)
+        forces: dict[int, Array] = {}
+        first_chunk = CHUNK  # a first pass's rollouts are all CHUNK long
+        while poses:
+            ended_at, rules, states = self.step_passes(poses, first_chunk)
+            read = self.read(poses, states)
+            finite = read.finite()
+            going = []
+            for j, pose in enumerate(poses):
+                rule = RULES[rules[j]] if rules[j] >= 0 else ""
+                result = self.end_pass(pose, read, j, int(ended_at[j]), rule, bool(finite[j]))
+                if result is None:
+                    going.append(pose)
+                    continue
+                out[pose.index] = result
+                if result.settled:
+                    forces[pose.index] = pose.carried
+            self.seed(going)
+            poses, first_chunk = going, REFINE_CHUNK
+        return out, forces
+
+    def step_passes(self, poses: list[Pose], first_chunk: int) -> tuple[Array, Array, Array]:
+        """Each pose's pass stepped to its end (:func:`.step_kernel.passes`), the poses
+        dealt in turn to one thread per model copy: where each pass's last reading is,
+        the rule that fired there (−1: none), the state it was read at."""
+        n = len(poses)
+        targets = np.array([p.targets for p in poses]).reshape(n, -1)
+        starts = np.array([p.state for p in poses])
+        controls = np.array([p.control for p in poses])
+        left = np.array([p.readings_left for p in poses], dtype=np.int64)
+        early = np.array([p.earliest for p in poses], dtype=np.int64)
+        ended_at = np.empty(n, dtype=np.int64)
+        rules = np.empty(n, dtype=np.int64)
+        states = np.empty_like(starts)
+        assert self.threads is not None, "within settle()"
+        shares = [np.arange(k, n, self.lanes) for k in range(min(self.lanes, n))]
+        jobs = [self.threads.submit(self.step_share, k, targets[rows], starts[rows],
+                                    controls[rows], first_chunk, left[rows], early[rows])
+                for k, rows in enumerate(shares)]
+        for rows, job in zip(shares, jobs, strict=True):
+            ended_at[rows], rules[rows], states[rows] = job.result()
+        return ended_at, rules, states
+
+    def step_share(self, k: int, targets: Array, starts: Array, controls: Array,
+                   first_chunk: int, left: Array, early: Array) -> tuple[Array, Array, Array]:
+        """:meth:`step_passes` for one thread's poses, with model copy and data ``k``."""
+        m, d = self.pool[k], self.datas[k]
+        f = exact_compiled.functions()
+        n = len(starts)
+        out = (np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty_like(starts))
+        assert self.stepper is not None
+        self.stepper.passes(
+            f["mj_step"], f["mj_setState"], f["mj_getState"], m._address, d._address,
+            int(STATE), int(CONTROLS), m.eq_data, np.asarray(self.rig.driver_eqs, dtype=np.int64),
+            d.eq_active, m.eq_active0, d.warning.number, d.qacc_warmstart, d.sensordata, d.qvel,
+            targets, starts, controls, np.full(n, first_chunk, dtype=np.int64), CHUNK, left,
+            early, self.columns, self.column_scale, self.rig.weight, *out)
+        return out
+
     def run_chunk(self, wave: list[Pose], nstep: int) -> list[Settled | None]:
         """One rollout of ``nstep`` steps for the poses of ``wave``; for each, its final
         Settled, or None while it goes on."""
-        for model, pose in zip(self.pool, wave, strict=False):
-            model.eq_data[self.rig.driver_eqs, 0] = pose.targets
+        eqs = self.rig.driver_eqs
+        for eq_data, pose in zip(self.eq_data, wave, strict=False):
+            eq_data[eqs, 0] = pose.targets
         initial = np.array([p.state for p in wave])
         # The controls held for the chunk, and the outputs, as the wrapper would make them
         # (tiled over the steps, allocated): its checks of every model, every call, were a
@@ -389,16 +505,17 @@ class BatchSettler:
         speed = np.abs(before[:, :, self.qvel_slice] * self.rig.weight).max(axis=2)
         # A pass reads at most its budget + 1 times and stops no earlier than its minimum
         # (run_until_settled's).
-        left = np.array([p.refinement.budget() + 1 - p.pass_steps for p in wave])
-        early = np.array([p.refinement.minimum() - p.pass_steps for p in wave])
+        left = np.array([p.readings_left - p.pass_steps for p in wave])
+        early = np.array([p.earliest - p.pass_steps for p in wave])
         at = np.arange(nstep)[None, :]
         speed[(at >= left[:, None]) | (at < early[:, None])] = np.inf
         first, rule = first_stops(np.array([p.history for p in wave]), readings, speed)
+        out_of_budget = (left <= nstep) | ~np.isfinite(readings).all(axis=(1, 2))
         ended: list[tuple[int, int, str]] = []  # (pose in wave, step in chunk, rule or "")
         for k, pose in enumerate(wave):
             if first[k] >= 0:
                 ended.append((k, int(first[k]), RULES[rule[k]]))
-            elif left[k] <= nstep or not np.all(np.isfinite(readings[k])):
+            elif out_of_budget[k]:
                 ended.append((k, min(int(left[k]), nstep) - 1, ""))
             else:
                 pose.pass_steps += nstep

@@ -31,7 +31,8 @@ from mechcheck.sim_models.compiled import kernel
 KERNEL = "mechcheck.sim_models.mujoco.exact_kernel"
 #: ``void f(const mjModel *, mjData *)``, the pointers passed as integers of their size.
 PASS = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t)
-#: ``mj_setState(const mjModel *, mjData *, const mjtNum *state, int spec)``.
+#: ``mj_setState(const mjModel *, mjData *, const mjtNum *state, int spec)``, and
+#: ``mj_getState``'s, the same but for the state's constness.
 SET_STATE = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t,
                              ctypes.c_int)
 #: ``mj_mulM(const mjModel *, const mjData *, mjtNum *res, const mjtNum *vec)``.
@@ -64,9 +65,10 @@ def functions() -> dict[str, Callable[..., None]]:
     out: dict[str, Callable[..., None]] = {
         name: PASS((name, lib))
         for name in ("mj_forward", "mj_kinematics", "mj_comPos", "mj_comVel",
-                     "mj_rnePostConstraint")}
+                     "mj_rnePostConstraint", "mj_step")}
     return out | {"mj_mulM": MUL(("mj_mulM", lib)),
-                  "mj_setState": SET_STATE(("mj_setState", lib))}
+                  "mj_setState": SET_STATE(("mj_setState", lib)),
+                  "mj_getState": SET_STATE(("mj_getState", lib))}
 
 
 @cache

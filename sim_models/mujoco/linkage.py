@@ -33,9 +33,9 @@ from mechcheck.sim_models.inertia import real_inertial
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
 from mechcheck.sim_models.mujoco import exact_compiled
 from mechcheck.sim_models.mujoco.batch_settle import (
-    POOL,
     BatchSettler,
     built_models,
+    copies_needed,
     kept_models,
     model_copies,
 )
@@ -452,7 +452,7 @@ def settled_sweep(case: Case, first: np.ndarray, results: LinkageResults,
     except TypeError:  # should a Case ever hold an unhashable value: built for this sweep
         models = built_models(case)
     rig = models.rig
-    with models.lock, model_copies(rig.model, min(POOL, len(first))) as pool:
+    with models.lock, model_copies(rig.model, copies_needed(rig.model, len(first))) as pool:
         qpos = rig.joint_states(results.pose)[0]
         settled = BatchSettler(models, pool, qpos).settle(results.pose.drivers,
                                                           first if continuation else None)

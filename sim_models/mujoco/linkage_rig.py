@@ -51,7 +51,7 @@ from mechcheck.sim_models.mujoco.linkage_model import (
     spanning_tree,
 )
 from mechcheck.sim_models.mujoco.model import STATIC, Settings, place_frames_exactly
-from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, load_wrenches
+from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, load_wrenches, rows_times
 
 Array = NDArray[np.float64]
 
@@ -321,7 +321,7 @@ class LinkageRig:
         out = load_wrenches(site_xpos, xipos, self.loads, self.incidence, self.body_forces)
         out += self.extra
         if self.closure_damping and self.viscous:
-            omega = qvel @ self.rotation.T
+            omega = rows_times(qvel, self.rotation)
             spin = {link: omega[:, k] for k, link in enumerate(self.moving_links)}
             still = np.zeros(qvel.shape[0])
             for name, c in self.closure_damping.items():
@@ -362,7 +362,7 @@ class LinkageRig:
         if pairs.sites.size:
             f = carried[..., pairs.rows] * pairs.signs[:, None]
             xfrc[..., 0:3] = pairs.incidence @ f
-            xfrc[..., 5] = cross_z(arm, f) @ pairs.incidence.T
+            xfrc[..., 5] = rows_times(cross_z(arm, f), pairs.incidence)
         return xfrc, carried[..., self.drive_first_rows]
 
     def load_points(self, qpos: Array) -> tuple[Array, Array]:
@@ -579,8 +579,8 @@ class LinkageRig:
         plan = self.plan
         points = site_xpos[:, plan.point_sites, :2].reshape(len(qpos), -1)
         out = dict(zip(plan.point_names, points.T, strict=True))
-        out.update(zip(self.phi_names, (qpos @ self.rotation.T).T, strict=True))
-        out.update(zip(plan.joint_names, (qpos @ plan.joint_rows.T).T, strict=True))
+        out.update(zip(self.phi_names, rows_times(qpos, self.rotation).T, strict=True))
+        out.update(zip(plan.joint_names, rows_times(qpos, plan.joint_rows).T, strict=True))
         return out
 
     # -- how settled ------------------------------------------------------------------
