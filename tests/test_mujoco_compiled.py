@@ -178,14 +178,14 @@ def test_compiled_passes_settle_as_the_rollouts_do(name: str,
     calls: list[int] = []
     model = batch_settle.sensing_rig(as_linkage(builtin("seed-E1-as-stated"))).model
     assert batch_settle.compiled_passes(model) is not None, "numba: the passes compile"
-    original = batch_settle.BatchSettler.step_share
+    original = batch_settle.BatchSettler.share_arguments
 
     def counting(self: batch_settle.BatchSettler, *args: object) -> object:
         calls.append(1)
         return original(self, *args)  # type: ignore[arg-type]
 
     with monkeypatch.context() as m:
-        m.setattr(batch_settle.BatchSettler, "step_share", counting)
+        m.setattr(batch_settle.BatchSettler, "share_arguments", counting)
         compiled = settled_sweep(name)
     assert len(calls) >= 4
     with monkeypatch.context() as m:
