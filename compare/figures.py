@@ -161,6 +161,14 @@ def _lower_curve(case: Case, ref_status: pd.DataFrame) -> Curve:
     return Curve("μ", theta, np.degrees(transmission_angle(case, np.radians(theta))))
 
 
+def warm_up() -> None:
+    """Import matplotlib for :func:`draw_sweep` (a worker warming up)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot
+
+
 def draw_sweep(plot: SweepPlot) -> bytes:
     """PNG bytes of the four-panel figure (matplotlib imported here: only where drawn)."""
     import matplotlib

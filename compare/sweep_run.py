@@ -14,40 +14,49 @@ from mechcheck.analytic.case import Case
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
 from mechcheck.executors import executor_for
-from mechcheck.figures import draw_sweep, sweep_plot
+from mechcheck.figures import draw_sweep, sweep_plot, warm_up
 from mechcheck.junit import junit_sweep_xml
 from mechcheck.output import file_stem, write_all
 from mechcheck.report import render_sweep, sweep_view_model
-from mechcheck.sweep import SweepOutcome, SweepTask, run_sweep
+from mechcheck.sweep import LocalExecutor, SweepTask, run_sweep
 from mechcheck.tables import sweep_comparison
 
 
-def compare_sweep(cases: list[Case], outcome: SweepOutcome) -> pd.DataFrame:
-    """Every non-reference backend's poses against the reference, all cases."""
+def compare_sweep(cases: list[Case], results: pd.DataFrame,
+                  statuses: pd.DataFrame) -> pd.DataFrame:
+    """Every non-reference backend's poses against the reference, all cases (``results``
+    and ``statuses``: the sweep's tables, :meth:`~mechcheck.sweep.SweepOutcome.read`)."""
     frames = []
     for case in cases:
-        backends = {t.backend for t in outcome.tasks if t.case.name == case.name} - {REFERENCE}
-        if not backends:
-            continue
-        ref = outcome.read(case=case.name, backends=[REFERENCE])
-        ref_status = outcome.read(case=case.name, backends=[REFERENCE], kind="status")
-        for backend in sorted(backends):
-            other = outcome.read(case=case.name, backends=[backend])
-            if len(other):
-                frames.append(sweep_comparison(case, ref, ref_status, other))
+        mine = results[results["case"] == case.name]
+        ref = mine[mine["backend"] == REFERENCE]
+        ref_status = statuses[(statuses["case"] == case.name)
+                              & (statuses["backend"] == REFERENCE)]
+        for backend in sorted({str(b) for b in mine["backend"].unique()} - {REFERENCE}):
+            frames.append(sweep_comparison(case, ref, ref_status,
+                                           mine[mine["backend"] == backend]))
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
         columns=["case", "theta12", "quantity", "backend", "value", "reference", "abs_err",
                  "rel_err", "tolerance", "passed", "case_kind"])
 
 
-def draw_figures(executor: Executor, cases: list[Case], outcome: SweepOutcome,
+def draw_figures(executor: Executor, cases: list[Case], results: pd.DataFrame,
                  statuses: pd.DataFrame, comparison: pd.DataFrame) -> dict[str, bytes]:
     """Each case's figure (PNG bytes), drawn in the sweep's worker pool: this process
     only reduces the tables to the thinned curves (:func:`mechcheck.figures.sweep_plot`)."""
     pending = {c.name: executor.submit(draw_sweep, sweep_plot(
-        c, outcome.read(case=c.name), statuses[statuses["case"] == c.name],
+        c, results[results["case"] == c.name], statuses[statuses["case"] == c.name],
         comparison[comparison["case"] == c.name])) for c in cases}
     return {name: future.result() for name, future in pending.items()}
+
+
+def warm_figures(executor: Executor, figures: int) -> None:
+    """Have the pool's workers import matplotlib now, while this process compares: a
+    resumed sweep's figures waited about 0.5 s for it (:func:`mechcheck.figures.warm_up`).
+    Not in this process (``--workers 0``): it draws there itself, when it does."""
+    if not isinstance(executor, LocalExecutor):
+        for _ in range(figures):
+            executor.submit(warm_up)
 
 
 def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask], n_poses: int,
@@ -69,9 +78,12 @@ def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask],
         if bar is not None:
             bar.close()
         wall = time.perf_counter() - start
-        comparison = compare_sweep(cases, outcome)
-        statuses = outcome.read(kind="status")
-        figures = draw_figures(executor, cases, outcome, statuses, comparison)
+        warm_figures(executor, len(cases))
+        # Each table read once from all its parts (a read per case and backend took a
+        # third of a resumed sweep's comparing).
+        results, statuses = outcome.read(), outcome.read(kind="status")
+        comparison = compare_sweep(cases, results, statuses)
+        figures = draw_figures(executor, cases, results, statuses, comparison)
     model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, figures,
                              title="mechcheck sweep report", n_poses=n_poses, wall_time_s=wall,
                              executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)

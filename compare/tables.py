@@ -142,9 +142,14 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     """
     keys = ["theta12", "quantity"]
     ref = reference[[*keys, "value", "unit"]].rename(columns={"value": "reference"})
-    ref = ref.assign(quantity=ref["quantity"].astype(str), unit=ref["unit"].astype(str))
-    merged = other.drop(columns="unit").assign(quantity=other["quantity"].astype(str)).merge(
-        ref, on=keys)
+    # Names and units stay categories (a sweep's tables share them: read together) until
+    # the result: mapped and factorised by their few distinct values, never walked as
+    # strings row by row (Arrow strings took half of a resumed sweep's comparing).
+    if not isinstance(ref["quantity"].dtype, pd.CategoricalDtype) or \
+            not ref["quantity"].dtype == other["quantity"].dtype:
+        ref = ref.assign(quantity=ref["quantity"].astype(str))
+        other = other.assign(quantity=other["quantity"].astype(str))
+    merged = other.drop(columns="unit").merge(ref, on=keys)
     if merged.empty:
         return pd.DataFrame(columns=["case", "theta12", *COMPARISON_COLUMNS[1:]])
     quantity = merged["quantity"]
@@ -184,8 +189,8 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     atol = np.array([r.atol for r in rules])[codes]
     passed = (rel_err <= rtol) | (abs_err / factor <= atol)
     return pd.DataFrame({
-        "case": case.name, "theta12": merged["theta12"], "quantity": quantity,
-        "backend": merged["backend"].astype(str), "value": merged["value"],
+        "case": case.name, "theta12": merged["theta12"], "quantity": quantity.astype(str),
+        "backend": str(merged["backend"].iloc[0]), "value": merged["value"],
         "reference": merged["reference"], "abs_err": abs_err, "rel_err": rel_err,
         "tolerance": rtol, "passed": passed, "case_kind": pose_kind,
     })

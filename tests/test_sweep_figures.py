@@ -91,9 +91,9 @@ def test_figures_are_drawn_by_the_sweeps_executor(tmp_path: Path) -> None:
     cases = [builtin("seed-E1-as-stated")]
     outcome = run_sweep(plan(cases, [], parse_range("0:360:10")), tmp_path, LocalExecutor())
     executor = CountingExecutor()
-    statuses = outcome.read(kind="status")
-    figures = sweep_run.draw_figures(executor, cases, outcome, statuses,
-                                     sweep_run.compare_sweep(cases, outcome))
+    results, statuses = outcome.read(), outcome.read(kind="status")
+    figures = sweep_run.draw_figures(executor, cases, results, statuses,
+                                     sweep_run.compare_sweep(cases, results, statuses))
     assert executor.calls == ["draw_sweep"]
     assert figures[cases[0].name].startswith(b"\x89PNG")
 
