@@ -24,6 +24,7 @@ coordinates, redundant joints) have no plan and keep the Newton path.
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import cached_property
@@ -48,6 +49,9 @@ GRID_STEP = math.radians(2.0)
 #: rounds (33⁸ ≈ 1.4e12: a 2° bracket to 1e-14 rad, below the continuation's 2⁻⁴⁰).
 LOCK_SAMPLES = 33
 LOCK_ROUNDS = 9
+#: Paths a plan keeps (:func:`path`), and the lock their memo is changed under.
+KEPT_PATHS = 8
+PATHS_LOCK = threading.Lock()
 #: A link whose angle stays within ±this on the grid of the travel never crosses atan2's
 #: cut at ±π between grid nodes: its raw angle is already the continuous one.
 NO_WRAP = math.pi / 2
@@ -91,6 +95,11 @@ class AssurPlan:
 
     linkage: Linkage
     groups: tuple[Group, ...]
+
+    @cached_property
+    def paths(self) -> dict[tuple[int, int], Path]:
+        """The paths traced so far, by their span of nodes (:func:`path`), oldest first."""
+        return {}
 
     @cached_property
     def carriers(self) -> dict[str, str]:
@@ -278,10 +287,28 @@ class Path:
 
 
 def path(plan: AssurPlan, values: Array) -> Path:
-    """The path of the drivers from the drawn pose over the travel of ``values`` (N,)."""
+    """The path of the drivers from the drawn pose over the travel of ``values`` (N,).
+
+    It depends on the plan and the span of nodes only, so the plan keeps the last few it
+    traced (:attr:`AssurPlan.paths`): a linkage swept again over the same span (a kept
+    preset's next sweep, its stretches' simulators) does not place its nodes and search
+    its locks again (measured: a fifth of ``mujoco_solve``'s seed E1 sweep)."""
     h = plan.step
     first = math.floor(min(float(values.min(initial=0.0)), 0.0) / h)
     last = math.ceil(max(float(values.max(initial=0.0)), 0.0) / h)
+    traced = plan.paths.get((first, last))
+    if traced is None:
+        traced = _trace(plan, first, last)
+        with PATHS_LOCK:  # a plan may be swept from several threads
+            plan.paths[(first, last)] = traced
+            while len(plan.paths) > KEPT_PATHS:
+                del plan.paths[next(iter(plan.paths))]
+    return traced
+
+
+def _trace(plan: AssurPlan, first: int, last: int) -> Path:
+    """:func:`path` over the nodes ``first`` … ``last`` (× the plan's step)."""
+    h = plan.step
     nodes = np.arange(first, last + 1, dtype=np.float64) * h
     placed = place(plan, nodes)
     zero = -first

@@ -138,6 +138,23 @@ def test_the_seed_fourbar_locks_at_its_change_point_by_the_law_of_cosines() -> N
     assert 0.0 < math.pi - theta < math.radians(0.01)
 
 
+def test_a_plan_keeps_the_paths_it_traced() -> None:
+    """A second sweep over the same span of nodes gets the path the first traced (the
+    plan's memo), and it is the path a fresh plan traces: the same lock and the same
+    continuous angles, to the bit; a longer span is traced anew."""
+    linkage = LINKAGES["e1-linkage"]
+    plan = linkage.assur_plan
+    assert plan is not None
+    values = np.radians(np.linspace(-40.0, 150.0, 77))
+    first = path(plan, values)
+    assert path(plan, values[::-1].copy()) is first
+    fresh = path(replace(linkage).assur_plan, values)  # type: ignore[arg-type]
+    assert fresh is not first and (fresh.lo, fresh.hi) == (first.lo, first.hi)
+    for link, angles in first.node_angles.items():
+        assert np.array_equal(angles, fresh.node_angles[link], equal_nan=True)
+    assert path(plan, np.radians([-60.0, 150.0])) is not first
+
+
 def test_singular_verdicts_next_to_a_lock_follow_the_exact_condition_number() -> None:
     """Approaching the locking four-bar's toggle to within 1e-15 rad, where the cheap bound
     cannot decide: each verdict is the dense SVD's, condition > 1e8 or not, at that pose."""
