@@ -486,7 +486,7 @@ class BatchSettler:
                 int(STATE), int(CONTROLS), m.eq_data,
                 np.asarray(self.rig.driver_eqs, dtype=np.int64), d.eq_active, m.eq_active0,
                 d.warning.number, d.qacc_warmstart, d.sensordata, d.qvel, targets, starts,
-                controls, np.full(n, first_chunk, dtype=np.int64), CHUNK, left, early,
+                controls, first_chunk, CHUNK, left, early,
                 self.columns, self.column_scale, self.rig.weight,
                 np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty_like(starts))
 

@@ -31,12 +31,13 @@ Array = np.ndarray
 def passes(step: Any, set_state: Any, get_state: Any, m: int, d: int, full: int,
            controls_spec: int, eq_data: Array, driver_eqs: Array, eq_active: Array,
            eq_active0: Array, warnings: Array, warmstart: Array, sensordata: Array,
-           qvel: Array, targets: Array, starts: Array, controls: Array, first_chunk: Array,
+           qvel: Array, targets: Array, starts: Array, controls: Array, first_chunk: int,
            chunk: int, readings_left: Array, earliest: Array, columns: Array,
            column_scale: Array, weight: Array, ended_at: Array, rules: Array,
            ended_state: Array) -> None:
     """One settling pass of each pose i: its drivers at ``targets[i]``, from ``starts[i]``
-    (a FULLPHYSICS state), its loads ``controls[i]`` held. Writes the pass's last reading
+    (a FULLPHYSICS state), its loads ``controls[i]`` held, its first rollout ``first_chunk``
+    steps long and the others ``chunk``. Writes the pass's last reading
     (``ended_at[i]``, counted from the pass's start), the rule that fired there (−1: none,
     the pass ran out of budget or read a number that is not finite) and the state it was
     read at (``ended_state[i]``)."""
@@ -51,7 +52,7 @@ def passes(step: Any, set_state: Any, get_state: Any, m: int, d: int, full: int,
             eq_data[driver_eqs[j], 0] = targets[i, j]
         before[:] = starts[i]
         history[:] = math.nan
-        offset, length, done = 0, first_chunk[i], False
+        offset, length, done = 0, first_chunk, False
         while not done:
             # A rollout begins: the state set, warm start and warnings cleared, loads set.
             set_state(m, d, before.ctypes.data, full)
