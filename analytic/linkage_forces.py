@@ -20,7 +20,7 @@ this is exactly the seed's method: three equations per member, solved at once.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -194,6 +194,32 @@ def solve_with_friction(pose: LinkagePose, k: Array, b: Array, x: Array,
     return x, converged
 
 
+def friction_loop_gain(pose: LinkagePose, k: Array, x: Array,
+                       terms: list[CoulombTerm]) -> Array:
+    """Per pose, the gain of the loop that takes the Coulomb terms from the last reactions,
+    as both simulators do step by step: the spectral radius of K⁻¹·∂φ/∂x at the solution.
+
+    Above 1 that loop cannot settle: a joint held inside its friction angle self-locks (a
+    slide whose rod makes φ with its axis, μ·|tan φ| ≥ 1). A term at exactly zero force is
+    taken at the side of positive force: |N|'s slope is ±1 on either, and the gain's
+    size the same."""
+    out = np.full(x.shape[0], np.nan)
+    finite = np.isfinite(x).all(axis=1) & np.isfinite(k).all(axis=(1, 2))
+    if not finite.any() or k.shape[1] != k.shape[2]:
+        return out
+    rows = np.flatnonzero(finite)
+    probe = np.where(x[rows] == 0.0, np.finfo(float).tiny, x[rows])
+    terms = [replace(t, sense=t.sense[rows]) for t in terms]
+    dphi = friction_residual(pose.take(rows), terms, probe)[1]
+    with np.errstate(all="ignore"):
+        try:
+            loop = np.linalg.solve(k[finite], dphi)
+        except np.linalg.LinAlgError:  # a singular pose has no forces, nor a loop
+            return out
+        out[finite] = np.abs(np.linalg.eigvals(loop)).max(axis=1, initial=0.0)
+    return out
+
+
 def condition(pose: LinkagePose, k: Array) -> Array:
     """2-norm condition number of K with couples made forces (÷ the linkage's size) and
     rows scaled to unit length: dimensionless, and independent of units."""
@@ -239,6 +265,8 @@ class LinkageResults:
     stable: Array | None = None
     #: Linear springs whose ends meet while they carry a tension (:func:`undirected_springs`).
     undirected: NDArray[np.str_] | None = None
+    #: With Coulomb friction: the gain of its explicit loop (:func:`friction_loop_gain`).
+    friction_gain: Array | None = None
 
     @cached_property
     def condition(self) -> Array:
@@ -256,7 +284,8 @@ class LinkageResults:
                               lambda: self.condition[which], self.ill_conditioned[which],
                               self.converged[which], self.reversing[which],
                               None if self.stable is None else self.stable[which],
-                              None if self.undirected is None else self.undirected[which])
+                              None if self.undirected is None else self.undirected[which],
+                              None if self.friction_gain is None else self.friction_gain[which])
 
     @property
     def singular(self) -> NDArray[np.bool_]:
@@ -350,8 +379,10 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     terms = coulomb_terms(pose)
     converged = np.ones(x.shape[0], dtype=bool)
     reversing = np.full(x.shape[0], "", dtype=object)
+    gain = None
     if terms:
         x, converged = solve_with_friction(pose, k, b, x, terms)
+        gain = friction_loop_gain(pose, k, x, terms)
         for t in terms:
             stops = t.sense == 0.0
             reversing[stops] = np.where(reversing[stops] == "", t.joint.name,
@@ -364,7 +395,7 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
         converged = converged & np.isfinite(stable)
     return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms),
                           lambda: cond, ~(cond <= SINGULAR_CONDITION), converged, reversing, stable,
-                          undirected)
+                          undirected, gain)
 
 
 def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:

@@ -94,6 +94,19 @@ def at_rest_reason(case: Case, window: float, rest_speed: float = REST_SPEED) ->
     return ""
 
 
+def self_locking_note(results: LinkageResults) -> str:
+    """Why a driven run with Coulomb friction may not settle at this pose ("" if nothing
+    says so): the gain of the loop that takes friction from the last reactions, as both
+    simulators take it, is 1 or more (:func:`.linkage_forces.friction_loop_gain`)."""
+    gain = results.friction_gain
+    if gain is None or not gain[0] >= 1.0:
+        return ""
+    return (f"; the friction loop's gain is {gain[0]:.3g} ≥ 1 at this pose: friction taken "
+            "from the last reactions, as the simulators take it, cannot settle where a joint "
+            "is held inside its friction angle (a slide whose rod makes φ with its axis "
+            "jams when μ·|tan φ| ≥ 1)")
+
+
 def driven_motion(case: Case, quasi_static_speed: float) -> Motion:
     """The motion a driven run follows: the drivers' own, or for a static case with Coulomb
     friction a slow one, ``quasi_static_speed`` (rad/s or m/s) in each driver's ``sense``

@@ -263,6 +263,31 @@ def test_self_locking_slide_gives_no_number_in_either() -> None:
         solution = mechcheck.solve(case, backend)
         assert solution.status == "not_settled" and solution.message, backend
         assert not any(quantity_kind(q) != "pose" for q in solution.values), backend
+        # The verdict names the jam: the loop's gain, μ·|tan φ| = 1.13 by hand.
+        assert "the friction loop's gain is 1.13 ≥ 1" in solution.message, backend
+
+
+@pytest.mark.parametrize(("theta12", "mu", "load"), [(2.5, 0.3, 5.0), (2.6, 0.2, 1.0),
+                                                     (2.75, 0.25, 0.0)])
+def test_the_friction_loop_gain_of_a_slide_is_mu_tan_phi(theta12: float, mu: float,
+                                                         load: float) -> None:
+    """With a massless rod and slider, the slide's normal force follows the rod force's
+    component across the slide, and its friction μ·|N| the rod force along it: the loop
+    that takes friction from the last reactions has gain μ·|tan φ|, φ the rod's angle to
+    the slide axis (by hand, from the rod's angle). The analytic engine's spectral radius
+    of K⁻¹·∂φ/∂x gives the same, above and below 1."""
+    from mechcheck.analytic.linkage_backends import analytic_results
+    from mechcheck.sim_models.presets import as_linkage
+
+    case = Case(name="slide-loop", geometry=SliderCrankGeometry(0.75, 0.6875, offset=0.0),
+                theta12=theta12, ground_angle=-1.5, branch="right",
+                masses=(Mass(2, 1.0, (0.0, 0.5), 0.0),),
+                loads=(Load(4, (0.0, 0.0), (load, 1.0), 0.0),), motion=Motion(3.0, 0.0),
+                friction=Friction(mu=mu, pin_radius={"A0": 0.0}, slide_mu=mu, direction=1))
+    rod = pose_of(case, np.array([theta12])).links[3].angle[0]
+    hand = mu * abs(math.tan(rod - case.ground_angle))
+    gain = analytic_results(as_linkage(case)).friction_gain
+    assert gain is not None and gain[0] == pytest.approx(hand, rel=1e-9)
 
 
 @pytest.mark.slow

@@ -467,18 +467,20 @@ class BatchSettler:
                                       first_chunk, left[rows], early[rows])
                  for k, rows in enumerate(shares)]
         assert self.stepper is not None and self.threads is not None, "within settle()"
-        jobs = [self.threads.submit(self.stepper.passes, *call) for call in calls[1:]]
-        self.stepper.passes(*calls[0])
+        jobs = [self.threads.submit(self.stepper.passes, *inputs, *outputs)
+                for inputs, outputs in calls[1:]]
+        self.stepper.passes(*calls[0][0], *calls[0][1])
         for job in jobs:
             job.result()
-        for rows, call in zip(shares, calls, strict=True):
-            ended_at[rows], rules[rows], states[rows] = call[-3:]
+        for rows, (_, outputs) in zip(shares, calls, strict=True):
+            ended_at[rows], rules[rows], states[rows] = outputs
         return ended_at, rules, states
 
     def share_arguments(self, k: int, targets: Array, starts: Array, controls: Array,
-                        first_chunk: int, left: Array, early: Array) -> tuple[object, ...]:
+                        first_chunk: int, left: Array, early: Array
+                        ) -> tuple[tuple[object, ...], tuple[Array, Array, Array]]:
         """:func:`.step_kernel.passes`'s arguments for one thread's poses, with model copy
-        and data ``k``; its outputs last."""
+        and data ``k``: its inputs, and its outputs (the last three)."""
         m, d = self.pool[k], self.datas[k]
         f = exact_compiled.functions()
         n = len(starts)
@@ -487,7 +489,7 @@ class BatchSettler:
                 np.asarray(self.rig.driver_eqs, dtype=np.int64), d.eq_active, m.eq_active0,
                 d.warning.number, d.qacc_warmstart, d.sensordata, d.qvel, targets, starts,
                 controls, first_chunk, CHUNK, left, early,
-                self.columns, self.column_scale, self.rig.weight,
+                self.columns, self.column_scale, self.rig.weight), (
                 np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty_like(starts))
 
     def run_chunk(self, wave: list[Pose], nstep: int) -> list[Settled | None]:

@@ -61,7 +61,13 @@ from mechcheck.sim_models.convergence import (
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import link_extent, real_inertial
-from mechcheck.sim_models.linkage_motion import Motion, at_rest_reason, driven_motion, lead_limit
+from mechcheck.sim_models.linkage_motion import (
+    Motion,
+    at_rest_reason,
+    driven_motion,
+    lead_limit,
+    self_locking_note,
+)
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
 from mechcheck.sim_models.mujoco.linkage_model import INERTIA_FLOOR_FRACTION, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
@@ -258,7 +264,8 @@ def driven_solution(case: Case, rigs: LinkageRigs, out: Convergence, results: Li
                   if rigs.doubled is not None else 0.0))
     pose = {q: v for q, v in out.values.items() if quantity_kind(q, units.get(q)) == "pose"}
     if not out.converged:
-        return Solution(case.name, "mujoco", pose, status="not_settled", message=out.verdict(),
+        return Solution(case.name, "mujoco", pose, status="not_settled",
+                        message=out.verdict() + self_locking_note(results),
                         diagnostics=diagnostics, units=units)
     left = left_assembly(float(diagnostics["pose_drift"]), case.linkage.scale)
     if left:

@@ -53,7 +53,13 @@ from mechcheck.sim_models.convergence import (
     massless_limit,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
-from mechcheck.sim_models.linkage_motion import Motion, at_rest_reason, driven_motion, lead_limit
+from mechcheck.sim_models.linkage_motion import (
+    Motion,
+    at_rest_reason,
+    driven_motion,
+    lead_limit,
+    self_locking_note,
+)
 from mechcheck.sim_models.pymunk.linkage import (
     has_free_coordinates,
     loop_violations,
@@ -454,7 +460,8 @@ def driven_solution(case: Case, results: LinkageResults, out: Convergence, end: 
               solver_disagreement=end.solver_disagreement)
     pose = {k: v for k, v in out.values.items() if quantity_kind(k, units.get(k)) == "pose"}
     if not out.converged:
-        return Solution(case.name, BACKEND, pose, status="not_settled", message=out.verdict(),
+        return Solution(case.name, BACKEND, pose, status="not_settled",
+                        message=out.verdict() + self_locking_note(results),
                         diagnostics=diagnostics, units=units)
     left = left_assembly(float(diagnostics["pose_drift"]), linkage.scale)
     if left:
