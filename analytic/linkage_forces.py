@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -265,8 +265,13 @@ class LinkageResults:
     stable: Array | None = None
     #: Linear springs whose ends meet while they carry a tension (:func:`undirected_springs`).
     undirected: NDArray[np.str_] | None = None
-    #: With Coulomb friction: the gain of its explicit loop (:func:`friction_loop_gain`).
-    friction_gain: Array | None = None
+    #: With Coulomb friction: the gain of its explicit loop (:func:`friction_loop_gain`),
+    #: computed when first asked for (only a simulator's verdict reads it).
+    friction_gain_of: Callable[[], Array] | None = None
+
+    @cached_property
+    def friction_gain(self) -> Array | None:
+        return None if self.friction_gain_of is None else self.friction_gain_of()
 
     @cached_property
     def condition(self) -> Array:
@@ -285,7 +290,8 @@ class LinkageResults:
                               self.converged[which], self.reversing[which],
                               None if self.stable is None else self.stable[which],
                               None if self.undirected is None else self.undirected[which],
-                              None if self.friction_gain is None else self.friction_gain[which])
+                              None if self.friction_gain_of is None
+                              else lambda: np.asarray(self.friction_gain)[which])
 
     @property
     def singular(self) -> NDArray[np.bool_]:
@@ -379,10 +385,10 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     terms = coulomb_terms(pose)
     converged = np.ones(x.shape[0], dtype=bool)
     reversing = np.full(x.shape[0], "", dtype=object)
-    gain = None
+    gain: Callable[[], Array] | None = None
     if terms:
         x, converged = solve_with_friction(pose, k, b, x, terms)
-        gain = friction_loop_gain(pose, k, x, terms)
+        gain = partial(friction_loop_gain, pose, k, x.copy(), terms)
         for t in terms:
             stops = t.sense == 0.0
             reversing[stops] = np.where(reversing[stops] == "", t.joint.name,
