@@ -32,9 +32,10 @@ def compare_sweep(cases: list[Case], results: pd.DataFrame,
         ref = mine[mine["backend"] == REFERENCE]
         ref_status = statuses[(statuses["case"] == case.name)
                               & (statuses["backend"] == REFERENCE)]
-        for backend in sorted({str(b) for b in mine["backend"].unique()} - {REFERENCE}):
-            frames.append(sweep_comparison(case, ref, ref_status,
-                                           mine[mine["backend"] == backend]))
+        backends = sorted({str(b) for b in mine["backend"].unique()} - {REFERENCE})
+        if backends:  # all at once, each backend's rows together, in name order
+            others = pd.concat([mine[mine["backend"] == b] for b in backends])
+            frames.append(sweep_comparison(case, ref, ref_status, others))
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
         columns=["case", "theta12", "quantity", "backend", "value", "reference", "abs_err",
                  "rel_err", "tolerance", "passed", "case_kind"])

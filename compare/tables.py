@@ -134,7 +134,8 @@ def kinds_of(units: pd.Series) -> dict[str, str]:
 
 def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.DataFrame,
                      other: pd.DataFrame) -> pd.DataFrame:
-    """Per-pose comparisons of one backend's sweep against the reference, vectorised.
+    """Per-pose comparisons of backends' sweeps (``other``: one or more backends, each
+    backend's rows together) against the reference, vectorised.
 
     Same measure and policy as :func:`comparison_rows`, with the case kind taken
     per pose (``near_singular`` where the reference's condition number says so).
@@ -180,17 +181,17 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     rel_err = abs_err / scale
     cond = merged["theta12"].map(reference_status.set_index("theta12")["condition_number"])
     pose_kind = np.where(cond.to_numpy() > NEAR_SINGULAR_CONDITION, "near_singular", case.kind)
-    # One rule per distinct (quantity, pose kind, unit), spread back by its codes: the
-    # columns are Arrow strings, which are slow to walk element by element.
-    codes, triples = pd.MultiIndex.from_arrays([quantity, pose_kind, unit]).factorize()
-    rules = [tolerance_for(case, str(merged["backend"].iloc[0]), q, k, kind_of_unit(u))
-             for q, k, u in triples]
+    # One rule per distinct (backend, quantity, pose kind, unit), spread back by its codes:
+    # the columns are Arrow strings, which are slow to walk element by element.
+    codes, keys_found = pd.MultiIndex.from_arrays(
+        [merged["backend"], quantity, pose_kind, unit]).factorize()
+    rules = [tolerance_for(case, str(b), q, k, kind_of_unit(u)) for b, q, k, u in keys_found]
     rtol = np.array([r.rtol for r in rules])[codes]
     atol = np.array([r.atol for r in rules])[codes]
     passed = (rel_err <= rtol) | (abs_err / factor <= atol)
     return pd.DataFrame({
         "case": case.name, "theta12": merged["theta12"], "quantity": quantity.astype(str),
-        "backend": str(merged["backend"].iloc[0]), "value": merged["value"],
+        "backend": merged["backend"].astype(str), "value": merged["value"],
         "reference": merged["reference"], "abs_err": abs_err, "rel_err": rel_err,
         "tolerance": rtol, "passed": passed, "case_kind": pose_kind,
     })
