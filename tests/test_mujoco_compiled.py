@@ -196,3 +196,23 @@ def test_compiled_passes_settle_as_the_rollouts_do(name: str,
     for key in ("passes", "stop_rule"):
         assert [s.diagnostics.get(key) for s in compiled] == [s.diagnostics.get(key) for s in rolled]
     assert_same_settling(compiled, rolled)
+
+
+def test_compiled_passes_run_out_of_budget_as_the_rollouts_do(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Seed E1 within 0.02° of its change point: poses whose passes run out of their step
+    budgets (96 000 steps in 15 passes, `not_settled`; 19 623 in 3) and one that settles
+    late (20 267 in 8) take the same steps, passes, verdicts and numbers compiled and
+    through the rollouts: the budget's last reading is where both end a pass."""
+    e1 = builtin("seed-E1-as-stated")
+    theta = np.radians(180.0 - np.array([0.0097, 0.006, 0.02]))
+    compiled = sweep(e1, theta, "mujoco")
+    assert [s.status for s in compiled] == ["not_settled", "not_settled", "ok"]
+    with monkeypatch.context() as m:
+        m.setattr(batch_settle, "compiled_passes", lambda model: None)
+        batch_settle.kept_models.cache_clear()
+        rolled = sweep(e1, theta, "mujoco")
+    assert [s.diagnostics.get("passes") for s in compiled] == \
+        [s.diagnostics.get("passes") for s in rolled]
+    assert [s.message for s in compiled] == [s.message for s in rolled]
+    assert_same_settling(compiled, rolled)
