@@ -155,6 +155,9 @@ def sweep_command(
     fresh: Annotated[bool, typer.Option(
         help="Discard the parts of an earlier run in DIR instead of resuming from them.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    figures: Annotated[bool, typer.Option(
+        help="Draw each case's figure into figures/ and the report (--no-figures: neither, "
+             "and an earlier run's figures of these cases are removed).")] = True,
 ) -> None:
     """Sweep θ12 over a range for every case and backend; resumable, Parquet output."""
     from mechcheck.casefile import builtin_sweep_files, load_specs
@@ -181,7 +184,7 @@ def sweep_command(
     poses = max(len(driver_grid) if c.mechanism == "linkage" and driver_grid is not None
                 else len(grid) for c, _ in specs)
     status = run_sweep_command(specs, tasks, poses, out, workers=workers, dask=dask,
-                               fail_on=verdicts, junit=junit, quiet=quiet)
+                               fail_on=verdicts, junit=junit, quiet=quiet, figures=figures)
     raise typer.Exit(status)
 
 

@@ -296,8 +296,10 @@ def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: 
         case_views.append({
             "name": case.name, "description": spec.description if spec else "",
             "mechanism": case.mechanism, "kind": case.kind,
-            "figure": f"{file_stem(case.name)}.png",
-            "figure_b64": base64.b64encode(figures[case.name]).decode(),
+            # No figure when the sweep was run without them (--no-figures).
+            "figure": f"{file_stem(case.name)}.png" if case.name in figures else None,
+            "figure_b64": base64.b64encode(figures[case.name]).decode()
+            if case.name in figures else None,
             "singular": _pose_list(ref.loc[ref["status"] == "singular", "theta12"]),
             "indeterminate": _pose_list(ref.loc[ref["status"] == "indeterminate", "theta12"]),
             "near_singular": _pose_list(ref.loc[(ref["condition_number"] > 1e4)

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import sys
 import time
-from concurrent.futures import Executor
+from concurrent.futures import Executor, Future
 from pathlib import Path
 
 import pandas as pd
-from tqdm import tqdm
 
 from mechcheck.analytic.case import Case
 from mechcheck.backends import REFERENCE
@@ -42,13 +41,20 @@ def compare_sweep(cases: list[Case], results: pd.DataFrame,
 
 
 def draw_figures(executor: Executor, cases: list[Case], results: pd.DataFrame,
-                 statuses: pd.DataFrame, comparison: pd.DataFrame) -> dict[str, bytes]:
-    """Each case's figure (PNG bytes), drawn in the sweep's worker pool: this process
-    only reduces the tables to the thinned curves (:func:`mechcheck.figures.sweep_plot`)."""
-    pending = {c.name: executor.submit(draw_sweep, sweep_plot(
+                 statuses: pd.DataFrame, comparison: pd.DataFrame) -> dict[str, Future[bytes]]:
+    """Each case's figure (PNG bytes, to come), drawn in the sweep's worker pool: this
+    process only reduces the tables to the thinned curves
+    (:func:`mechcheck.figures.sweep_plot`)."""
+    return {c.name: executor.submit(draw_sweep, sweep_plot(
         c, results[results["case"] == c.name], statuses[statuses["case"] == c.name],
         comparison[comparison["case"] == c.name])) for c in cases}
-    return {name: future.result() for name, future in pending.items()}
+
+
+def forget_figures(out: Path, cases: list[Case]) -> None:
+    """Remove the cases' figures an earlier run drew (``--no-figures``): a report without
+    them must not sit beside figures of other results."""
+    for case in cases:
+        (out / "figures" / f"{file_stem(case.name)}.png").unlink(missing_ok=True)
 
 
 def warm_figures(executor: Executor, figures: int) -> None:
@@ -62,11 +68,17 @@ def warm_figures(executor: Executor, figures: int) -> None:
 
 def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask], n_poses: int,
                       out: Path, *, workers: int | None, dask: str | None,
-                      fail_on: tuple[str, ...], junit: Path | None, quiet: bool) -> int:
-    """Run, compare and report a sweep; returns the exit status."""
+                      fail_on: tuple[str, ...], junit: Path | None, quiet: bool,
+                      figures: bool = True) -> int:
+    """Run, compare and report a sweep (``figures``: draw each case's); returns the exit
+    status."""
     cases = [c for c, _ in specs]
     start = time.perf_counter()
-    bar = None if quiet else tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True)
+    bar = None
+    if not quiet:
+        from tqdm import tqdm  # only for the progress bar
+
+        bar = tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True)
 
     def progress(done: int, total: int) -> None:
         if bar is not None:
@@ -79,19 +91,24 @@ def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask],
         if bar is not None:
             bar.close()
         wall = time.perf_counter() - start
-        warm_figures(executor, len(cases))
+        if figures:
+            warm_figures(executor, len(cases))
         # Each table read once from all its parts (a read per case and backend took a
         # third of a resumed sweep's comparing).
         results, statuses = outcome.read(), outcome.read(kind="status")
         comparison = compare_sweep(cases, results, statuses)
-        figures = draw_figures(executor, cases, results, statuses, comparison)
-    model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, figures,
+        drawing = draw_figures(executor, cases, results, statuses, comparison) if figures else {}
+        comparison_buffer = comparison.to_parquet(index=False)  # while the figures are drawn
+        pngs = {name: future.result() for name, future in drawing.items()}
+    model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, pngs,
                              title="mechcheck sweep report", n_poses=n_poses, wall_time_s=wall,
                              executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)
     markdown, page = render_sweep(model)
     files: dict[str, str | bytes] = {"report.md": markdown, "report.html": page}
-    write_all(out / "figures", {f"{file_stem(name)}.png": png for name, png in figures.items()})
-    comparison_buffer = comparison.to_parquet(index=False)
+    if figures:
+        write_all(out / "figures", {f"{file_stem(name)}.png": png for name, png in pngs.items()})
+    else:
+        forget_figures(out, cases)
     assert comparison_buffer is not None
     files["comparison.parquet"] = comparison_buffer
     write_all(out, files)

@@ -5,6 +5,7 @@ Values are converted from SI/radians to table units (degrees) only here.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable, Sequence
 
@@ -127,11 +128,6 @@ def diagnostics_frame(solutions: Sequence[Solution]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=DIAGNOSTIC_COLUMNS)
 
 
-def kinds_of(units: pd.Series) -> dict[str, str]:
-    """The kind of each distinct unit in ``units``."""
-    return {u: kind_of_unit(u) for u in units.unique()}
-
-
 def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.DataFrame,
                      other: pd.DataFrame) -> pd.DataFrame:
     """Per-pose comparisons of backends' sweeps (``other``: one or more backends, each
@@ -141,57 +137,103 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     per pose (``near_singular`` where the reference's condition number says so).
     Columns: the comparison columns of CONVENTIONS.md plus ``theta12``.
     """
-    keys = ["theta12", "quantity"]
-    ref = reference[[*keys, "value", "unit"]].rename(columns={"value": "reference"})
-    # Names and units stay categories (a sweep's tables share them: read together) until
-    # the result: mapped and factorised by their few distinct values, never walked as
-    # strings row by row (Arrow strings took half of a resumed sweep's comparing).
-    if not isinstance(ref["quantity"].dtype, pd.CategoricalDtype) or \
-            not ref["quantity"].dtype == other["quantity"].dtype:
-        ref = ref.assign(quantity=ref["quantity"].astype(str))
-        other = other.assign(quantity=other["quantity"].astype(str))
-    merged = other.drop(columns="unit").merge(ref, on=keys)
-    if merged.empty:
+    # Names and units are worked on as integer codes over their few distinct values, and
+    # rows are matched, grouped and judged in numpy: pandas' merge, group-by and string
+    # columns took most of a resumed sweep's comparing, mostly in their first use.
+    names, (ref_q, other_q) = shared_codes(reference["quantity"], other["quantity"])
+    units, (ref_u,) = shared_codes(reference["unit"])
+    poses = np.unique(reference["theta12"].to_numpy(dtype=float))
+    ref_pose = np.searchsorted(poses, reference["theta12"].to_numpy(dtype=float))
+    theta = other["theta12"].to_numpy(dtype=float)
+    row = matching_rows(ref_pose * len(names) + ref_q, pose_index(poses, theta), other_q,
+                        len(names))
+    found = row >= 0
+    if not found.any():
         return pd.DataFrame(columns=["case", "theta12", *COMPARISON_COLUMNS[1:]])
-    quantity = merged["quantity"]
-    unit = merged["unit"]
-    # Mapped through a table of the few distinct units, not the function row by row.
-    factor = unit.map({u: unit_factor(u) for u in unit.unique()}).to_numpy()
-    kind = unit.map(kinds_of(unit))
-    # Scale of each force/torque kind at each pose: the largest reference magnitude.
-    ref_kind = ref.assign(kind=ref["unit"].map(kinds_of(ref["unit"])), mag=ref["reference"].abs())
-    scale_table = ref_kind.groupby(["theta12", "kind"], observed=True)["mag"].max()
-    kinds = set(scale_table.index.get_level_values("kind"))
-    scale = scale_table.reindex(pd.MultiIndex.from_arrays([merged["theta12"], kind])).to_numpy()
-    scale = np.maximum(np.nan_to_num(scale, nan=SCALE_FLOOR), SCALE_FLOOR)
+    row, theta, other_q = row[found], theta[found], other_q[found]
+    pose = ref_pose[row]
+    unit = ref_u[row]
+    kinds = ["force", "torque", "pose"]
+    unit_kind = np.array([kinds.index(kind_of_unit(u)) for u in units], dtype=np.intp)
+    factor = np.array([unit_factor(u) for u in units])[unit]
+    kind = unit_kind[unit]
+    ref_value = reference["value"].to_numpy(dtype=float)
+    # Scale of each force/torque kind at each pose: the largest reference magnitude
+    # (NaN where the pose has none of that kind, then the floor).
+    largest = np.full((len(poses), len(kinds)), np.nan)
+    np.fmax.at(largest, (ref_pose, unit_kind[ref_u]), np.abs(ref_value))
+    largest = np.nan_to_num(largest, nan=SCALE_FLOOR)
+    scale = np.maximum(largest[pose, kind], SCALE_FLOOR)
     # Forces at least the largest torque over the longest link, torques at least the
     # largest reaction times it (see kind_scales).
     length = case.geometry.scale
-    force_at, torque_at = (np.nan_to_num(merged["theta12"].map(scale_table.xs(k, level="kind"))
-                                         .to_numpy(dtype=float) if k in kinds else
-                                         np.full(len(merged), np.nan), nan=SCALE_FLOOR)
-                           for k in ("force", "torque"))
-    scale = np.where(kind == "torque", np.maximum(scale, force_at * length), scale)
-    scale = np.where(kind == "force", np.maximum(scale, torque_at / length), scale)
-    is_angle = (unit == "deg").to_numpy()
-    scale = np.where(kind == "pose", np.where(is_angle, factor, case.geometry.scale), scale)
-    diff = merged["value"].to_numpy() - merged["reference"].to_numpy()
+    force_at, torque_at = largest[pose, 0], largest[pose, 1]
+    scale = np.where(kind == 1, np.maximum(scale, force_at * length), scale)
+    scale = np.where(kind == 0, np.maximum(scale, torque_at / length), scale)
+    is_angle = np.array([u == "deg" for u in units], dtype=bool)[unit]
+    scale = np.where(kind == 2, np.where(is_angle, factor, length), scale)
+    value = other["value"].to_numpy(dtype=float)[found]
+    diff = value - ref_value[row]
     diff = np.where(is_angle, (diff + 180.0) % 360.0 - 180.0, diff)
     abs_err = np.abs(diff)
     rel_err = abs_err / scale
-    cond = merged["theta12"].map(reference_status.set_index("theta12")["condition_number"])
-    pose_kind = np.where(cond.to_numpy() > NEAR_SINGULAR_CONDITION, "near_singular", case.kind)
-    # One rule per distinct (backend, quantity, pose kind, unit), spread back by its codes:
-    # the columns are Arrow strings, which are slow to walk element by element.
-    codes, keys_found = pd.MultiIndex.from_arrays(
-        [merged["backend"], quantity, pose_kind, unit]).factorize()
-    rules = [tolerance_for(case, str(b), q, k, kind_of_unit(u)) for b, q, k, u in keys_found]
+    status_poses = reference_status["theta12"].to_numpy(dtype=float)
+    order = np.argsort(status_poses, kind="stable")
+    at = pose_index(status_poses[order], theta)
+    cond = np.where(at >= 0, reference_status["condition_number"].to_numpy(dtype=float)[
+        order][np.maximum(at, 0)], np.nan)
+    near = cond > NEAR_SINGULAR_CONDITION
+    backends, (backend,) = shared_codes(other["backend"])
+    backend = backend[found]
+    # One rule per distinct (backend, quantity, pose kind, unit), spread back by its codes.
+    rule_key = ((backend * len(names) + other_q) * 2 + near) * len(units) + unit
+    distinct, codes = np.unique(rule_key, return_inverse=True)
+    rules = []
+    for key in distinct.tolist():
+        rest, u = divmod(key, len(units))
+        rest, is_near = divmod(rest, 2)
+        b, q = divmod(rest, len(names))
+        rules.append(tolerance_for(case, backends[b], names[q],
+                                   "near_singular" if is_near else case.kind,
+                                   kind_of_unit(units[u])))
     rtol = np.array([r.rtol for r in rules])[codes]
     atol = np.array([r.atol for r in rules])[codes]
     passed = (rel_err <= rtol) | (abs_err / factor <= atol)
     return pd.DataFrame({
-        "case": case.name, "theta12": merged["theta12"], "quantity": quantity.astype(str),
-        "backend": merged["backend"].astype(str), "value": merged["value"],
-        "reference": merged["reference"], "abs_err": abs_err, "rel_err": rel_err,
-        "tolerance": rtol, "passed": passed, "case_kind": pose_kind,
+        "case": case.name, "theta12": theta, "quantity": np.array(names, dtype=object)[other_q],
+        "backend": np.array(backends, dtype=object)[backend], "value": value,
+        "reference": ref_value[row], "abs_err": abs_err, "rel_err": rel_err,
+        "tolerance": rtol, "passed": passed,
+        "case_kind": np.where(near, "near_singular", case.kind),
     })
+
+
+def shared_codes(*columns: pd.Series) -> tuple[list[str], list[np.ndarray]]:
+    """The distinct strings of ``columns`` together, and each column as codes into them
+    (a sweep's tables are read with shared categories: their codes are used as they are)."""
+    dtypes = {c.dtype for c in columns}
+    if len(dtypes) == 1 and isinstance(columns[0].dtype, pd.CategoricalDtype):
+        return ([str(c) for c in columns[0].cat.categories],
+                [c.cat.codes.to_numpy(dtype=np.intp) for c in columns])
+    codes, distinct = pd.factorize(np.concatenate([c.to_numpy(dtype=object) for c in columns]))
+    bounds = np.cumsum([0, *(len(c) for c in columns)])
+    return ([str(d) for d in distinct],
+            [codes[a:b].astype(np.intp) for a, b in itertools.pairwise(bounds)])
+
+
+def pose_index(poses: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Where each of ``theta`` is in the sorted ``poses`` (exactly), or -1."""
+    if not len(poses):
+        return np.full(len(theta), -1, dtype=np.intp)
+    at = np.minimum(np.searchsorted(poses, theta), len(poses) - 1)
+    return np.where(poses[at] == theta, at, -1)
+
+
+def matching_rows(ref_keys: np.ndarray, pose: np.ndarray, quantity: np.ndarray,
+                  n_names: int) -> np.ndarray:
+    """For each row (``pose``, ``quantity``), the reference row with the same key, or -1
+    (an inner join on pose and quantity, keeping the rows' own order)."""
+    order = np.argsort(ref_keys, kind="stable")
+    keys = pose * n_names + quantity
+    at = pose_index(ref_keys[order], keys)
+    return np.where((pose >= 0) & (at >= 0), order[np.maximum(at, 0)], -1)

@@ -10,12 +10,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from mechcheck import sweep as sweep_module
+from mechcheck import sweep as sweep_module, sweep_run
 from mechcheck.analytic import forces
+from mechcheck.analytic.solution import Solution, unit_factor
+from mechcheck.backends import REFERENCE
+from mechcheck.casefile import load_cases
 from mechcheck.executors import executor_for
 from mechcheck.sweep import LocalExecutor, parse_range, plan, run_sweep
 
-from .builtin import builtin
+from .builtin import builtin, rocker_load_case
 
 
 class Killed(RuntimeError):
@@ -127,3 +130,92 @@ def test_singular_pose_condition_is_recorded(tmp_path: Path, monkeypatch: pytest
     status = outcome.read(backends=["analytic"], kind="status").set_index("theta12")
     assert math.isinf(status.loc[180.0, "condition_number"])
     assert status.loc[60.0, "condition_number"] < 10.0
+
+
+def pose_solutions(case_name: str, results: pd.DataFrame, statuses: pd.DataFrame,
+                   theta: float) -> dict[str, Solution]:
+    """Each backend's Solution at one pose, rebuilt from the sweep's tables (SI values)."""
+    rows = results[(results["case"] == case_name) & (results["theta12"] == theta)]
+    solutions = {}
+    for backend, mine in rows.groupby("backend", observed=True):
+        status = statuses[(statuses["case"] == case_name) & (statuses["backend"] == backend)
+                          & (statuses["theta12"] == theta)]
+        units = dict(zip(mine["quantity"].astype(str), mine["unit"].astype(str), strict=True))
+        values = {q: v / unit_factor(units[q])
+                  for q, v in zip(mine["quantity"].astype(str), mine["value"], strict=True)}
+        solutions[str(backend)] = Solution(
+            case_name, str(backend), values, units=units,
+            diagnostics={"condition_number": float(status["condition_number"].iloc[0])})
+    return solutions
+
+
+def test_the_sweep_comparison_is_the_per_pose_comparison(tmp_path: Path) -> None:
+    """The vectorised sweep comparison (:func:`mechcheck.tables.sweep_comparison`, numpy
+    over integer codes) gives, at every pose, the rows :func:`comparison_rows` gives for
+    that pose alone: the same quantities, errors, tolerances, verdicts and case kinds.
+    Poses: a coarse turn plus seed E1 next to its change point (condition number above
+    1e4: near-singular tolerances), angles (deg), a length (s14, m) and a linkage's
+    quantities; backends with errors of 1e-16 (virtual work) and 1e-12 (mujoco_solve).
+    A moment on the crank with a feeble force on the rocker leaves the reactions small:
+    forces are then measured against the drive torque over the longest link."""
+    from mechcheck.tables import comparison_rows
+
+    path = tmp_path / "moment.toml"
+    path.write_text(rocker_load_case("crank-moment").split("[[case.loads]]")[0]
+                    + "[[case.loads]]\nlink = 2\nat = [0.0, 0.0]\ntorque = 5.0\n"
+                    + "[[case.loads]]\nlink = 4\nat = [90.0, 0.0]\n"
+                    + "force = { magnitude = 0.01, angle = 20.0 }\n")
+    cases = [builtin("seed-E1-as-stated"), builtin("seed-E2-frictionless"),
+             builtin("watt-ii-demo"), *load_cases(path)]
+    grid = np.concatenate([np.arange(0.0, 360.0, 30.0), [179.99, 180.01]])
+    outcome = run_sweep(plan(cases, ["virtual_work", "mujoco_solve"], grid,
+                             np.arange(-20.0, 21.0, 10.0)), tmp_path, LocalExecutor())
+    results, statuses = outcome.read(), outcome.read(kind="status")
+    swept = sweep_run.compare_sweep(cases, results, statuses)
+    expected = []
+    for case in cases:
+        for theta in np.unique(results.loc[results["case"] == case.name, "theta12"]):
+            found = pose_solutions(case.name, results, statuses, float(theta))
+            for backend in ("mujoco_solve", "virtual_work"):
+                if REFERENCE in found and backend in found:
+                    expected += [{**row, "theta12": theta} for row in
+                                 comparison_rows(case, found[REFERENCE], found[backend])]
+    per_pose = pd.DataFrame(expected)
+    keys = ["case", "backend", "theta12", "quantity"]
+    a, b = (f.sort_values(keys).reset_index(drop=True) for f in (swept, per_pose))
+    assert len(a) == len(b) > 700 and (a["case_kind"] == "near_singular").sum() >= 20
+    assert set(a["quantity"]) >= {"theta13", "s14"}  # an angle and a length compared
+    assert a[keys].astype(str).equals(b[keys].astype(str))
+    # Errors to rounding: the tables hold degrees, which the per-pose path turns back into
+    # radians, moving each angle (≤ π rad, error scale 1 rad) by up to an ulp, 4.4e-16.
+    assert np.allclose(a["rel_err"], b["rel_err"], rtol=1e-9, atol=8 * np.finfo(float).eps)
+    assert np.array_equal(a["tolerance"], b["tolerance"])
+    assert a["passed"].tolist() == b["passed"].tolist()
+    assert a["case_kind"].tolist() == b["case_kind"].tolist()
+    # The same table whether the names arrive as shared categories or as plain strings.
+    plain = results.astype({c: str for c in ("case", "backend", "quantity", "unit")})
+    pd.testing.assert_frame_equal(sweep_run.compare_sweep(cases, plain, statuses), swept)
+
+
+def test_angles_are_compared_across_the_wrap() -> None:
+    """θ13 of 180° − 1e-9 rad against −180° + 1e-9 rad is 2e-9 rad apart, not a turn:
+    the sweep comparison says so as :func:`comparison_rows` does."""
+    from mechcheck.tables import comparison_rows, sweep_comparison
+
+    case = builtin("seed-E1-as-stated")
+    reference = Solution(case.name, REFERENCE, {"theta13": math.pi - 1e-9, "T12": 1.0},
+                         diagnostics={"condition_number": 2.0})
+    other = Solution(case.name, "mujoco_solve", {"theta13": -math.pi + 1e-9, "T12": 1.0})
+
+    def table(s: Solution) -> pd.DataFrame:
+        return pd.DataFrame({"theta12": 60.0, "backend": s.backend, "quantity": list(s.values),
+                             "value": list(s.in_table_units().values()),
+                             "unit": [s.unit(q) for q in s.values]})
+
+    swept = sweep_comparison(case, table(reference),
+                             pd.DataFrame({"theta12": [60.0], "condition_number": [2.0]}),
+                             table(other)).set_index("quantity")
+    expected = {r["quantity"]: r for r in comparison_rows(case, reference, other)}
+    assert math.isclose(expected["theta13"]["rel_err"], 2e-9, rel_tol=1e-6)
+    assert math.isclose(swept.loc["theta13", "rel_err"], 2e-9, rel_tol=1e-6)
+    assert swept["passed"].tolist() == [expected[q]["passed"] for q in swept.index]

@@ -95,7 +95,7 @@ def test_figures_are_drawn_by_the_sweeps_executor(tmp_path: Path) -> None:
     figures = sweep_run.draw_figures(executor, cases, results, statuses,
                                      sweep_run.compare_sweep(cases, results, statuses))
     assert executor.calls == ["draw_sweep"]
-    assert figures[cases[0].name].startswith(b"\x89PNG")
+    assert figures[cases[0].name].result().startswith(b"\x89PNG")
 
 
 def test_the_sweep_command_does_not_import_matplotlib() -> None:
@@ -105,3 +105,32 @@ def test_the_sweep_command_does_not_import_matplotlib() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True)
     assert done.stdout.strip() == "False"
+
+
+def test_a_sweep_without_figures_reports_the_same_without_them(tmp_path: Path) -> None:
+    """``--no-figures``: the same comparison and exit status, a report with no image, and
+    no figure left from an earlier run of the same directory; drawing them again puts
+    them back."""
+    from typer.testing import CliRunner
+
+    from mechcheck.cli import app
+
+    def sweep(*options: str) -> int:
+        done = CliRunner().invoke(app, ["sweep", "-b", "virtual_work", "--theta12", "0:360:30",
+                                        "--workers", "0", "-q", "--out", str(tmp_path),
+                                        *options])
+        assert done.exit_code in (0, 1), done.output
+        return done.exit_code
+
+    assert sweep() == 0
+    figures = sorted(p.name for p in (tmp_path / "figures").glob("*.png"))
+    assert len(figures) >= 3
+    drawn = pd.read_parquet(tmp_path / "comparison.parquet")
+    assert "data:image/png" in (tmp_path / "report.html").read_text()
+    assert sweep("--no-figures") == 0
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "comparison.parquet"), drawn)
+    assert not list((tmp_path / "figures").glob("*.png"))
+    assert "data:image/png" not in (tmp_path / "report.html").read_text()
+    assert "](figures/" not in (tmp_path / "report.md").read_text()
+    assert sweep() == 0
+    assert sorted(p.name for p in (tmp_path / "figures").glob("*.png")) == figures
