@@ -15,8 +15,10 @@ Each is a fresh process, timed ``--repeats`` times: median, min and max.
    reporting add on top of the backends' work.
 3. ``mechcheck sweep`` again on the same directory, every part already there (the
    resume path: imports, software versions, reading the parts, comparing, figures,
-   report); its reference, ``import mechcheck`` and reading the parts with pandas in a
-   fresh process.
+   report), then the same with ``--no-figures`` (issue 13: "≤ 1 s plus its figures");
+   their reference, ``import mechcheck`` and reading the parts with pandas in a fresh
+   process. The runs alternate (with figures, without, the reference) so that the
+   machine's drift falls on all three alike.
 4. ``mechcheck sweep FILE -b analytic`` over 10⁶ poses, written to Parquet.
 """
 
@@ -123,12 +125,19 @@ def time_sweeps(cli: list[str], out: Path, repeats: int) -> None:
           f"{spread(fresh)}  ({runs[-1][1]})")
     print(f"  reference, the same runs' time solving the tasks: {spread(solving)}; "
           f"ratio {statistics.median(fresh) / statistics.median(solving):.2f}")
-    resumed, last = repeated(sweep, repeats)
     read_parts = [sys.executable, "-c", READ_PARTS.format(out=str(out / "sweep"))]
-    reading, read_last = repeated(read_parts, repeats)
-    print(f"the same sweeps resumed, every part there: {spread(resumed)}  ({last})")
-    print(f"  reference, import mechcheck and read the parts: {spread(reading)}  "
-          f"({read_last}); ratio {statistics.median(resumed) / statistics.median(reading):.2f}")
+    resumed, bare, reading = [], [], []
+    for _ in range(repeats):
+        for times, command in ((resumed, sweep), (bare, [*sweep, "--no-figures"]),
+                               (reading, read_parts)):
+            took, last = timed(command)
+            times.append(took)
+    print(f"the same sweeps resumed, every part there: {spread(resumed)}")
+    print(f"  the same with --no-figures: {spread(bare)}; the figures add "
+          f"{statistics.median(resumed) - statistics.median(bare):.2f} s")
+    print(f"  reference, import mechcheck and read the parts: {spread(reading)}  ({last}); "
+          f"ratio {statistics.median(bare) / statistics.median(reading):.2f} without figures, "
+          f"{statistics.median(resumed) / statistics.median(reading):.2f} with them")
     million = ["sweep", str(out / "e1.toml"), "-b", "analytic", "--theta12", "0:360:0.00036",
                "-q", "--fresh", "--out", str(out / "million")]
     times, last = repeated([*cli, *million], repeats)
