@@ -76,9 +76,13 @@ def solve_time(line: str) -> float:
 
 
 def timed(command: list[str]) -> tuple[float, str]:
-    start = time.perf_counter()
-    done = subprocess.run(command, capture_output=True, text=True, check=False)
-    return time.perf_counter() - start, done.stdout.strip().splitlines()[-1]
+    # In an empty directory: ``python -c`` and ``-m`` put theirs first on sys.path, where a
+    # stray file (a scratch ``nt.py`` in /tmp once was imported by pathlib) would be timed.
+    with tempfile.TemporaryDirectory() as empty:
+        start = time.perf_counter()
+        done = subprocess.run(command, capture_output=True, text=True, check=False, cwd=empty)
+        took = time.perf_counter() - start
+    return took, done.stdout.strip().splitlines()[-1]
 
 
 def repeated(command: list[str], repeats: int) -> tuple[list[float], str]:

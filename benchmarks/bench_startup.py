@@ -17,6 +17,7 @@ import platform
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -32,12 +33,12 @@ COMMANDS = {
 TARGET_S = {"mechcheck --help": 0.25}
 
 
-def wall_times(command: list[str], repeats: int) -> list[float]:
-    subprocess.run(command, capture_output=True, check=True)  # warm-up, not measured
+def wall_times(command: list[str], repeats: int, cwd: str) -> list[float]:
+    subprocess.run(command, capture_output=True, check=True, cwd=cwd)  # warm-up, not measured
     out = []
     for _ in range(repeats):
         start = time.perf_counter()
-        subprocess.run(command, capture_output=True, check=True)
+        subprocess.run(command, capture_output=True, check=True, cwd=cwd)
         out.append(time.perf_counter() - start)
     return out
 
@@ -51,8 +52,12 @@ def main() -> None:
     print("| command | median s | min s | max s | median / python -c pass | target |")
     print("|---|---:|---:|---:|---:|---|")
     reference = None
-    for label, command in COMMANDS.items():
-        times = wall_times(command, repeats)
+    # Each process starts in an empty directory: ``python -c`` puts its directory first on
+    # sys.path, where a stray file (a scratch ``nt.py`` in /tmp once was imported by
+    # pathlib) would be timed too.
+    with tempfile.TemporaryDirectory() as empty:
+        rows = {label: wall_times(command, repeats, empty) for label, command in COMMANDS.items()}
+    for label, times in rows.items():
         median = statistics.median(times)
         reference = reference or median
         target = TARGET_S.get(label)

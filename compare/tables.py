@@ -153,10 +153,11 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     row, theta, other_q = row[found], theta[found], other_q[found]
     pose = ref_pose[row]
     unit = ref_u[row]
-    kinds = ["force", "torque", "pose"]
+    kinds = ("force", "torque", "pose")  # indices into the per-pose scales below
     unit_kind = np.array([kinds.index(kind_of_unit(u)) for u in units], dtype=np.intp)
     factor = np.array([unit_factor(u) for u in units])[unit]
     kind = unit_kind[unit]
+    is_force, is_torque, is_pose = (kind == k for k in range(len(kinds)))
     ref_value = reference["value"].to_numpy(dtype=float)
     # Scale of each force/torque kind at each pose: the largest reference magnitude
     # (NaN where the pose has none of that kind, then the floor).
@@ -168,10 +169,10 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     # largest reaction times it (see kind_scales).
     length = case.geometry.scale
     force_at, torque_at = largest[pose, 0], largest[pose, 1]
-    scale = np.where(kind == 1, np.maximum(scale, force_at * length), scale)
-    scale = np.where(kind == 0, np.maximum(scale, torque_at / length), scale)
+    scale = np.where(is_torque, np.maximum(scale, force_at * length), scale)
+    scale = np.where(is_force, np.maximum(scale, torque_at / length), scale)
     is_angle = np.array([u == "deg" for u in units], dtype=bool)[unit]
-    scale = np.where(kind == 2, np.where(is_angle, factor, length), scale)
+    scale = np.where(is_pose, np.where(is_angle, factor, length), scale)
     value = other["value"].to_numpy(dtype=float)[found]
     diff = value - ref_value[row]
     diff = np.where(is_angle, (diff + 180.0) % 360.0 - 180.0, diff)
