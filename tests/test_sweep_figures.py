@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import re
 import subprocess
 import sys
 from concurrent.futures import Future
@@ -127,6 +128,10 @@ def test_a_sweep_without_figures_reports_the_same_without_them(tmp_path: Path) -
     assert len(figures) >= 3
     drawn = pd.read_parquet(tmp_path / "comparison.parquet")
     assert "data:image/png" in (tmp_path / "report.html").read_text()
+    # Each image a paragraph of its own in the Markdown (a line glued to the next is not).
+    paragraphs = re.findall(r"\n\n!\[[^]]+\]\(figures/[^)]+\.png\)\n\n",
+                            (tmp_path / "report.md").read_text())
+    assert len(paragraphs) == len(figures)
     assert sweep("--no-figures") == 0
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "comparison.parquet"), drawn)
     assert not list((tmp_path / "figures").glob("*.png"))
