@@ -23,7 +23,10 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 import mechcheck
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.linkage import Joint
+from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
+from mechcheck.sim_models.linkage_motion import coulomb_joints, prescribed_motion
 from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
 from mechcheck.sim_models.pymunk.linkage_dynamics import DRIVEN
 from mechcheck.testing import assert_solution_close
@@ -88,6 +91,28 @@ def slide_self_locks(case: Case) -> bool:
 #: on). The check allows 1 % for finite differences against the backend's closed form.
 SENSED_RATE = 1e-5
 REST = {"mujoco": 0.0, "pymunk": 1.01 * SENSED_RATE}
+
+
+def coulomb_motion_unresolved(case: Case, window: float, rest_speed: float) -> bool:
+    """True when some Coulomb joint's relative rate, from central differences of the
+    analytic positions along the prescribed motion, is below ``rest_speed`` at the reading
+    (rad/s; a slide's m/s per the length scale; 1 % allowed for the differences) or
+    changes sense within ``window`` before it (s, the simulator's time step): independent
+    of the backends' own check, which takes the rates the kinematics computes."""
+    motion = prescribed_motion(case)
+    tau = np.linspace(-window, 0.0, 101)
+    step = 1e-6
+
+    def coordinate(joint: Joint, t: np.ndarray) -> np.ndarray:
+        return solve_pose(case.linkage, motion.at(t)[0]).joint_coordinate(joint)[0]
+
+    for joint in coulomb_joints(case):
+        rate = (coordinate(joint, tau + step) - coordinate(joint, tau - step)) / (2.0 * step)
+        per_length = case.linkage.scale if joint.kind == "prismatic" else 1.0
+        if (abs(rate[-1]) <= 1.01 * rest_speed * per_length
+                or np.any(np.sign(rate) != np.sign(rate[-1]))):
+            return True
+    return False
 
 
 def timestep_stops_at_first_order(solution: mechcheck.Solution) -> bool:

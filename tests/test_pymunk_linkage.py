@@ -19,14 +19,12 @@ from typer.testing import CliRunner
 
 import mechcheck
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage import Joint
 from mechcheck.analytic.linkage_backends import analytic_results, solve
-from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import linkage_case
 from mechcheck.cli import app
 from mechcheck.linkage_file import LinkageCaseSpec
-from mechcheck.sim_models.linkage_motion import coulomb_joints, is_driven, prescribed_motion
+from mechcheck.sim_models.linkage_motion import is_driven
 from mechcheck.sim_models.pymunk import backend as pm, linkage as pl, linkage_dynamics as pld
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE
 from mechcheck.sweep import SweepTask, run_task
@@ -35,7 +33,7 @@ from mechcheck.tolerance import rule
 
 from .builtin import builtin, builtin_cases
 from .strategies import linkage_tables
-from .test_driven_friction import SENSED_RATE
+from .test_driven_friction import SENSED_RATE, coulomb_motion_unresolved
 from .test_linkage_identities import SETTINGS, case_of
 from .test_linkage_sweep import LINKAGES
 
@@ -167,32 +165,10 @@ def assert_reading_or_reason(case: Case, solution: Solution) -> None:
         # A draw of README's test command (2026-11-26): a six-bar whose slider sat at its
         # dead centre (coupler 1e-5 m off the slide's line), its slide slower than pymunk
         # resolves at the reading.
-        assert coulomb_motion_unresolved(case), solution.message
+        assert coulomb_motion_unresolved(case, pld.DRIVEN.dt, SENSED_RATE), solution.message
     else:
         assert solution.status == "not_settled" and solution.message
     assert not any(q.startswith(("F_", "Q_", "M_", "S_")) for q in solution.values)
-
-
-def coulomb_motion_unresolved(case: Case) -> bool:
-    """True when some Coulomb joint's relative rate, from central differences of the
-    analytic positions along the prescribed motion, is below pymunk's resolved rate at
-    the reading (rad/s; a slide's m/s per the length scale) or changes sense within its
-    time step before it: independent of the backend's own check, which takes the rates
-    the kinematics computes."""
-    motion = prescribed_motion(case)
-    tau = np.linspace(-pld.DRIVEN.dt, 0.0, 101)
-    step = 1e-6
-
-    def coordinate(joint: Joint, t: np.ndarray) -> np.ndarray:
-        return solve_pose(case.linkage, motion.at(t)[0]).joint_coordinate(joint)[0]
-
-    for joint in coulomb_joints(case):
-        rate = (coordinate(joint, tau + step) - coordinate(joint, tau - step)) / (2.0 * step)
-        per_length = case.linkage.scale if joint.kind == "prismatic" else 1.0
-        if (abs(rate[-1]) <= 1.01 * SENSED_RATE * per_length
-                or np.any(np.sign(rate) != np.sign(rate[-1]))):
-            return True
-    return False
 
 
 #: A draw of README's test command (2026-11-26): a slider at its dead centre, pymunk `indeterminate`.
