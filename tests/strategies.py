@@ -18,6 +18,9 @@ from mechcheck.analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
+from mechcheck.analytic.linkage import Linkage
+from mechcheck.analytic.solution import Solution
+from mechcheck.analytic.values import GROUND
 
 #: Random poses closer than this to a toggle are left to the singular-pose
 #: tests: their forces are amplified by the condition number and identities
@@ -223,3 +226,23 @@ def linkage_tables(draw: st.DrawFn, *, friction: bool = False, moving: bool | No
         if not is_moving:
             driver["sense"] = draw(st.sampled_from(["increasing", "decreasing"]))
     return table
+
+
+#: Relative to the largest joint force: an inner joint's force below this is the rounding of
+#: a zero (a spring pulling a crank along itself onto its ground pin left 2e-15 N at every
+#: inner joint against 3.75 N at the pin: a draw of README's test command, 2026-11-26).
+ROUNDING = 1e-9
+
+
+def inner_joints(linkage: Linkage) -> set[str]:
+    """The joints between two moving links."""
+    return {j.name for j in linkage.joints if GROUND not in j.links}
+
+
+def carries_a_force(reference: Solution, joints: set[str]) -> bool:
+    """Whether one of ``joints`` carries a force above the rounding of ``reference``'s
+    largest joint force. Where none does, every load goes straight to the ground and the
+    simulators' joint forces alternate about zero (README, MuJoCo, open finding)."""
+    magnitudes = {q: abs(v) for q, v in reference.values.items() if q.startswith("F_")}
+    largest = max(magnitudes.values(), default=0.0)
+    return any(v > ROUNDING * largest for q, v in magnitudes.items() if q[2:-2] in joints)

@@ -21,8 +21,6 @@ from mechcheck.analytic.linkage import Joint, Link, Linkage, LinkMass, PointLoad
 from mechcheck.analytic.linkage_backends import analytic_results, solution_from, solve
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.presets import linkage_of
-from mechcheck.analytic.solution import Solution
-from mechcheck.analytic.values import GROUND
 from mechcheck.casefile import linkage_case
 from mechcheck.linkage_file import LinkageCaseSpec
 from mechcheck.sim_models.convergence import left_assembly
@@ -37,7 +35,7 @@ from mechcheck.sim_models.mujoco.settle import SETTLE_RTOL
 from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin_cases
-from .strategies import MAX_CONDITION, linkage_tables
+from .strategies import MAX_CONDITION, carries_a_force, inner_joints, linkage_tables
 from .test_driven_friction import coulomb_motion_unresolved
 
 GOLDEN = Path(__file__).parent / "golden" / "mujoco"
@@ -465,8 +463,7 @@ def test_mujoco_backend_on_random_linkages(table: dict[str, Any]) -> None:
     case = random_case(table)
     reference = solve(case)
     linkage = case.linkage
-    inner = {j.name for j in linkage.joints if GROUND not in j.links}
-    assume(carries_a_force(reference, inner))
+    assume(carries_a_force(reference, inner_joints(linkage)))
     sim = settle(case)
     if sim.status == "indeterminate":
         # A draw of README's test command (2026-11-26, REVERSING_AT_B): the pin B between
@@ -482,20 +479,6 @@ def test_mujoco_backend_on_random_linkages(table: dict[str, Any]) -> None:
         assert not any(q.startswith(("F_", "Q_", "M_", "S_")) for q in sim.values)
         return
     assert_close(case, sim)
-
-
-#: Relative to the largest joint force: an inner joint's force below this is the rounding of
-#: a zero (a spring pulling a crank along itself onto its ground pin left 2e-15 N at every
-#: inner joint against 3.75 N at the pin: a draw of README's test command, 2026-11-26).
-ROUNDING = 1e-9
-
-
-def carries_a_force(reference: Solution, joints: set[str]) -> bool:
-    """Whether one of ``joints`` carries a force above the rounding of ``reference``'s
-    largest joint force."""
-    forces = {q: abs(v) for q, v in reference.values.items() if q.startswith("F_")}
-    largest = max(forces.values(), default=0.0)
-    return any(v > ROUNDING * largest for q, v in forces.items() if q[2:-2] in joints)
 
 
 #: The draw that left only rounding at the inner joints (the crank's spring along itself).
@@ -527,8 +510,7 @@ def test_rounding_at_the_inner_joints_is_no_force() -> None:
     assert abs(reference.values["F_O2_x"]) == pytest.approx(3.75, rel=1e-12)
     assert not carries_a_force(reference, {"A", "B"})
     watt = builtin_cases()["watt-ii-demo"]
-    inner = {j.name for j in watt.linkage.joints if GROUND not in j.links}
-    assert carries_a_force(solve(watt), inner)
+    assert carries_a_force(solve(watt), inner_joints(watt.linkage))
 
 
 #: s: the longest lead-in a driven MuJoCo run may take (1600 steps of 2.5e-5 s).

@@ -32,7 +32,7 @@ from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
 from .builtin import builtin, builtin_cases
-from .strategies import linkage_tables
+from .strategies import carries_a_force, inner_joints, linkage_tables
 from .test_driven_friction import SENSED_RATE, coulomb_motion_unresolved
 from .test_linkage_identities import SETTINGS, case_of
 from .test_linkage_sweep import LINKAGES
@@ -382,9 +382,47 @@ def test_random_static_linkages_by_the_constraint_solve(table: dict[str, Any]) -
 @SETTINGS
 @given(linkage_tables(friction=False, moving=False))
 def test_random_static_linkages_by_settling(table: dict[str, Any]) -> None:
-    """The same random linkages, held and settled by simulation."""
+    """The same random linkages, held and settled by simulation. Left out: draws where no
+    joint between two moving links carries a force (README, open finding; below)."""
     case = loaded_case(table)
+    assume(carries_a_force(solve(case), inner_joints(case.linkage)))
     assert_solution_close(case, pm.settle(case), complete=True)
+
+
+#: A draw of README's test command (2026-11-26): the only load, 0.125 N, on the crank's
+#: ground pin; every other joint carries nothing.
+LOAD_ON_THE_GROUND_PIN: dict[str, Any] = {
+    "name": "random-linkage", "mechanism": "linkage", "gravity": [0.0, 0.0],
+    "points": {"O2": [0.0, 0.0], "A": [0.20532771839798078, 0.0], "O4": [0.5, 0.0],
+               "B": [0.35266385919899035, -0.47779918544705063]},
+    "links": [{"name": "ground", "points": ["O2", "O4"]},
+              {"name": "crank", "points": ["O2", "A"]},
+              {"name": "coupler", "points": ["A", "B"]},
+              {"name": "rocker", "points": ["O4", "B"]}],
+    "joints": [{"name": n, "kind": "revolute", "links": links, "at": n} for n, links in (
+        ("O2", ["ground", "crank"]), ("A", ["crank", "coupler"]), ("B", ["coupler", "rocker"]),
+        ("O4", ["ground", "rocker"]))],
+    "drivers": [{"joint": "O2", "rotation": 0.001953125}],
+    "loads": [{"link": "crank", "at": [0.0, 0.0], "force": {"x": 0.0, "y": 0.125},
+               "torque": 0.0}],
+    "masses": []}
+
+
+def test_a_load_straight_into_the_ground_gives_no_wrong_number() -> None:
+    """README, open finding: with nothing between two moving links carrying a force,
+    pymunk's forces there chatter about zero (3e-10 N here, against a 0.125 N load) and its
+    settling need not stop. It then says ``not_settled`` with no number, never a wrong one;
+    the random test above leaves such draws out."""
+    case = linkage_case(LinkageCaseSpec.model_validate(LOAD_ON_THE_GROUND_PIN))
+    reference = solve(case)
+    assert reference.values["F_O2_y"] == pytest.approx(-0.125, rel=1e-12)  # the load, by hand
+    assert not carries_a_force(reference, inner_joints(case.linkage))
+    solution = pm.settle(case)
+    if solution.status == "ok":
+        assert_solution_close(case, solution, complete=True)
+    else:
+        assert solution.status == "not_settled" and solution.message
+        assert not any(q.startswith(("F_", "Q_", "M_", "S_")) for q in solution.values)
 
 
 def test_an_unloaded_linkage_settles_to_zero_forces() -> None:
