@@ -246,3 +246,18 @@ def carries_a_force(reference: Solution, joints: set[str]) -> bool:
     magnitudes = {q: abs(v) for q, v in reference.values.items() if q.startswith("F_")}
     largest = max(magnitudes.values(), default=0.0)
     return any(v > ROUNDING * largest for q, v in magnitudes.items() if q[2:-2] in joints)
+
+
+def four_bar_table(points: dict[str, list[float]], **rest: Any) -> dict[str, Any]:
+    """A ``mechanism = "linkage"`` table of the four-bar :func:`linkage_tables` draws
+    (ground O2–O4, crank O2–A, coupler A–B, rocker O4–B, pins at their points), no
+    gravity and no masses unless ``rest`` (drivers, loads, springs …) says otherwise."""
+    links = (("ground", ["O2", "O4"]), ("crank", ["O2", "A"]), ("coupler", ["A", "B"]),
+             ("rocker", ["O4", "B"]))
+    pins = (("O2", ["ground", "crank"]), ("A", ["crank", "coupler"]),
+            ("B", ["coupler", "rocker"]), ("O4", ["ground", "rocker"]))
+    return {"name": "random-linkage", "mechanism": "linkage", "gravity": [0.0, 0.0],
+            "points": points, "links": [{"name": n, "points": p} for n, p in links],
+            "joints": [{"name": n, "kind": "revolute", "links": between, "at": n}
+                       for n, between in pins],
+            "masses": [], **rest}

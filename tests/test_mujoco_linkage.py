@@ -35,7 +35,13 @@ from mechcheck.sim_models.mujoco.settle import SETTLE_RTOL
 from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin_cases
-from .strategies import MAX_CONDITION, carries_a_force, inner_joints, linkage_tables
+from .strategies import (
+    MAX_CONDITION,
+    carries_a_force,
+    four_bar_table,
+    inner_joints,
+    linkage_tables,
+)
 from .test_driven_friction import coulomb_motion_unresolved
 
 GOLDEN = Path(__file__).parent / "golden" / "mujoco"
@@ -481,25 +487,15 @@ def test_mujoco_backend_on_random_linkages(table: dict[str, Any]) -> None:
     assert_close(case, sim)
 
 
-#: The draw that left only rounding at the inner joints (the crank's spring along itself).
-ROUNDING_ONLY = {
-    "name": "random-linkage", "mechanism": "linkage", "gravity": [0.0, 0.0],
-    "points": {"O2": [0.0, 0.0], "A": [0.125, 0.0], "O4": [0.2, 0.0],
-               "B": [0.9697916666666665, -0.5350953559231811]},
-    "links": [{"name": "ground", "points": ["O2", "O4"]},
-              {"name": "crank", "points": ["O2", "A"]},
-              {"name": "coupler", "points": ["A", "B"]},
-              {"name": "rocker", "points": ["O4", "B"]}],
-    "joints": [{"name": n, "kind": "revolute", "links": links, "at": n} for n, links in (
-        ("O2", ["ground", "crank"]), ("A", ["crank", "coupler"]), ("B", ["coupler", "rocker"]),
-        ("O4", ["ground", "rocker"]))],
-    "drivers": [{"joint": "O2", "rotation": 0.0, "sense": "increasing"}],
-    "loads": [{"link": "crank", "at": [0.0, 0.0], "force": {"x": 0.0, "y": 0.0}, "torque": 0.0}],
-    "masses": [],
-    "springs": [{"name": "k1", "ends": [["ground", "O2"], ["crank", [0.125, 0.0]]],
-                 "stiffness": 10.0, "free_length": 0.5},
-                {"name": "k2", "joint": "A", "stiffness": 1.0, "free_rotation": 0.0}],
-    "friction": {"mu": 0.25, "pin_radius": {"O2": 0.0}}}
+#: The draw that left only rounding at the inner joints (the crank's spring along itself),
+#: without its zero load and its zero-radius pin friction, which change nothing.
+ROUNDING_ONLY = four_bar_table(
+    {"O2": [0.0, 0.0], "A": [0.125, 0.0], "O4": [0.2, 0.0],
+     "B": [0.9697916666666665, -0.5350953559231811]},
+    drivers=[{"joint": "O2", "rotation": 0.0, "sense": "increasing"}],
+    springs=[{"name": "k1", "ends": [["ground", "O2"], ["crank", [0.125, 0.0]]],
+              "stiffness": 10.0, "free_length": 0.5},
+             {"name": "k2", "joint": "A", "stiffness": 1.0, "free_rotation": 0.0}])
 
 
 def test_rounding_at_the_inner_joints_is_no_force() -> None:

@@ -32,7 +32,7 @@ from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
 from .builtin import builtin, builtin_cases
-from .strategies import carries_a_force, inner_joints, linkage_tables
+from .strategies import carries_a_force, four_bar_table, inner_joints, linkage_tables
 from .test_driven_friction import SENSED_RATE, coulomb_motion_unresolved
 from .test_linkage_identities import SETTINGS, case_of
 from .test_linkage_sweep import LINKAGES
@@ -391,21 +391,12 @@ def test_random_static_linkages_by_settling(table: dict[str, Any]) -> None:
 
 #: A draw of README's test command (2026-11-26): the only load, 0.125 N, on the crank's
 #: ground pin; every other joint carries nothing.
-LOAD_ON_THE_GROUND_PIN: dict[str, Any] = {
-    "name": "random-linkage", "mechanism": "linkage", "gravity": [0.0, 0.0],
-    "points": {"O2": [0.0, 0.0], "A": [0.20532771839798078, 0.0], "O4": [0.5, 0.0],
-               "B": [0.35266385919899035, -0.47779918544705063]},
-    "links": [{"name": "ground", "points": ["O2", "O4"]},
-              {"name": "crank", "points": ["O2", "A"]},
-              {"name": "coupler", "points": ["A", "B"]},
-              {"name": "rocker", "points": ["O4", "B"]}],
-    "joints": [{"name": n, "kind": "revolute", "links": links, "at": n} for n, links in (
-        ("O2", ["ground", "crank"]), ("A", ["crank", "coupler"]), ("B", ["coupler", "rocker"]),
-        ("O4", ["ground", "rocker"]))],
-    "drivers": [{"joint": "O2", "rotation": 0.001953125}],
-    "loads": [{"link": "crank", "at": [0.0, 0.0], "force": {"x": 0.0, "y": 0.125},
-               "torque": 0.0}],
-    "masses": []}
+LOAD_ON_THE_GROUND_PIN = four_bar_table(
+    {"O2": [0.0, 0.0], "A": [0.20532771839798078, 0.0], "O4": [0.5, 0.0],
+     "B": [0.35266385919899035, -0.47779918544705063]},
+    drivers=[{"joint": "O2", "rotation": 0.001953125}],
+    loads=[{"link": "crank", "at": [0.0, 0.0], "force": {"x": 0.0, "y": 0.125},
+            "torque": 0.0}])
 
 
 def test_a_load_straight_into_the_ground_gives_no_wrong_number() -> None:
