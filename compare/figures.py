@@ -23,6 +23,7 @@ import pandas as pd
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.transmission import transmission_angle
 from mechcheck.backends import REFERENCE
+from mechcheck.output import file_stem
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION
 
 if TYPE_CHECKING:
@@ -39,6 +40,11 @@ MARGINS = {"left": 0.075, "right": 0.985, "bottom": 0.075, "top": 0.915, "wspace
            "hspace": 0.16}
 #: The most singular poses marked with a vertical line per panel.
 MAX_SINGULAR_LINES = 50
+
+
+def figure_file(case_name: str) -> str:
+    """The file name of a case's sweep figure, in the sweep's ``figures/``."""
+    return f"{file_stem(case_name)}.png"
 
 
 def thin(x: np.ndarray, y: np.ndarray, limit: int = MAX_POINTS) -> tuple[np.ndarray, np.ndarray]:

@@ -20,8 +20,8 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
+from mechcheck.figures import figure_file
 from mechcheck.linkage_file import LinkageCaseSpec
-from mechcheck.output import file_stem
 from mechcheck.run import RunResult
 from mechcheck.seeds import SeedRow, derived_value
 from mechcheck.tables import ordered, table_value
@@ -297,7 +297,7 @@ def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: 
             "name": case.name, "description": spec.description if spec else "",
             "mechanism": case.mechanism, "kind": case.kind,
             # No figure when the sweep was run without them (--no-figures).
-            "figure": f"{file_stem(case.name)}.png" if case.name in figures else None,
+            "figure": figure_file(case.name) if case.name in figures else None,
             "figure_b64": base64.b64encode(figures[case.name]).decode()
             if case.name in figures else None,
             "singular": _pose_list(ref.loc[ref["status"] == "singular", "theta12"]),

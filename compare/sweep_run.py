@@ -13,9 +13,9 @@ from mechcheck.analytic.case import Case
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
 from mechcheck.executors import executor_for
-from mechcheck.figures import draw_sweep, sweep_plot, warm_up
+from mechcheck.figures import draw_sweep, figure_file, sweep_plot, warm_up
 from mechcheck.junit import junit_sweep_xml
-from mechcheck.output import file_stem, write_all
+from mechcheck.output import write_all
 from mechcheck.report import render_sweep, sweep_view_model
 from mechcheck.sweep import LocalExecutor, SweepTask, run_sweep
 from mechcheck.tables import sweep_comparison
@@ -54,7 +54,7 @@ def forget_figures(out: Path, cases: list[Case]) -> None:
     """Remove the cases' figures an earlier run drew (``--no-figures``): a report without
     them must not sit beside figures of other results."""
     for case in cases:
-        (out / "figures" / f"{file_stem(case.name)}.png").unlink(missing_ok=True)
+        (out / "figures" / figure_file(case.name)).unlink(missing_ok=True)
 
 
 def warm_figures(executor: Executor, figures: int) -> None:
@@ -106,7 +106,7 @@ def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask],
     markdown, page = render_sweep(model)
     files: dict[str, str | bytes] = {"report.md": markdown, "report.html": page}
     if figures:
-        write_all(out / "figures", {f"{file_stem(name)}.png": png for name, png in pngs.items()})
+        write_all(out / "figures", {figure_file(name): png for name, png in pngs.items()})
     else:
         forget_figures(out, cases)
     assert comparison_buffer is not None
