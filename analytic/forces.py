@@ -211,6 +211,21 @@ def verdict_at(case: Case, results: PoseResults, index: int) -> PoseVerdict | No
     return None
 
 
+def pose_verdicts(case: Case, results: PoseResults) -> tuple[NDArray[np.object_],
+                                                             NDArray[np.object_]]:
+    """Every pose's verdict (``"ok"`` where it has forces) and its message: :func:`verdict_at`
+    at every pose, looked up only where the pose is flagged."""
+    n = len(results.theta12)
+    statuses = np.full(n, "ok", dtype=object)
+    messages = np.full(n, "", dtype=object)
+    flagged = ~results.assembled | results.singular | results.indeterminate | ~results.converged
+    for index in np.flatnonzero(flagged):
+        found = verdict_at(case, results, int(index))
+        if found is not None:
+            statuses[index], messages[index] = found.status, found.message
+    return statuses, messages
+
+
 def solution_from(case: Case, backend: str, results: PoseResults, index: int = 0, *,
                   method: str, elapsed: float) -> Solution:
     """A :class:`Solution` for one pose of vectorised results, with its verdict."""

@@ -26,15 +26,38 @@ from __future__ import annotations
 
 import math
 import re
+from collections import Counter
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from mechcheck.analytic.linkage_kinematics import joint_jacobian_at_drawn_pose
-from mechcheck.analytic.values import GROUND, CaseError, FrozenMap, Vec2, finite
+from mechcheck.analytic import linalg
+from mechcheck.analytic.linalg import Batched
+from mechcheck.analytic.linkage_kinematics import (
+    constraint_system,
+    joint_system_at,
+    solve_in_lengths,
+    unit_scales,
+)
+from mechcheck.analytic.values import (
+    GROUND,
+    MIN_LINK_LENGTH,
+    CaseError,
+    FrozenMap,
+    Vec2,
+    bounded_angle,
+    driver_displacement,
+    driver_rotation,
+    finite,
+    length_text,
+    nonnegative,
+    pair,
+    positive,
+    too_close,
+)
 
 if TYPE_CHECKING:
     from mechcheck.analytic.linkage_assur import AssurPlan
@@ -51,9 +74,16 @@ def _identifier(name: object, key: str) -> str:
 
 
 def _point(value: Vec2, key: str) -> Vec2:
-    if len(value) != 2:
+    if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
         raise CaseError(f"must be a pair [x, y], got {value!r}", key=key)
-    return (finite(value[0], f"{key}[0]"), finite(value[1], f"{key}[1]"))
+    return pair(value, key)
+
+
+def _force(value: Vec2, key: str) -> Vec2:
+    """A force's components, named as a case file writes them (``force.x``, ``force.y``)."""
+    if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
+        raise CaseError(f"must be a pair (x, y), got {value!r}", key=key)
+    return (finite(value[0], f"{key}.x"), finite(value[1], f"{key}.y"))
 
 
 @dataclass(frozen=True)
@@ -163,12 +193,17 @@ class Linkage:
     springs: tuple[LinearSpring | TorsionSpring, ...] = ()
     gravity: Vec2 = (0.0, 0.0)
     friction: JointFriction | None = None
+    #: Where the reference point (the ground's first point) is in the file's frame, m: every
+    #: position inside is held relative to it (:meth:`_centre_points`), and positions reported
+    #: back add it (:meth:`drawn`).
+    offset: Vec2 = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", FrozenMap(
             {_identifier(n, f"points.{n}"): _point(p, f"points.{n}") for n, p in self.points.items()}))
         object.__setattr__(self, "links", tuple(self.links))
         self._check_links()
+        shift = self._centre_points()
         object.__setattr__(self, "joints", tuple(self._checked_joint(j, i)
                                                  for i, j in enumerate(self.joints)))
         self._check_points_joined()
@@ -177,13 +212,15 @@ class Linkage:
         self._check_loads()
         self._check_springs()
         self._check_friction()
+        self._centre_loads(shift)
 
     # -- construction checks ------------------------------------------------------------
     def _check_links(self) -> None:
         names = [link.name for link in self.links]
+        counts = Counter(names)   # counted once: a link list of thousands stays linear
         for i, link in enumerate(self.links):
             _identifier(link.name, f"links[{i}].name")
-            if names.count(link.name) > 1:
+            if counts[link.name] > 1:
                 raise CaseError(f"duplicate link name {link.name!r}", key=f"links[{i}].name")
             if not link.points:
                 raise CaseError("a link must carry at least one point", key=f"links[{i}].points")
@@ -196,15 +233,33 @@ class Linkage:
         for name in self.points:
             if name not in carried:
                 raise CaseError("no link carries this point", key=f"points.{name}")
+        self._check_spacing()
+
+    def _check_spacing(self) -> None:
+        """Points of one link are at one place or a link length apart, and the drawing is
+        that large: closer points are no drawing of a machine, and the simulators' bodies
+        built on them degenerate."""
+        for link in self.links:
+            close = too_close([(p, self.points[p]) for p in dict.fromkeys(link.points)])
+            if close is not None:
+                first, second, distance = close
+                raise CaseError(f"is {length_text(distance)} from {first!r}, which link "
+                                f"{link.name!r} also carries: two points of one link are at one "
+                                f"place or at least {length_text(MIN_LINK_LENGTH)} (a micrometre) "
+                                "apart", key=f"points.{second}")
+        xs, ys = [p[0] for p in self.points.values()], [p[1] for p in self.points.values()]
+        if max(max(xs) - min(xs), max(ys) - min(ys)) < MIN_LINK_LENGTH:
+            raise CaseError(f"the drawing is less than {length_text(MIN_LINK_LENGTH)} (a micrometre) "
+                            "across: no linkage is that small", key="points")
 
     def _checked_joint(self, joint: Joint, i: int) -> Joint:
         key = f"joints[{i}]"
         _identifier(joint.name, f"{key}.name")
-        if [j.name for j in self.joints].count(joint.name) > 1:
+        if self._joint_name_counts[joint.name] > 1:
             raise CaseError(f"duplicate joint name {joint.name!r}", key=f"{key}.name")
         if joint.kind not in ("revolute", "prismatic"):
             raise CaseError(f"must be 'revolute' or 'prismatic', got {joint.kind!r}", key=f"{key}.kind")
-        links = {link.name: link for link in self.links}
+        links = self._links_by_name
         if len(joint.links) != 2 or joint.links[0] == joint.links[1]:
             raise CaseError("must name two different links", key=f"{key}.links")
         for name in joint.links:
@@ -213,6 +268,9 @@ class Linkage:
         if joint.at not in self.points:
             raise CaseError(f"unknown point {joint.at!r}", key=f"{key}.at")
         first, second = (links[name] for name in joint.links)
+        if joint.kind == "revolute" and joint.axis is not None:
+            raise CaseError("a revolute joint has no axis: only a prismatic joint slides along one",
+                            key=f"{key}.axis")
         if joint.kind == "revolute":
             if joint.at not in first.points or joint.at not in second.points:
                 raise CaseError(f"both links must carry point {joint.at!r} (a revolute joint "
@@ -232,11 +290,19 @@ class Linkage:
     def _check_points_joined(self) -> None:
         """Every pair of links carrying one point is joined there, directly or through
         revolute joints at that point (LINKAGES.md: only joints join links)."""
+        carried_by: dict[str, list[str]] = {}
+        for link in self.links:
+            for point in dict.fromkeys(link.points):
+                carried_by.setdefault(point, []).append(link.name)
+        pinned_at: dict[str, list[tuple[str, str]]] = {}
+        for j in self.joints:
+            if j.kind == "revolute":
+                pinned_at.setdefault(j.at, []).append(j.links)
         for name in self.points:
-            carriers = [link.name for link in self.links if name in link.points]
+            carriers = carried_by.get(name, [])
             if len(carriers) < 2:
                 continue
-            pins = [j.links for j in self.joints if j.kind == "revolute" and j.at == name]
+            pins = pinned_at.get(name, [])
             if _components(carriers, pins) > 1:
                 raise CaseError(f"links {', '.join(map(repr, carriers))} all carry {name!r} but "
                                 "are not all joined there by revolute joints", key=f"points.{name}")
@@ -257,9 +323,15 @@ class Linkage:
             if d.joint in seen:
                 raise CaseError(f"joint {d.joint!r} is driven twice", key=f"{key}.joint")
             seen.add(d.joint)
-            for name in ("value", "velocity", "acceleration"):
+            # The file's key: a revolute joint is driven by a rotation, a prismatic one by a
+            # displacement; both bounded, as the pose is reached by continuation.
+            if joints[d.joint].kind == "revolute":
+                driver_rotation(d.value, f"{key}.rotation")
+            else:
+                driver_displacement(d.value, self.scale, f"{key}.displacement")
+            for name in ("velocity", "acceleration"):
                 finite(getattr(d, name), f"{key}.{name}")
-            if d.sense not in (-1, 0, 1):
+            if isinstance(d.sense, bool) or d.sense not in (-1, 0, 1):
                 raise CaseError("must be 'increasing' or 'decreasing'", key=f"{key}.sense")
             if d.sense and d.velocity and (d.velocity > 0) != (d.sense > 0):
                 raise CaseError(f"says {'increasing' if d.sense > 0 else 'decreasing'} but the "
@@ -288,14 +360,17 @@ class Linkage:
         for kind, i, link in owners:
             if link not in names:
                 raise CaseError(f"unknown link {link!r}", key=f"{kind}[{i}].link")
+        _point(self.gravity, "gravity")
+        for i, ld in enumerate(self.loads):
+            _point(ld.at, f"loads[{i}].at")
+            _force(ld.force, f"loads[{i}].force")
+            finite(ld.torque, f"loads[{i}].torque")
         for i, m in enumerate(self.masses):
-            if not m.mass > 0.0:
-                raise CaseError(f"must be > 0, got {m.mass:g}", key=f"masses[{i}].mass")
-            if m.inertia < 0.0:
-                raise CaseError(f"must be >= 0, got {m.inertia:g}", key=f"masses[{i}].inertia")
+            positive(m.mass, f"masses[{i}].mass")
+            _point(m.com, f"masses[{i}].com")
+            nonnegative(m.inertia, f"masses[{i}].inertia")
 
     def _check_springs(self) -> None:
-        names = {link.name for link in self.links}
         joints = {j.name: j for j in self.joints}
         seen: set[str] = set()
         for i, s in enumerate(self.springs):
@@ -305,34 +380,123 @@ class Linkage:
                 raise CaseError(f"duplicate spring name {s.name!r}", key=f"{key}.name")
             seen.add(s.name)
             if isinstance(s, LinearSpring):
-                for k, (link, _) in enumerate(s.ends):
-                    if link not in names:
-                        raise CaseError(f"unknown link {link!r}", key=f"{key}.ends[{k}]")
-                if s.ends[0][0] == s.ends[1][0]:
-                    raise CaseError("both ends are on one link: a spring between two points of "
-                                    "one rigid link does nothing", key=f"{key}.ends")
-                if s.free_length < 0.0:
-                    raise CaseError(f"must be >= 0, got {s.free_length:g}", key=f"{key}.free_length")
-            elif s.joint not in joints or joints[s.joint].kind != "revolute":
-                raise CaseError(f"must name a revolute joint, got {s.joint!r}", key=f"{key}.joint")
+                self._check_linear_spring(s, key)
+            elif isinstance(s, TorsionSpring):
+                if s.joint not in joints or joints[s.joint].kind != "revolute":
+                    raise CaseError(f"must name a revolute joint, got {s.joint!r}", key=f"{key}.joint")
+                nonnegative(s.stiffness, f"{key}.stiffness")
+                bounded_angle(s.free_rotation, f"{key}.free_rotation")
+                nonnegative(s.damping, f"{key}.damping")
+            else:
+                raise CaseError(f"must be a LinearSpring or a TorsionSpring, got {s!r}", key=key)
+
+    def _check_linear_spring(self, s: LinearSpring, key: str) -> None:
+        names = {link.name for link in self.links}
+        if len(s.ends) != 2:
+            raise CaseError("must be two ends [link, point]", key=f"{key}.ends")
+        for k, end in enumerate(s.ends):
+            if not isinstance(end, (tuple, list)) or len(end) != 2:
+                raise CaseError(f"must be [link, [x, y]], got {end!r}", key=f"{key}.ends[{k}]")
+            link, at = end
+            if not isinstance(link, str) or link not in names:
+                raise CaseError(f"unknown link {link!r}", key=f"{key}.ends[{k}]")
+            if isinstance(at, str) or not hasattr(at, "__len__") or len(at) != 2:
+                raise CaseError(f"must be [link, [x, y]], got {end!r}", key=f"{key}.ends[{k}]")
+            # One key for the end, whichever coordinate is bad: the file writes it
+            # [link, [x, y]], so an index past ends[k] would point into the link's name.
+            for v in at:
+                finite(v, f"{key}.ends[{k}]")
+        if s.ends[0][0] == s.ends[1][0]:
+            raise CaseError("both ends are on one link: a spring between two points of "
+                            "one rigid link does nothing", key=f"{key}.ends")
+        nonnegative(s.stiffness, f"{key}.stiffness")
+        if finite(s.free_length, f"{key}.free_length") < 0.0:
+            raise CaseError(f"must be >= 0, got {length_text(s.free_length)}", key=f"{key}.free_length")
+        nonnegative(s.damping, f"{key}.damping")
 
     def _check_friction(self) -> None:
         f = self.friction
         if f is None:
             return
         joints = {j.name: j for j in self.joints}
+        nonnegative(f.mu, "friction.mu")
         for table in ("pin_radius", "joint_mu", "viscous"):
-            for name in getattr(f, table):
+            for name, value in getattr(f, table).items():
                 if name not in joints:
                     raise CaseError(f"unknown joint {name!r}", key=f"friction.{table}.{name}")
                 if table == "pin_radius" and joints[name].kind != "revolute":
                     raise CaseError("a pin radius belongs to a revolute joint",
                                     key=f"friction.{table}.{name}")
+                nonnegative(value, f"friction.{table}.{name}")
+
+    # -- where the drawing sits -----------------------------------------------------------
+    def _centre_points(self) -> Vec2:
+        """Hold the points relative to the reference point (the ground's first point), and
+        return the shift: every tolerance of the engine is then independent of where the
+        drawing sits (a four-bar drawn 5 km from the origin kept 1e-12 m of its closure)."""
+        ground = next(link for link in self.links if link.name == GROUND)
+        rx, ry = self.points[ground.points[0]]
+        if rx == 0.0 and ry == 0.0:
+            return (0.0, 0.0)
+        object.__setattr__(self, "points", FrozenMap(
+            {n: (x - rx, y - ry) for n, (x, y) in self.points.items()}))
+        object.__setattr__(self, "offset", (self.offset[0] + rx, self.offset[1] + ry))
+        return (rx, ry)
+
+    def _centre_loads(self, shift: Vec2) -> None:
+        """Move the drawn positions of loads, centres of mass and spring ends by the points'
+        shift (:meth:`_centre_points`)."""
+        if shift == (0.0, 0.0):
+            return
+
+        def moved(p: Vec2) -> Vec2:
+            return (p[0] - shift[0], p[1] - shift[1])
+
+        object.__setattr__(self, "loads", tuple(replace(ld, at=moved(ld.at)) for ld in self.loads))
+        object.__setattr__(self, "masses", tuple(replace(m, com=moved(m.com)) for m in self.masses))
+        object.__setattr__(self, "springs", tuple(
+            replace(s, ends=((s.ends[0][0], moved(s.ends[0][1])), (s.ends[1][0], moved(s.ends[1][1]))))
+            if isinstance(s, LinearSpring) else s for s in self.springs))
+
+    def drawn(self, p: Vec2) -> Vec2:
+        """A position held relative to the reference point, in the file's frame (m)."""
+        return (p[0] + self.offset[0], p[1] + self.offset[1])
 
     # -- derived facts ------------------------------------------------------------------
-    @property
+    @cached_property
     def moving_links(self) -> tuple[str, ...]:
         return tuple(link.name for link in self.links if link.name != GROUND)
+
+    @cached_property
+    def link_number(self) -> dict[str, int]:
+        """Each moving link's place in :attr:`moving_links`."""
+        return {name: k for k, name in enumerate(self.moving_links)}
+
+    @cached_property
+    def joint_number(self) -> dict[str, int]:
+        """Each joint's place in :attr:`joints`."""
+        return {j.name: k for k, j in enumerate(self.joints)}
+
+    @cached_property
+    def carriers(self) -> dict[str, str]:
+        """The link each point's position is reported on: the first that carries it."""
+        out: dict[str, str] = {}
+        for link in self.links:
+            for point in link.points:
+                out.setdefault(point, link.name)
+        return out
+
+    @cached_property
+    def _joint_name_counts(self) -> Counter[str]:
+        return Counter(j.name for j in self.joints)
+
+    @cached_property
+    def _links_by_name(self) -> dict[str, Link]:
+        return {link.name: link for link in self.links}
+
+    @cached_property
+    def _joints_by_name(self) -> dict[str, Joint]:
+        return {j.name: j for j in self.joints}
 
     @property
     def gruebler(self) -> int:
@@ -340,13 +504,56 @@ class Linkage:
         return 3 * (len(self.links) - 1) - 2 * len(self.joints)
 
     @cached_property
+    def drawn_rank(self) -> int:
+        """Rank of the joints' constraint Jacobian at the drawn pose (in length units:
+        :func:`.linkage_kinematics.unit_scales`, so that it does not depend on the drawing's
+        place, orientation or size)."""
+        return self._rank_at(np.zeros(3 * len(self.moving_links)))
+
+    @cached_property
     def joint_rank(self) -> int:
-        """Rank of the joints' constraint Jacobian at the drawn pose."""
-        jac = joint_jacobian_at_drawn_pose(self)
-        if jac.size == 0:
-            return 0
-        s = np.linalg.svd(jac, compute_uv=False)
-        return int((s > 1e-9 * max(1.0, float(s[0]))).sum())
+        """Rank of the joints' constraint Jacobian: at the drawn pose, or, where the drawing
+        sits on a change point (a four-bar drawn flat), a little way along the linkage's own
+        motions, where the constraints are independent again. Constraints dependent at every
+        pose (a second pin at one point, a triangle of slides) stay dependent there."""
+        drawn = self.drawn_rank
+        if drawn == 2 * len(self.joints):
+            return drawn
+        return max([drawn, *(self._rank_near_drawing(seed) for seed in range(PROBES))])
+
+    @property
+    def drawn_at_change_point(self) -> bool:
+        """The drawing sits where the joints' constraints are dependent although they are
+        not elsewhere: which branch the linkage takes from there is not drawn."""
+        return self.drawn_rank < self.joint_rank
+
+    def _rank_at(self, q: np.ndarray) -> int:
+        jac = joint_system_at(self, q)
+        rows, cols = unit_scales(self, drivers=False)
+        scaled = jac.scaled(np.broadcast_to(rows, (1, rows.size)), cols)
+        return linalg.rank(scaled.dense()[0] if scaled.small else scaled.at(0))
+
+    def _rank_near_drawing(self, seed: int) -> int:
+        """The rank a step of 10⁻³ of the linkage's size away from the drawn pose, along a
+        random motion the constraints allow to first order, brought back onto them."""
+        size = 3 * len(self.moving_links)
+        rows, cols = unit_scales(self, drivers=False)
+        jac = joint_system_at(self, np.zeros(size))
+        direction = np.random.default_rng(seed).standard_normal(size) / cols   # in lengths
+        along = direction - solve_in_lengths(self, jac, jac_times(jac, direction), drivers=False)[0]
+        norm = float(np.linalg.norm(along / cols))
+        if not norm > 0.0:
+            return self.drawn_rank
+        q = along * (1e-3 * self.scale / norm)
+        for _ in range(50):
+            phi, jac = constraint_system(self, q[None, :], np.zeros((1, 0)), drivers=False)
+            if np.abs(phi * rows).max(initial=0.0) <= 1e-13 * self.scale:
+                return self._rank_at(q)
+            # Gauss–Newton back onto the constraints, blind to the nearly dependent
+            # directions (a plain step there is as large as 1/σ_min).
+            scaled = jac.scaled(rows[None, :], cols)
+            q = q - linalg.solve_truncated(scaled, phi * rows, 1e-6)[0] * cols
+        return self.drawn_rank   # not back on the constraints: no evidence either way
 
     @cached_property
     def assur_plan(self) -> AssurPlan | None:
@@ -356,13 +563,13 @@ class Linkage:
 
     @property
     def dof(self) -> int:
-        """Degrees of freedom by the rank of the constraint Jacobian at the drawn pose."""
+        """Degrees of freedom by the rank of the constraint Jacobian (:attr:`joint_rank`)."""
         return 3 * len(self.moving_links) - self.joint_rank
 
     @property
     def redundant(self) -> bool:
-        """The joints' constraints are dependent at the drawn pose (over-constrained, or a
-        singular drawing): the reactions are then not unique."""
+        """The joints' constraints are dependent (over-constrained): the reactions are then
+        not unique."""
         return self.joint_rank < 2 * len(self.joints)
 
     @property
@@ -378,14 +585,26 @@ class Linkage:
         slides = any(j.kind == "prismatic" and f.coefficient(j.name) > 0.0 for j in self.joints)
         return pins or slides
 
-    @property
+    @cached_property
     def scale(self) -> float:
-        """A characteristic length: the largest distance between two points (m)."""
+        """A characteristic length: twice the largest distance of a point from the points'
+        centroid (m), between the drawing's diameter and twice it; unchanged when the whole
+        drawing is moved or turned, and scaled with it."""
         xy = np.array(list(self.points.values()))
-        return float(max(np.ptp(xy[:, 0]), np.ptp(xy[:, 1]), 1e-9))
+        xy = xy - xy[0]     # the same digits wherever the drawing sits
+        return float(max(2.0 * np.sqrt(((xy - xy.mean(axis=0)) ** 2).sum(axis=1)).max(), 1e-300))
 
     def joint(self, name: str) -> Joint:
-        return next(j for j in self.joints if j.name == name)
+        return self._joints_by_name[name]
+
+
+#: Random motions tried from a drawing whose constraints are dependent (:attr:`Linkage.joint_rank`).
+PROBES = 3
+
+
+def jac_times(jac: Batched, x: np.ndarray) -> np.ndarray:
+    """J·x at one pose."""
+    return np.asarray(jac.at(0) @ x if not jac.small else jac.dense()[0] @ x)[None, :]
 
 
 def _components(nodes: list[str], edges: list[tuple[str, str]]) -> int:

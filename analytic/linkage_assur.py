@@ -23,6 +23,7 @@ coordinates, redundant joints) have no plan and keep the Newton path.
 
 from __future__ import annotations
 
+import heapq
 import math
 import threading
 from collections.abc import Iterator
@@ -101,11 +102,10 @@ class AssurPlan:
         """The paths traced so far, by their span of nodes (:func:`path`), oldest first."""
         return {}
 
-    @cached_property
+    @property
     def carriers(self) -> dict[str, str]:
-        """The link each point's position is reported on: the first that carries it."""
-        return {name: next(link.name for link in self.linkage.links if name in link.points)
-                for name in self.linkage.points}
+        """The link each point's position is reported on (:attr:`Linkage.carriers`)."""
+        return self.linkage.carriers
 
     @cached_property
     def joints_on(self) -> dict[str, list[Joint]]:
@@ -127,53 +127,87 @@ class AssurPlan:
 
 
 def assur_plan(linkage: Linkage) -> AssurPlan | None:
-    """The linkage's crank-and-RRR-dyad decomposition, or None if it has none (see module)."""
+    """The linkage's crank-and-RRR-dyad decomposition, or None if it has none (see module).
+
+    Groups are taken greedily: a crank where the driven joint reaches an unplaced link, else
+    the dyad whose middle joint comes first in the file. Only joints next to what was just
+    placed can start a new dyad, so each is looked at again only then (a heap of candidates
+    in file order): the plan of a chain of n loops costs O(n log n), not O(n²)."""
     if (len(linkage.drivers) != 1 or linkage.dof != 1 or linkage.redundant
             or any(j.kind != "revolute" for j in linkage.joints)):
         return None
-    driven = {d.joint for d in linkage.drivers}
-    placed = {GROUND}
-    used: set[str] = set()
+    search = _Search(linkage)
     groups: list[Group] = []
-    while len(placed) < len(linkage.links):
-        group = _next_group(linkage, placed, used, driven)
+    while len(search.placed) < len(linkage.links):
+        group = search.next_group()
         if group is None:
             return None
         groups.append(group)
-        placed.update([group.link] if isinstance(group, Crank) else group.links)
-        used.update([group.joint.name] if isinstance(group, Crank)
-                    else (j.name for j in group.joints))
-    if len(used) != len(linkage.joints):
+        search.take(group)
+    if len(search.used) != len(linkage.joints):
         return None
     return AssurPlan(linkage, tuple(groups))
 
 
-def _next_group(linkage: Linkage, placed: set[str], used: set[str],
-                driven: set[str]) -> Group | None:
-    free = [j for j in linkage.joints if j.name not in used]
-    for joint in free:
-        if joint.name in driven and (joint.links[0] in placed) != (joint.links[1] in placed):
-            inner = 0 if joint.links[0] in placed else 1
-            return Crank(joint.links[1 - inner], joint, joint.links[inner],
-                         linkage.points[joint.at], 1.0 if inner == 0 else -1.0)
-    for middle in free:
+class _Search:
+    """What :func:`assur_plan` has placed, and the joints that may start a dyad now."""
+
+    def __init__(self, linkage: Linkage) -> None:
+        self.linkage = linkage
+        self.driven = {d.joint for d in linkage.drivers}
+        self.placed = {GROUND}
+        self.used: set[str] = set()
+        self.at_link: dict[str, list[int]] = {link.name: [] for link in linkage.links}
+        for k, joint in enumerate(linkage.joints):
+            for link in joint.links:
+                self.at_link[link].append(k)
+        self.candidates = list(range(len(linkage.joints)))   # a heap: file order
+
+    def next_group(self) -> Group | None:
+        for name in self.driven:
+            joint = self.linkage.joint(name)
+            if name not in self.used and (joint.links[0] in self.placed) != (joint.links[1] in self.placed):
+                inner = 0 if joint.links[0] in self.placed else 1
+                return Crank(joint.links[1 - inner], joint, joint.links[inner],
+                             self.linkage.points[joint.at], 1.0 if inner == 0 else -1.0)
+        while self.candidates:
+            middle = self.linkage.joints[heapq.heappop(self.candidates)]
+            dyad = self._dyad_at(middle)
+            if dyad is not None:
+                return dyad
+        return None
+
+    def _dyad_at(self, middle: Joint) -> Dyad | None:
         a, b = middle.links
-        if middle.name in driven or a in placed or b in placed:
-            continue
-        ends = [_anchor(free, link, placed, driven) for link in (a, b)]
+        if middle.name in self.used or middle.name in self.driven or a in self.placed \
+                or b in self.placed:
+            return None
+        ends = [self._anchor(link) for link in (a, b)]
         if ends[0] is None or ends[1] is None:
-            continue
-        dyad = _dyad(linkage, (a, b), (ends[0], middle, ends[1]), placed)
-        if dyad is not None:
-            return dyad
-    return None
+            return None
+        return _dyad(self.linkage, (a, b), (ends[0], middle, ends[1]), self.placed)
 
+    def _anchor(self, link: str) -> Joint | None:
+        """The undriven free joint pinning ``link`` to a placed body, if exactly one."""
+        joints = self.linkage.joints
+        pins = [joints[k] for k in self.at_link[link] if joints[k].name not in self.used
+                and joints[k].name not in self.driven
+                and joints[k].links[joints[k].links.index(link) - 1] in self.placed]
+        return pins[0] if len(pins) == 1 else None
 
-def _anchor(free: list[Joint], link: str, placed: set[str], driven: set[str]) -> Joint | None:
-    """The undriven joint pinning ``link`` to a placed body, if exactly one."""
-    pins = [j for j in free if link in j.links and j.name not in driven
-            and j.links[j.links.index(link) - 1] in placed]
-    return pins[0] if len(pins) == 1 else None
+    def take(self, group: Group) -> None:
+        """Place the group's links and look again at the joints near them."""
+        links = [group.link] if isinstance(group, Crank) else list(group.links)
+        self.placed.update(links)
+        self.used.update([group.joint.name] if isinstance(group, Crank)
+                         else (j.name for j in group.joints))
+        near = set()
+        for link in links:
+            for k in self.at_link[link]:
+                for other in self.linkage.joints[k].links:
+                    near.update(self.at_link[other])
+        for k in sorted(near):
+            heapq.heappush(self.candidates, k)
 
 
 def _dyad(linkage: Linkage, links: tuple[str, str], joints: tuple[Joint, Joint, Joint],

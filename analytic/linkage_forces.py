@@ -26,6 +26,8 @@ from functools import cached_property, partial
 import numpy as np
 from numpy.typing import NDArray
 
+from mechcheck.analytic import linalg
+from mechcheck.analytic.linalg import Batched
 from mechcheck.analytic.linkage import Joint, Linkage
 from mechcheck.analytic.linkage_equilibrium import equilibrium_poses
 from mechcheck.analytic.linkage_kinematics import (
@@ -54,29 +56,34 @@ FRICTION_ITERATIONS = 50
 REVERSAL_RTOL = 1e-12
 
 
-def _force_on(m: Array, layout: ForceLayout, link: str, col: int, direction: Array,
+def _force_on(m: Batched, layout: ForceLayout, link: str, col: int, direction: Array,
               point: Array, sign: float) -> None:
     """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
     r = layout.row(link)
     if r < 0:
         return
-    m[:, r, col] += sign * direction[:, 0]
-    m[:, r + 1, col] += sign * direction[:, 1]
-    m[:, r + 2, col] += sign * cross(point, direction)
+    m.add(r, col, sign * direction[:, 0])
+    m.add(r + 1, col, sign * direction[:, 1])
+    m.add(r + 2, col, sign * cross(point, direction))
 
 
-def _couple_on(m: Array, layout: ForceLayout, link: str, col: int, sign: float) -> None:
+def _couple_on(m: Batched, layout: ForceLayout, link: str, col: int, sign: float) -> None:
     r = layout.row(link)
     if r >= 0:
-        m[:, r + 2, col] += sign
+        m.add(r + 2, col, sign)
 
 
 def coefficient_matrix(pose: LinkagePose) -> Array:
     """K (N, 3n, 2j + d): how each unknown enters each link's equilibrium."""
+    return coefficient_entries(pose).dense()
+
+
+def coefficient_entries(pose: LinkagePose) -> Batched:
+    """K as entries (:class:`~.linalg.Batched`): a few per joint, whatever the linkage's size."""
     linkage = pose.linkage
     layout = ForceLayout(linkage)
     n = pose.q.shape[0]
-    k = np.zeros((n, layout.rows, layout.columns))
+    k = Batched(layout.rows, layout.columns, n)
     ones = np.ones(n)
     ex = np.stack([ones, 0 * ones], axis=1)
     ey = np.stack([0 * ones, ones], axis=1)
@@ -134,7 +141,11 @@ def coulomb_terms(pose: LinkagePose) -> list[CoulombTerm]:
         if coefficient <= 0.0:
             continue
         _, rate, _ = moving.joint_coordinate(joint)
-        speed = np.abs(moving.qdot).max(axis=1) * max(1.0, linkage.scale)
+        # The pose's speed scale as an angular speed: a link's |ṫ| / size or |ω|.
+        spin = np.abs(moving.qdot).copy()
+        spin[:, 0::3] /= linkage.scale
+        spin[:, 1::3] /= linkage.scale
+        speed = spin.max(axis=1) * (1.0 if joint.kind == "revolute" else linkage.scale)
         sense = np.where(np.abs(rate) > REVERSAL_RTOL * speed, np.sign(rate), 0.0)
         terms.append(CoulombTerm(joint, coefficient, sense))
     return terms
@@ -220,32 +231,36 @@ def friction_loop_gain(pose: LinkagePose, k: Array, x: Array,
     return out
 
 
-def condition(pose: LinkagePose, k: Array) -> Array:
-    """2-norm condition number of K with couples made forces (÷ the linkage's size) and
-    rows scaled to unit length: dimensionless, and independent of units."""
+def condition(pose: LinkagePose, k: Batched | Array) -> Array:
+    """2-norm condition number of K made dimensionless: moments made forces (moment rows ÷ L,
+    couple unknowns × L, L the linkage's size), then each link's two force rows scaled
+    together and its moment row alone to unit length. So the number does not change when the
+    drawing is moved, turned (rows scaled one by one would mix differently once turned) or
+    drawn in another size."""
     linkage = pose.linkage
+    entries = k if isinstance(k, Batched) else Batched.from_dense(k)
+    if 0 in (entries.rows, entries.cols):
+        return np.ones(entries.poses)
     layout = ForceLayout(linkage)
-    scaled = k.copy()
+    cols = np.ones(layout.columns)
     for joint in linkage.joints:
         if joint.kind == "prismatic":
-            scaled[:, :, layout.joint_columns(joint)[1]] /= linkage.scale
+            cols[layout.joint_columns(joint)[1]] *= linkage.scale
     for index, driver in enumerate(linkage.drivers):
         if linkage.joint(driver.joint).kind == "revolute":
-            scaled[:, :, layout.driver_column(index)] /= linkage.scale
-    scaled[:, 2::3, :] /= linkage.scale
-    norms = np.linalg.norm(scaled, axis=2, keepdims=True)
-    scaled = scaled / np.where(norms > 0.0, norms, 1.0)
-    if 0 in scaled.shape[1:]:
-        return np.ones(k.shape[0])
-    # A pose that does not assemble has no matrix: its condition is infinite by definition.
-    assembled = np.all(np.isfinite(scaled), axis=(1, 2))
-    out = np.full(k.shape[0], np.inf)
-    if assembled.any():
-        # Rectangular (free coordinates: more equations than unknowns) or square: the
-        # ratio of the extreme singular values over the unknowns' space.
-        s = np.linalg.svd(scaled[assembled], compute_uv=False)
-        out[assembled] = np.where(s[:, -1] > 0.0, s[:, 0] / s[:, -1], np.inf)
-    return out
+            cols[layout.driver_column(index)] *= linkage.scale
+    rows = np.ones(layout.rows)
+    rows[2::3] = 1.0 / linkage.scale
+    first = entries.scaled(np.broadcast_to(rows, (entries.poses, rows.size)), cols)
+    norms = first.row_norms()
+    pair = np.sqrt(0.5 * (norms[:, 0::3] ** 2 + norms[:, 1::3] ** 2))
+    norms[:, 0::3] = pair
+    norms[:, 1::3] = pair
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit = np.where(norms > 0.0, 1.0 / norms, 1.0)
+    # A pose that does not assemble has no matrix: its condition is infinite by definition
+    # (its entries are not finite, and linalg.condition says so).
+    return linalg.condition(first.scaled(unit, np.ones(layout.columns)))
 
 
 @dataclass(frozen=True)
@@ -318,10 +333,11 @@ def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
     """x_/y_ of every point, phi_ of every moving link, q_ of every joint."""
     linkage = pose.linkage
     out: dict[str, Array] = {}
+    carriers = linkage.carriers
     for name, drawn in linkage.points.items():
-        carrier = next(link.name for link in linkage.links if name in link.points)
-        position = pose.point(carrier, drawn)[0]
-        out[f"x_{name}"], out[f"y_{name}"] = position[:, 0], position[:, 1]
+        position = pose.point(carriers[name], drawn)[0]
+        out[f"x_{name}"] = position[:, 0] + linkage.offset[0]
+        out[f"y_{name}"] = position[:, 1] + linkage.offset[1]
     for link in linkage.moving_links:
         out[f"phi_{link}"] = pose.angle(link)[0]
     for joint in linkage.joints:
@@ -377,16 +393,17 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
         pose, stable = equilibrium_poses(linkage, values)
     else:
         pose = solve_pose(linkage, values, velocities, accelerations)
-    k = coefficient_matrix(pose)
+    entries = coefficient_entries(pose)
     b = known_vector(pose)
-    cond = condition(pose, k)
+    cond = condition(pose, entries)
     with np.errstate(all="ignore"):
-        x = solve_batched(k, -b)
+        x = linalg.solve(entries, -b)
     terms = coulomb_terms(pose)
     converged = np.ones(x.shape[0], dtype=bool)
     reversing = np.full(x.shape[0], "", dtype=object)
     gain: Callable[[], Array] | None = None
-    if terms:
+    if terms:   # Coulomb friction is solved densely (friction linkages are small)
+        k = entries.dense()
         x, converged = solve_with_friction(pose, k, b, x, terms)
         gain = partial(friction_loop_gain, pose, k, x.copy(), terms)
         for t in terms:
@@ -395,7 +412,8 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
                                         reversing[stops] + ", " + t.joint.name)
     reversing = reversing.astype(str)
     undirected = undirected_springs(pose)
-    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "") | (undirected != "")
+    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "") | (undirected != "") \
+        | linkage.redundant | linkage.drawn_at_change_point   # reactions not unique, or no branch
     x[withheld] = np.nan
     if stable is not None:  # an equilibrium not found is no pose to report forces at
         converged = converged & np.isfinite(stable)
@@ -422,26 +440,43 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
         else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, len(linkage.drivers))
     found = static_results(linkage.assur_plan, vals)
     pose = found.pose
-    singular = _singular_by_bound(pose, found.condition_bound)
+    exact = _ExactCondition(pose)
+    singular = _singular_by_bound(pose, found.condition_bound, exact)
     undirected = undirected_springs(pose)
     for name, value in found.values.items():
         if name.startswith(("F_", "Q_")):
             value[singular | (undirected != "")] = np.nan
     n = vals.shape[0]
-    return LinkageResults(pose, found.values, lambda: condition(pose, coefficient_matrix(pose)),
-                          singular, np.ones(n, dtype=bool), np.zeros(n, dtype="<U1"),
-                          undirected=undirected)
+    return LinkageResults(pose, found.values, exact.all, singular, np.ones(n, dtype=bool),
+                          np.zeros(n, dtype="<U1"), undirected=undirected)
 
 
-def _singular_by_bound(pose: LinkagePose, bound: Array) -> NDArray[np.bool_]:
+class _ExactCondition:
+    """:func:`condition` of some or all poses of a static pose set, each computed once."""
+
+    def __init__(self, pose: LinkagePose) -> None:
+        self.pose = pose
+        self.known = np.full(pose.q.shape[0], np.nan)
+
+    def of(self, which: NDArray[np.bool_]) -> Array:
+        todo = which & np.isnan(self.known)
+        if todo.any():
+            rest = np.zeros_like(self.pose.q[todo])
+            near = LinkagePose(self.pose.linkage, self.pose.drivers[todo], self.pose.q[todo], rest,
+                               rest, self.pose.locked_at[todo])
+            self.known[todo] = condition(near, coefficient_entries(near))
+        return self.known[which]
+
+    def all(self) -> Array:
+        return self.of(np.ones(self.known.shape, dtype=bool))
+
+
+def _singular_by_bound(pose: LinkagePose, bound: Array, exact: _ExactCondition) -> NDArray[np.bool_]:
     """Condition number > :data:`SINGULAR_CONDITION` at each assembled pose: not where an upper
     bound of it is below (with a margin for the bound's rounding), else by :func:`condition`."""
     assembled = pose.assembled
     singular = np.zeros(assembled.shape, dtype=bool)
     undecided = assembled & ~(bound * (1.0 + 1e-9) < SINGULAR_CONDITION)
     if undecided.any():
-        rest = np.zeros_like(pose.q[undecided])
-        near = LinkagePose(pose.linkage, pose.drivers[undecided], pose.q[undecided], rest, rest,
-                           pose.locked_at[undecided])
-        singular[undecided] = ~(condition(near, coefficient_matrix(near)) <= SINGULAR_CONDITION)
+        singular[undecided] = ~(exact.of(undecided) <= SINGULAR_CONDITION)
     return singular

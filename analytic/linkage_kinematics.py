@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mechcheck.analytic import linalg
+from mechcheck.analytic.linalg import Batched
 from mechcheck.analytic.values import GROUND
 
 if TYPE_CHECKING:
@@ -64,7 +66,7 @@ class Layout:
 
     def index(self, link: str) -> int:
         """Column of the link's t_x (t_y and φ follow); −1 for the ground."""
-        return -1 if link == GROUND else 3 * self.linkage.moving_links.index(link)
+        return -1 if link == GROUND else 3 * self.linkage.link_number[link]
 
     @property
     def size(self) -> int:
@@ -161,28 +163,34 @@ def _link_point(layout: Layout, q: Array, link: str, p0: Array) -> tuple[Array, 
     return q[:, k:k + 2] + r, perp(r)
 
 
-def _put(jac: Array, row: int, layout: Layout, link: str, d_t: Array, d_phi: Array) -> None:
-    """Add ∂(row)/∂(t_x, t_y, φ) of ``link`` (nothing for the ground).
-
-    ``jac`` is laid out (rows, 3n, N), poses last, so that each entry is written for all
-    poses at once into contiguous memory (N-first, the writes were strided and took a
-    third of a sweep's time).
-    """
+def _put(jac: Batched, row: int, layout: Layout, link: str, d_t: Array | None,
+         d_phi: Array | float) -> None:
+    """Add ∂(row)/∂(t_x, t_y, φ) of ``link`` (nothing for the ground); ``d_t`` None: zero."""
     k = layout.index(link)
     if k >= 0:
-        jac[row, k:k + 2, :] += d_t.T
-        jac[row, k + 2, :] += d_phi
+        if d_t is not None:
+            jac.add(row, k, d_t[:, 0])
+            jac.add(row, k + 1, d_t[:, 1])
+        jac.add(row, k + 2, d_phi)
 
 
 def residual_and_jacobian(linkage: Linkage, q: Array, targets: Array, *,
                           drivers: bool = True) -> tuple[Array, Array]:
     """Φ (N, m) and J = ∂Φ/∂q (N, m, 3n) for coordinates q and driver targets (N, d);
     without ``drivers``, the joints' rows only."""
+    phi, jac = constraint_system(linkage, q, targets, drivers=drivers)
+    return phi, jac.dense()
+
+
+def constraint_system(linkage: Linkage, q: Array, targets: Array, *,
+                      drivers: bool = True) -> tuple[Array, Batched]:
+    """Φ (N, m) and J = ∂Φ/∂q as entries (:class:`~.linalg.Batched`), as
+    :func:`residual_and_jacobian`."""
     layout = Layout(linkage)
     n = q.shape[0]
     rows = layout.rows if drivers else 2 * len(linkage.joints)
     phi = np.zeros((n, rows))
-    jac = np.zeros((rows, layout.size, n))
+    jac = Batched(rows, layout.size, n)
     row = 0
     for joint in linkage.joints:
         i, j = joint.links
@@ -192,10 +200,13 @@ def residual_and_jacobian(linkage: Linkage, q: Array, targets: Array, *,
             pj, dpj = _link_point(layout, q, j, p0)
             phi[:, row:row + 2] = pi - pj
             for c in range(2):
-                eye = np.zeros((n, 2))
-                eye[:, c] = 1.0
-                _put(jac, row + c, layout, i, eye, dpi[:, c])
-                _put(jac, row + c, layout, j, -eye, -dpj[:, c])
+                ki, kj = layout.index(i), layout.index(j)
+                if ki >= 0:
+                    jac.add(row + c, ki + c, 1.0)
+                    jac.add(row + c, ki + 2, dpi[:, c])
+                if kj >= 0:
+                    jac.add(row + c, kj + c, -1.0)
+                    jac.add(row + c, kj + 2, -dpj[:, c])
         else:
             _angle_lock(layout, q, jac, phi, row, i, j)
             _slide_row(layout, q, jac, phi, row + 1, joint, linkage, normal=True)
@@ -210,20 +221,20 @@ def residual_and_jacobian(linkage: Linkage, q: Array, targets: Array, *,
             _slide_row(layout, q, jac, phi, row, joint, linkage, normal=False)
         phi[:, row] -= targets[:, k]
         row += 1
-    return phi, np.moveaxis(jac, 2, 0)
+    return phi, jac
 
 
-def _angle_lock(layout: Layout, q: Array, jac: Array, phi: Array, row: int, i: str, j: str) -> None:
+def _angle_lock(layout: Layout, q: Array, jac: Batched, phi: Array, row: int, i: str,
+                j: str) -> None:
     """Row φ_j − φ_i."""
-    n = q.shape[0]
     for link, sign in ((j, 1.0), (i, -1.0)):
         k = layout.index(link)
         if k >= 0:
             phi[:, row] += sign * q[:, k + 2]
-        _put(jac, row, layout, link, np.zeros((n, 2)), np.full(n, sign))
+        _put(jac, row, layout, link, None, sign)
 
 
-def _slide_row(layout: Layout, q: Array, jac: Array, phi: Array, row: int, joint: Joint,
+def _slide_row(layout: Layout, q: Array, jac: Batched, phi: Array, row: int, joint: Joint,
                linkage: Linkage, *, normal: bool) -> None:
     """Row w_i·(p_j(A0) − p_i(A0)), w = n (the slide's normal) or u (its axis), fixed in i."""
     i, j = joint.links
@@ -295,59 +306,78 @@ def quadratic_terms(linkage: Linkage, q: Array, qdot: Array) -> Array:
 
 
 def joint_jacobian_at_drawn_pose(linkage: Linkage) -> Array:
-    """∂(joint constraints)/∂q at the drawn pose, (2j, 3n): its rank gives the mobility."""
-    layout = Layout(linkage)
-    _, jac = residual_and_jacobian(linkage, np.zeros((1, layout.size)), np.zeros((1, 0)),
-                                   drivers=False)
-    return jac[0]
+    """∂(joint constraints)/∂q at the drawn pose, (2j, 3n), dense: its rank gives the mobility."""
+    return joint_system_at(linkage, np.zeros(Layout(linkage).size)).dense()[0]
+
+
+def joint_system_at(linkage: Linkage, q: Array) -> Batched:
+    """∂(joint constraints)/∂q at coordinates q (3n,), as entries."""
+    return constraint_system(linkage, q[None, :], np.zeros((1, 0)), drivers=False)[1]
 
 
 # -- solving ----------------------------------------------------------------------------
 
 def solve_batched(a: Array, b: Array) -> Array:
     """a·x = b for every pose: exact where a is square and regular, else least squares."""
-    finite = np.isfinite(a).all(axis=(1, 2)) & np.isfinite(b).all(axis=1)
-    if not finite.all():  # a pose that is not there (NaN) has no solution; LAPACK would fail
-        x = np.full((a.shape[0], a.shape[2]), np.nan)
-        if finite.any():
-            x[finite] = solve_batched(a[finite], b[finite])
-        return x
-    with np.errstate(all="ignore"):
-        if a.shape[1] == a.shape[2]:
-            try:
-                return np.asarray(np.linalg.solve(a, b[..., None])[..., 0], dtype=np.float64)
-            except np.linalg.LinAlgError:
-                pass
-        return np.asarray(np.einsum("nij,nj->ni", np.linalg.pinv(a), b), dtype=np.float64)
+    return linalg.solve(a, b)
+
+
+def unit_scales(linkage: Linkage, *, drivers: bool = True) -> tuple[Array, Array]:
+    """Row and column scales that make the constraint system a system in lengths: rotation
+    columns become L·φ (L the linkage's size) and angle rows are multiplied by L. Solved
+    in these units, least-squares and least-norm steps, residuals and ranks do not depend on
+    where the drawing sits, how it is turned or how large it is."""
+    size = linkage.scale
+    cols = np.ones(Layout(linkage).size)
+    cols[2::3] = 1.0 / size
+    rows: list[float] = []
+    for joint in linkage.joints:
+        rows += [1.0, 1.0] if joint.kind == "revolute" else [size, 1.0]
+    if drivers:
+        kinds = {j.name: j.kind for j in linkage.joints}
+        rows += [size if kinds[d.joint] == "revolute" else 1.0 for d in linkage.drivers]
+    return np.array(rows), cols
+
+
+def solve_in_lengths(linkage: Linkage, jac: Batched, rhs: Array, *,
+                     drivers: bool = True) -> Array:
+    """J·x = rhs at every pose, solved in the units of :func:`unit_scales`."""
+    rows, cols = unit_scales(linkage, drivers=drivers)
+    scaled = jac.scaled(np.broadcast_to(rows, (jac.poses, rows.size)), cols)
+    return linalg.solve(scaled, rhs * rows) * cols
 
 
 def _newton(linkage: Linkage, q: Array, targets: Array) -> tuple[Array, NDArray[np.bool_]]:
     """Close the loops from q at the driver targets; returns (q, converged)."""
-    tol = CLOSURE_RTOL * max(1.0, linkage.scale)
+    tol = CLOSURE_RTOL * linkage.scale
+    rows, _ = unit_scales(linkage)
     q = q.copy()
     converged = np.zeros(q.shape[0], dtype=bool)
     with np.errstate(all="ignore"):
         for _ in range(NEWTON_ITERATIONS):
-            phi, jac = residual_and_jacobian(linkage, q, targets)
-            err = np.abs(phi).max(axis=1) if phi.shape[1] else np.zeros(q.shape[0])
+            phi, jac = constraint_system(linkage, q, targets)
+            err = np.abs(phi * rows).max(axis=1) if phi.shape[1] else np.zeros(q.shape[0])
             converged = np.isfinite(err) & (err <= tol)
             if converged.all():
                 break
-            step = solve_batched(jac, phi)
+            step = solve_in_lengths(linkage, jac, phi)
             step[converged] = 0.0
             q = q - step
     return q, converged & np.all(np.isfinite(q), axis=1)
 
 
+def _step_size(linkage: Linkage, driver: int) -> float:
+    """The continuation's largest step of a driver (rad or m)."""
+    kind = linkage.joint(linkage.drivers[driver].joint).kind
+    return STEP_ROTATION if kind == "revolute" else STEP_DISPLACEMENT * linkage.scale
+
+
 def _steps(linkage: Linkage, values: Array) -> int:
     """Continuation steps so that no driver moves more than one step at a time."""
-    joints = {j.name: j for j in linkage.joints}
     count = 1
-    for k, driver in enumerate(linkage.drivers):
-        kind = joints[driver.joint].kind
-        size = STEP_ROTATION if kind == "revolute" else STEP_DISPLACEMENT * linkage.scale
+    for k in range(len(linkage.drivers)):
         travel = float(np.abs(values[:, k]).max()) if values.size else 0.0
-        count = max(count, math.ceil(travel / size))
+        count = max(count, math.ceil(travel / _step_size(linkage, k)))
     return count
 
 
@@ -367,7 +397,14 @@ def positions(linkage: Linkage, values: Array) -> tuple[Array, Array]:
 
 def continuation_positions(linkage: Linkage, values: Array) -> tuple[Array, Array]:
     """:func:`positions` by continuation: Newton's method from the drawn pose in steps of at
-    most :data:`STEP_ROTATION` (or :data:`STEP_DISPLACEMENT`), bisecting where it locks."""
+    most :data:`STEP_ROTATION` (or :data:`STEP_DISPLACEMENT`), bisecting where it locks.
+
+    One driver: the path is walked once each way from the drawn pose, through anchors one
+    step apart, and every pose is closed from the anchor before it, so the cost grows with
+    the travel plus the number of poses, not with their product. Several drivers move
+    together along s·values, all poses at once."""
+    if values.shape[1] == 1 and values.shape[0]:
+        return _walked_positions(linkage, values[:, 0])
     n = values.shape[0]
     q = np.zeros((n, Layout(linkage).size))
     locked = np.full(n, np.nan)
@@ -386,9 +423,60 @@ def continuation_positions(linkage: Linkage, values: Array) -> tuple[Array, Arra
     return q, locked
 
 
-def _lock_fraction(linkage: Linkage, q: Array, values: Array, lo: float, hi: float) -> Array:
+def _walked_positions(linkage: Linkage, value: Array) -> tuple[Array, Array]:
+    """:func:`continuation_positions` of one driver at values (N,)."""
+    n = value.shape[0]
+    q = np.full((n, Layout(linkage).size), np.nan)
+    locked = np.full(n, np.nan)
+    size = _step_size(linkage, 0)
+    start, closed = _newton(linkage, np.zeros((1, q.shape[1])), np.zeros((1, 1)))
+    if not closed[0]:   # the drawing itself does not close
+        locked[:] = 0.0
+        return q, locked
+    for side in (1.0, -1.0):
+        rows = np.flatnonzero(side * value >= 0.0)
+        if not rows.size:
+            continue
+        travel = float(np.abs(value[rows]).max())
+        anchors, reach = _walk(linkage, start[0], side, size, travel)
+        inside = rows[np.abs(value[rows]) <= reach]
+        beyond = rows[np.abs(value[rows]) > reach]
+        locked[beyond] = reach / np.abs(value[beyond])
+        if not inside.size:
+            continue
+        before = np.minimum(np.floor(np.abs(value[inside]) / size).astype(np.intp), len(anchors) - 1)
+        trial, ok = _newton(linkage, anchors[before], value[inside, None])
+        q[inside[ok]] = trial[ok]
+        if not ok.all():    # between the last anchor and a lock: where exactly, per pose
+            bad = inside[~ok]
+            lo = np.where(value[bad] != 0.0, before[~ok] * size / np.abs(value[bad]), 0.0)
+            locked[bad] = _lock_fraction(linkage, anchors[before[~ok]], value[bad, None],
+                                         lo, np.ones(bad.size))
+    return q, locked
+
+
+def _walk(linkage: Linkage, start: Array, side: float, size: float,
+          travel: float) -> tuple[Array, float]:
+    """The anchors k·size (k = 0, 1, …) of one driver's path on one side of the drawn pose,
+    up to ``travel`` or to where the linkage locks, and how far the path reaches."""
+    count = math.ceil(travel / size) if travel > 0.0 else 0
+    anchors = [start]
+    for k in range(1, count + 1):
+        target = np.array([[side * min(k * size, travel)]])
+        trial, ok = _newton(linkage, anchors[-1][None, :], target)
+        if not ok[0]:
+            fraction = _lock_fraction(linkage, anchors[-1][None, :], target,
+                                      np.array([(k - 1) * size / abs(target[0, 0])]), np.ones(1))
+            return np.array(anchors), float(fraction[0]) * abs(target[0, 0])
+        anchors.append(trial[0])
+    return np.array(anchors), math.inf
+
+
+def _lock_fraction(linkage: Linkage, q: Array, values: Array, lo: float | Array,
+                   hi: float | Array) -> Array:
     """Bisection on s between a pose that closes (lo) and one that does not (hi)."""
-    lo_s, hi_s = np.full(q.shape[0], lo), np.full(q.shape[0], hi)
+    lo_s = np.broadcast_to(np.asarray(lo, dtype=float), (q.shape[0],)).copy()
+    hi_s = np.broadcast_to(np.asarray(hi, dtype=float), (q.shape[0],)).copy()
     good = q.copy()
     for _ in range(LOCK_BISECTIONS):
         mid = 0.5 * (lo_s + hi_s)
@@ -418,13 +506,13 @@ def solve_pose(linkage: Linkage, values: ArrayLike | None = None,
     q, locked = positions(linkage, vals)
     joints_rows = 2 * len(linkage.joints)
     with np.errstate(all="ignore"):
-        _, jac = residual_and_jacobian(linkage, np.nan_to_num(q), vals)
+        _, jac = constraint_system(linkage, np.nan_to_num(q), vals)
         rhs = np.zeros((n, Layout(linkage).rows))
         rhs[:, joints_rows:] = vel
-        qdot = solve_batched(jac, rhs)
+        qdot = solve_in_lengths(linkage, jac, rhs)
         rhs = -quadratic_terms(linkage, np.nan_to_num(q), qdot)
         rhs[:, joints_rows:] += acc
-        qddot = solve_batched(jac, rhs)
+        qddot = solve_in_lengths(linkage, jac, rhs)
     bad = ~np.all(np.isfinite(q), axis=1)
     qdot[bad] = np.nan
     qddot[bad] = np.nan

@@ -28,10 +28,10 @@ class ForceLayout:
 
     def row(self, link: str) -> int:
         """First of the link's three rows; −1 for the ground (no equations)."""
-        return -1 if link == GROUND else 3 * self.linkage.moving_links.index(link)
+        return -1 if link == GROUND else 3 * self.linkage.link_number[link]
 
     def joint_columns(self, joint: Joint) -> tuple[int, int]:
-        k = [j.name for j in self.linkage.joints].index(joint.name)
+        k = self.linkage.joint_number[joint.name]
         return 2 * k, 2 * k + 1
 
     def driver_column(self, index: int) -> int:

@@ -51,6 +51,9 @@ from mechcheck.analytic.linkage_loads import spring_axis
 from mechcheck.analytic.resultant import Resultant, resultants
 from mechcheck.analytic.values import GROUND
 
+#: Longest plan the condition bound is tried on: each group multiplies the bound by a
+#: factor above 1, so for longer chains it exceeds the singular threshold whatever the pose.
+BOUND_GROUPS = 24
 #: Poses per chunk: ~30 live arrays of this many doubles stay within a core's L2 cache.
 CHUNK = 8192
 
@@ -134,8 +137,8 @@ class _Chunk:
         linkage = self.linkage
         for name, p0 in linkage.points.items():
             x, y = self.point(self.plan.carriers[name], p0)
-            out[f"x_{name}"][part] = x
-            out[f"y_{name}"][part] = y
+            out[f"x_{name}"][part] = x + linkage.offset[0]
+            out[f"y_{name}"][part] = y + linkage.offset[1]
         for k, link in enumerate(linkage.moving_links):
             _, _, tx, ty = self.frame(link)
             q[part, 3 * k] = tx
@@ -250,7 +253,15 @@ class _Chunk:
 
     # -- the condition bound --------------------------------------------------------------
     def condition_bound(self) -> Array:
-        """An upper bound of :func:`.linkage_forces.condition` (see the module)."""
+        """An upper bound of :func:`.linkage_forces.condition` (see the module); infinite for
+        a plan of more than :data:`BOUND_GROUPS` groups, whose bound compounds group by group
+        far past the threshold (the exact number is then computed, sparse)."""
+        if len(self.plan.groups) > BOUND_GROUPS:
+            return np.full(self.value.shape, np.inf)
+        with np.errstate(over="ignore", invalid="ignore"):
+            return self._condition_bound()
+
+    def _condition_bound(self) -> Array:
         linkage = self.linkage
         size = linkage.scale
         joints_on = self.plan.joints_on
@@ -259,7 +270,7 @@ class _Chunk:
             x, y = self.point(j.links[1], linkage.points[j.at])
             radius[j.name] = (x * x + y * y) / size**2
         force_row = {link: float(len(js)) for link, js in joints_on.items()}   # squared norms
-        moment_row = {link: sum(radius[j.name] for j in js) + self.plan.couples[link] / size**4
+        moment_row = {link: sum(radius[j.name] for j in js) + self.plan.couples[link]
                       for link, js in joints_on.items()}
         groups = self.plan.groups
         inverse = [self._group_inverse(g, force_row, moment_row, size) for g in groups]
@@ -285,7 +296,7 @@ class _Chunk:
         if isinstance(group, Crank):
             px, py = self.point(group.link, group.point)
             f, m = force_row[group.link], moment_row[group.link]
-            return np.sqrt(2.0 * f + size**2 * (py * py + px * px) * f + size**4 * m)
+            return np.sqrt(2.0 * f + (py * py + px * px) * f / size**2 + m)
         x1, y1, mx, my, x2, y2 = self.placed.points[self.plan.groups.index(group)]
         a, c = group.links
         l1, l2 = group.lengths

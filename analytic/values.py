@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from typing import TypeVar
 
 Vec2 = tuple[float, float]
@@ -67,9 +69,46 @@ MIN_LINK_LENGTH = 1e-6
 MAX_ANGLE_DEG = 1e5
 
 
+#: The largest rotation of a driver from the drawn pose, degrees (ten turns). The pose is
+#: found by continuation from the drawn pose in steps of at most 2°, so time and memory grow
+#: with the rotation: 1e8° took 3.7 GB.
+MAX_DRIVER_ROTATION_DEG = 3600.0
+#: The largest displacement of a driver from the drawn pose, in multiples of the linkage's
+#: size (``Linkage.scale``, about the extent of its drawing). The continuation steps 2 % of
+#: that size, so time grows with the travel (1e9 mm ran for minutes); no slide of a drawn linkage
+#: reaches ten times the drawing.
+MAX_DRIVER_TRAVEL = 10.0
+
+#: Metres per unit of the lengths a case file may be written in.
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3}
+# Values are checked in SI, but a message quotes a length in the unit its file is written
+# in: the reader of a millimetre file must recognise the number they wrote.
+_QUOTED_UNIT: ContextVar[str] = ContextVar("quoted_length_unit", default="m")
+
+
+@contextmanager
+def lengths_quoted_in(unit: str) -> Iterator[None]:
+    """Within this block, messages quote lengths in ``unit`` (a key of LENGTH_UNITS)."""
+    token = _QUOTED_UNIT.set(unit)
+    try:
+        yield
+    finally:
+        _QUOTED_UNIT.reset(token)
+
+
+def length_text(metres: float) -> str:
+    """A length for a message, in the unit of the file being read (metres otherwise)."""
+    unit = _QUOTED_UNIT.get()
+    return f"{metres / LENGTH_UNITS[unit]:g} {unit}"
+
+
 def finite(value: float, key: str, limit: float = MAX_MAGNITUDE) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise CaseError(f"must be a number, got {value!r}", key=key)
+    if isinstance(value, int) and value.bit_length() > 1023:
+        # Python integers are unbounded: float() would raise, and printing one can too.
+        raise CaseError(f"must be finite, got an integer of {value.bit_length()} bits, beyond "
+                        "any floating-point number", key=key)
     if not math.isfinite(value):
         raise CaseError(f"must be finite, got {value!r}", key=key)
     if abs(value) > limit:
@@ -107,6 +146,55 @@ def nonnegative(value: float, key: str) -> float:
     if value < 0.0:
         raise CaseError(f"must be >= 0, got {value:g}", key=key)
     return value
+
+
+def driver_rotation(value: float, key: str) -> float:
+    """A driver's rotation from the drawn pose in radians, refused (in degrees) beyond
+    ±MAX_DRIVER_ROTATION_DEG."""
+    value = finite(value, key, limit=math.inf)
+    if abs(value) > math.radians(MAX_DRIVER_ROTATION_DEG):
+        raise CaseError(f"must be within ±{MAX_DRIVER_ROTATION_DEG:g}° (ten turns), got "
+                        f"{math.degrees(value):g}°: the pose is found by continuation from the "
+                        "drawn pose in steps of 2°, so each turn costs time and memory", key=key)
+    return value
+
+
+def driver_displacement(value: float, size: float, key: str) -> float:
+    """A driver's displacement from the drawn pose in metres, refused beyond
+    ±MAX_DRIVER_TRAVEL times the linkage's size ``size`` (m)."""
+    value = finite(value, key)
+    bound = MAX_DRIVER_TRAVEL * size
+    # The slack keeps a travel written as exactly the bound, in mm, from failing by rounding.
+    if abs(value) > bound * (1.0 + 1e-12):
+        raise CaseError(f"must be within ±{MAX_DRIVER_TRAVEL:g} × the linkage's size "
+                        f"(±{length_text(bound)}), got {length_text(value)}: the pose is found "
+                        "by continuation from the drawn pose in steps of 2 % of its size, so "
+                        "a longer travel costs time without bound", key=key)
+    return value
+
+
+def too_close(points: Sequence[tuple[str, Vec2]]) -> tuple[str, str, float] | None:
+    """Two of ``points`` closer than MIN_LINK_LENGTH but not at one place, with their
+    distance, or None.
+
+    In linear time: on a grid of cells MIN_LINK_LENGTH / 2 wide, two different places in
+    one cell are too close, so each cell holds one place and only the 5 × 5 cells around it
+    can hold another within reach.
+    """
+    cell = MIN_LINK_LENGTH / 2.0
+    grid: dict[tuple[int, int], tuple[str, Vec2]] = {}
+    for name, (x, y) in points:
+        i, j = math.floor(x / cell), math.floor(y / cell)
+        for di in range(-2, 3):
+            for dj in range(-2, 3):
+                other = grid.get((i + di, j + dj))
+                if other is None or other[1] == (x, y):
+                    continue
+                distance = math.hypot(x - other[1][0], y - other[1][1])
+                if distance < MIN_LINK_LENGTH:
+                    return other[0], name, distance
+        grid.setdefault((i, j), (name, (x, y)))
+    return None
 
 
 def pair(value: Vec2, key: str) -> Vec2:

@@ -190,6 +190,12 @@ def linkage_tables(draw: st.DrawFn, *, friction: bool = False, moving: bool | No
         joints += [_revolute("C", carrier, "link5"), _revolute("D", "link5", "output"),
                    _revolute("O6", "ground", "output")]
     links.insert(0, {"name": "ground", "points": ground})
+    # Two points of one link are at one place or a link length apart (a case file's rule:
+    # at least a micrometre; here a tenth of a millimetre, so that scaled drawings keep it).
+    for link in links:
+        carried = [points[p] for p in link["points"]]  # type: ignore[union-attr]
+        assume(all(math.dist(p, q) == 0.0 or math.dist(p, q) >= 1e-4
+                   for i, p in enumerate(carried) for q in carried[i + 1:]))
     moving_links = [str(link["name"]) for link in links if link["name"] != "ground"]
     is_moving = draw(st.booleans()) if moving is None else moving
     driver: dict[str, object] = {"joint": "O2", "rotation": draw(_number(-20.0, 20.0))}

@@ -1,0 +1,292 @@
+"""The linear algebra of the linkage engine, behind one door: matrices over many poses held
+as their entries, and the solves, condition numbers and ranks the engine asks of them.
+
+A linkage's constraint Jacobian and its member-equilibrium matrix have a few entries per
+joint, so they are assembled as entries (row, column, values at N poses), never as dense
+(N, rows, columns) arrays unless the system is small:
+
+- **small** (at most :data:`DENSE_COLUMNS` columns): dense and vectorised over the poses,
+  which is fastest for a few links at 10⁶ poses;
+- **large**: one sparse matrix per pose, factorised by SuperLU; the 2-norm condition number
+  from the largest and smallest singular values by Lanczos iteration (ARPACK), the smallest
+  through the factorisation; the rank by counting the singular values below the threshold.
+
+So memory grows with the number of entries (linearly with the links), and time with the
+factorisations' fill, which for the chains and trees of a linkage stays close to linear.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from scipy import sparse
+
+# scipy is imported where a large system needs it: the small, dense path (every built-in
+# linkage) does not pay for its import.
+
+Array = NDArray[np.float64]
+
+#: Largest system solved densely (columns): below it the batched dense LAPACK calls over all
+#: poses win; above it a sparse factorisation per pose does (benchmarks/bench_chain.py).
+DENSE_COLUMNS = 96
+#: Relative accuracy of the Lanczos estimates of the extreme singular values.
+LANCZOS_TOL = 1e-12
+#: Singular values below this fraction of the largest count as zero (rank).
+RANK_RTOL = 1e-9
+
+
+@dataclass
+class Batched:
+    """A (rows × columns) matrix at each of N poses, held as its entries."""
+
+    rows: int
+    cols: int
+    poses: int
+    _r: list[int] = field(default_factory=list)
+    _c: list[int] = field(default_factory=list)
+    _v: list[Array] = field(default_factory=list)
+
+    @classmethod
+    def from_dense(cls, m: Array) -> Batched:
+        """The entries of dense matrices (N, rows, cols) that are not zero at every pose."""
+        out = cls(m.shape[1], m.shape[2], m.shape[0])
+        for r, c in zip(*np.nonzero(np.any(m != 0.0, axis=0)), strict=True):
+            out.add(int(r), int(c), m[:, r, c])
+        return out
+
+    def add(self, row: int, col: int, values: Array | float) -> None:
+        """Add ``values`` (N,) (or one number for every pose) at (row, col)."""
+        self._r.append(row)
+        self._c.append(col)
+        self._v.append(np.broadcast_to(np.asarray(values, dtype=float), (self.poses,)))
+
+    @property
+    def small(self) -> bool:
+        return self.cols <= DENSE_COLUMNS
+
+    def values(self) -> Array:
+        """(entries, N)."""
+        return np.array(self._v) if self._v else np.zeros((0, self.poses))
+
+    def index(self) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        return np.asarray(self._r, dtype=np.intp), np.asarray(self._c, dtype=np.intp)
+
+    def dense(self) -> Array:
+        """(N, rows, cols), duplicates summed."""
+        out = np.zeros((self.rows, self.cols, self.poses))
+        for r, c, v in zip(self._r, self._c, self._v, strict=True):
+            out[r, c] += v   # a row of N contiguous values per entry
+        return np.moveaxis(out, 2, 0)
+
+    def at(self, pose: int) -> sparse.csc_matrix:
+        """The sparse matrix at one pose, duplicates summed."""
+        from scipy import sparse
+
+        r, c = self.index()
+        v = self.values()[:, pose] if self._v else np.zeros(0)
+        return sparse.csc_matrix((v, (r, c)), shape=(self.rows, self.cols))
+
+    def scaled(self, row_scale: Array, col_scale: Array) -> Batched:
+        """diag(row_scale)·A·diag(col_scale); ``row_scale`` (N, rows), ``col_scale`` (cols,)."""
+        out = Batched(self.rows, self.cols, self.poses)
+        for r, c, v in zip(self._r, self._c, self._v, strict=True):
+            out.add(r, c, v * row_scale[:, r] * col_scale[c])
+        return out
+
+    def row_norms(self) -> Array:
+        """(N, rows): the 2-norm of every row, duplicates summed first."""
+        if self.small:
+            return np.asarray(np.linalg.norm(self.dense(), axis=2), dtype=np.float64)
+        out = np.zeros((self.poses, self.rows))
+        for pose in range(self.poses):
+            m = self.at(pose).tocsr()
+            out[pose] = np.sqrt(np.asarray(m.multiply(m).sum(axis=1)).ravel())
+        return out
+
+    def plus(self, other: Batched) -> Batched:
+        out = Batched(self.rows, self.cols, self.poses)
+        out._r, out._c, out._v = self._r + other._r, self._c + other._c, self._v + other._v
+        return out
+
+
+def solve(a: Batched | Array, b: Array) -> Array:
+    """x with a·x = b at every pose (b: (N, rows)): exact where a is square and regular,
+    else the least-squares solution of least norm; NaN where a or b is not finite."""
+    if isinstance(a, np.ndarray):
+        return _solve_dense(a, b)
+    if a.small:
+        return _solve_dense(a.dense(), b)
+    x = np.full((a.poses, a.cols), np.nan)
+    values = a.values()
+    finite = np.isfinite(values).all(axis=0) & np.isfinite(b).all(axis=1)
+    for pose in np.flatnonzero(finite):
+        x[pose] = _solve_sparse(a.at(int(pose)), b[pose])
+    return x
+
+
+def solve_truncated(a: Batched, b: Array, rcond: float) -> Array:
+    """Least-squares x of least norm with a·x ≈ b at every pose, ignoring the directions whose
+    singular value is below ``rcond`` of the largest (dense: truncated SVD; sparse: LSMR
+    damped by ``rcond`` of the largest singular value): a step that does not blow up where a
+    is nearly singular."""
+    if a.small:
+        m = a.dense()
+        out = np.full((a.poses, a.cols), np.nan)
+        for pose in range(a.poses):
+            if np.all(np.isfinite(m[pose])) and np.all(np.isfinite(b[pose])):
+                out[pose] = np.linalg.lstsq(m[pose], b[pose], rcond=rcond)[0]
+        return out
+    from scipy.sparse import linalg as splinalg
+
+    out = np.full((a.poses, a.cols), np.nan)
+    for pose in range(a.poses):
+        m = a.at(pose)
+        top = math.sqrt(_largest_eigenvalue(_gram(m), a.cols))
+        out[pose] = splinalg.lsmr(m, b[pose], damp=rcond * top, atol=1e-15, btol=1e-15,
+                                  maxiter=20 * max(m.shape))[0]
+    return out
+
+
+def _gram(m: sparse.csc_matrix) -> Callable[[Array], Any]:
+    """x ↦ MᵀM·x."""
+    return lambda x: m.T @ (m @ x)
+
+
+def _solve_dense(a: Array, b: Array) -> Array:
+    finite = np.isfinite(a).all(axis=(1, 2)) & np.isfinite(b).all(axis=1)
+    if not finite.all():  # a pose that is not there (NaN) has no solution; LAPACK would fail
+        x = np.full((a.shape[0], a.shape[2]), np.nan)
+        if finite.any():
+            x[finite] = _solve_dense(a[finite], b[finite])
+        return x
+    with np.errstate(all="ignore"):
+        if a.shape[1] == a.shape[2]:
+            try:
+                return np.asarray(np.linalg.solve(a, b[..., None])[..., 0], dtype=np.float64)
+            except np.linalg.LinAlgError:
+                pass
+        return np.asarray(np.einsum("nij,nj->ni", np.linalg.pinv(a), b), dtype=np.float64)
+
+
+def _solve_sparse(m: sparse.csc_matrix, b: Array) -> Array:
+    from scipy.sparse import linalg as splinalg
+
+    if m.shape[0] == m.shape[1]:
+        try:
+            x = splinalg.splu(m).solve(b)
+            if np.all(np.isfinite(x)):
+                return np.asarray(x, dtype=np.float64)
+        except RuntimeError:  # exactly singular: fall through to least squares
+            pass
+    # Least squares of least norm (LSMR from x = 0), to rounding.
+    scale = float(np.abs(b).max(initial=0.0)) or 1.0
+    found = splinalg.lsmr(m, b / scale, atol=1e-15, btol=1e-15, maxiter=20 * max(m.shape))
+    return np.asarray(found[0] * scale, dtype=np.float64)
+
+
+def condition(a: Batched) -> Array:
+    """The 2-norm condition number σ_max/σ_min at every pose (over the columns' space for a
+    tall matrix); inf where a is singular or not finite."""
+    if a.small or a.rows != a.cols:
+        return _condition_dense(a.dense())
+    out = np.full(a.poses, np.inf)
+    finite = np.isfinite(a.values()).all(axis=0)
+    for pose in np.flatnonzero(finite):
+        out[pose] = _condition_sparse(a.at(int(pose)))
+    return out
+
+
+def _condition_dense(m: Array) -> Array:
+    out = np.full(m.shape[0], np.inf)
+    if 0 in m.shape[1:]:
+        return np.ones(m.shape[0])
+    finite = np.all(np.isfinite(m), axis=(1, 2))
+    if finite.any():
+        s = np.linalg.svd(m[finite], compute_uv=False)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out[finite] = np.where(s[:, -1] > 0.0, s[:, 0] / s[:, -1], np.inf)
+    return out
+
+
+def _condition_sparse(m: sparse.csc_matrix) -> float:
+    from scipy.sparse import linalg as splinalg
+
+    try:
+        lu = splinalg.splu(m)
+    except RuntimeError:
+        return math.inf
+    n = m.shape[0]
+    largest = _largest_eigenvalue(_gram(m), n)
+    smallest_inverse = _largest_eigenvalue(lambda x: lu.solve(lu.solve(x, trans="T")), n)
+    if not (math.isfinite(smallest_inverse) and smallest_inverse > 0.0):
+        return math.inf
+    return math.sqrt(largest * smallest_inverse)
+
+
+def _largest_eigenvalue(apply: Callable[[Array], Any], n: int) -> float:
+    """The largest eigenvalue of a symmetric positive semi-definite operator of size n."""
+    from scipy.sparse import linalg as splinalg
+
+    operator = splinalg.LinearOperator((n, n), matvec=apply, dtype=np.float64)
+    with np.errstate(all="ignore"):
+        try:
+            value = splinalg.eigsh(operator, k=1, which="LA", v0=np.ones(n),
+                                   tol=LANCZOS_TOL, return_eigenvectors=False)
+        except splinalg.ArpackNoConvergence as failed:
+            value = failed.eigenvalues
+        except (ValueError, RuntimeError):
+            return math.inf
+    return float(value[0]) if len(value) and np.isfinite(value[0]) else math.inf
+
+
+def rank(m: Array | sparse.spmatrix) -> int:
+    """The number of singular values of ``m`` (one matrix) above :data:`RANK_RTOL` of the
+    largest. Dense SVD when small; else the count of the small ones through a factorisation
+    of the augmented system [[I, Mᵀ], [M, −εI]], whose Schur complement is −(MMᵀ + εI)."""
+    if isinstance(m, np.ndarray):
+        if m.size == 0:
+            return 0
+        if m.shape[1] <= DENSE_COLUMNS or m.shape[0] <= DENSE_COLUMNS:
+            s = np.linalg.svd(m, compute_uv=False)
+            return int((s > RANK_RTOL * s[0]).sum()) if s.size and s[0] > 0.0 else 0
+    from scipy import sparse
+    from scipy.sparse import linalg as splinalg
+
+    if isinstance(m, np.ndarray):
+        m = sparse.csc_matrix(m)
+    wide = sparse.csc_matrix(m if m.shape[0] <= m.shape[1] else m.T)
+    r, c = wide.shape
+    if r == 0 or wide.nnz == 0:
+        return 0
+    top = _largest_eigenvalue(lambda x: wide @ (wide.T @ x), r)
+    eps = (1e-3 * RANK_RTOL) ** 2 * top
+    augmented = sparse.bmat([[sparse.identity(c), wide.T], [wide, -eps * sparse.identity(r)]],
+                            format="csc")
+    try:
+        lu = splinalg.splu(augmented)
+    except RuntimeError:
+        return rank(wide.toarray()) if c <= 4 * DENSE_COLUMNS else 0
+
+    def inverse_gram(y: Array) -> Array:
+        return np.asarray(-lu.solve(np.concatenate([np.zeros(c), y]))[c:], dtype=np.float64)
+
+    operator = splinalg.LinearOperator((r, r), matvec=inverse_gram, dtype=np.float64)
+    threshold = (RANK_RTOL**2) * top
+    k = 1
+    while True:
+        k = min(k, r - 1)
+        if k < 1:
+            return rank(wide.toarray())
+        values = splinalg.eigsh(operator, k=k, which="LA", v0=np.ones(r), tol=LANCZOS_TOL,
+                                return_eigenvectors=False)
+        small = int(np.sum(1.0 / values - eps <= threshold))
+        if small < k or k == r - 1:
+            return r - small
+        k *= 2
