@@ -15,6 +15,8 @@ beside the computed values in the report) and ``[[case.tolerance]]`` entries
 from __future__ import annotations
 
 import math
+import os
+import stat
 import tomllib
 from collections.abc import Iterable
 from pathlib import Path
@@ -34,7 +36,7 @@ from mechcheck.analytic.case import (
 )
 from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP
 from mechcheck.linkage_file import LinkageCaseSpec, linkage_from_spec
-from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, validated
+from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, needs_an_effect, validated
 
 
 class FourBarGeometrySpec(Strict):
@@ -120,6 +122,8 @@ def case_from_spec(spec: CaseSpec, source: str = "") -> Case:
     else:
         g = validated(SliderCrankGeometrySpec, spec.geometry, "geometry")
         geometry = _built(SliderCrankGeometry, "", g.a2 * scale, g.a3 * scale, g.offset * scale)
+    for i, ld in enumerate(spec.loads):
+        needs_an_effect(ld, f"loads[{i}]")
     loads = tuple(_built(Load, f"loads[{i}]", link=ld.link, at=pt(ld.at),
                          force=force_vector(ld.force, f"loads[{i}].force"), torque=ld.torque)
                   for i, ld in enumerate(spec.loads))
@@ -182,11 +186,61 @@ def parse_cases(data: dict[str, Any], source: str) -> list[tuple[Case, AnySpec]]
     return out
 
 
+#: The largest case file read, bytes. A 5,000-loop linkage file is about 5 MB; a file
+#: beyond this is no hand-written case, and reading it whole could exhaust the memory.
+MAX_CASE_FILE_BYTES = 64 * 2**20
+
+#: What a path that is not a regular file is, by its file-type bits.
+_NOT_REGULAR = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                (stat.S_ISSOCK, "a socket"))
+
+
+def _refuse_unless_regular(mode: int, size: int, source: str) -> None:
+    """Refuse a FIFO, device, socket or directory, and a file larger than the cap."""
+    for test, kind in _NOT_REGULAR:
+        if test(mode):
+            suffix = "" if kind == "a directory" else "; give a regular file"
+            raise CaseError(f"is {kind}, not a case file{suffix}", file=source)
+    if not stat.S_ISREG(mode):
+        raise CaseError("is not a regular file; give a case file", file=source)
+    if size > MAX_CASE_FILE_BYTES:
+        raise CaseError(f"is {size:,} bytes; a case file holds at most "
+                        f"{MAX_CASE_FILE_BYTES:,} bytes ({MAX_CASE_FILE_BYTES // 2**20} MiB)",
+                        file=source)
+
+
+def _read_bounded(path: str | Path, source: str) -> bytes:
+    """At most the cap's bytes of a regular file, or a CaseError.
+
+    The type is checked by name before anything is opened: opening a FIFO for reading
+    waits for a writer, and opening some devices acts on them. The descriptor is then
+    checked again (the path may have been swapped meanwhile; non-blocking, so a FIFO
+    swapped in cannot hang the open), and the read stops one byte past the cap, because a
+    pseudo-file's size (``/proc``) says nothing of its length.
+    """
+    info = os.stat(path)
+    _refuse_unless_regular(info.st_mode, info.st_size, source)
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
+    with os.fdopen(fd, "rb") as handle:
+        info = os.fstat(fd)
+        _refuse_unless_regular(info.st_mode, info.st_size, source)
+        raw = handle.read(MAX_CASE_FILE_BYTES + 1)
+    if len(raw) > MAX_CASE_FILE_BYTES:
+        raise CaseError(f"holds more than {MAX_CASE_FILE_BYTES:,} bytes "
+                        f"({MAX_CASE_FILE_BYTES // 2**20} MiB), the most a case file may",
+                        file=source)
+    return raw
+
+
 def read_case_text(path: str | Path) -> str:
-    """The text of a case file: UTF-8 (a byte-order mark is accepted), or one clear error."""
+    """The text of a case file: UTF-8 (a byte-order mark is accepted), or one clear error.
+
+    Only a regular file of at most :data:`MAX_CASE_FILE_BYTES` is read.
+    """
     source = str(path)
     try:
-        raw = Path(path).read_bytes()
+        raw = _read_bounded(path, source)
     except FileNotFoundError:
         raise CaseError("no such file", file=source) from None
     except IsADirectoryError:

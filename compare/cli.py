@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import gc
 import os
-import shutil
 import signal
 import sys
 from pathlib import Path
@@ -22,6 +21,7 @@ import typer
 
 from mechcheck import backends as registry
 from mechcheck.analytic.values import CaseError
+from mechcheck.executors import MAX_WORKERS_PER_CORE, ExecutorUnavailable, check_workers
 from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
 
 # pandas, matplotlib, pydantic and the simulators are imported inside the commands
@@ -82,7 +82,7 @@ def run_command(
     """Run backends over case files and report agreement with the analytic solution."""
     from mechcheck.casefile import builtin_case_files, load_specs
     from mechcheck.junit import junit_xml
-    from mechcheck.output import write_all
+    from mechcheck.output import OutputError, locked_folder, write_all
     from mechcheck.report import render
     from mechcheck.run import run
     from mechcheck.tables import diagnostics_frame, results_frame
@@ -102,23 +102,28 @@ def run_command(
     check_outputs(out, junit)
     cases = [case for case, _ in specs]
     progress = None if quiet else progress_printer()
-    result = run(cases, names, progress=progress, fail_on=verdicts)
-    markdown, page = render(result, {c.name: s for c, s in specs})
-    write_all(out, {
-        "results.csv": results_frame(result.solutions).to_csv(index=False),
-        "comparison.csv": result.comparison.to_csv(index=False),
-        "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
-        "report.md": markdown,
-        "report.html": page,
-    })
-    if junit is not None:
-        write_all(junit.parent, {junit.name: junit_xml(result)})
+    try:
+        with locked_folder(out, "--out"):
+            result = run(cases, names, progress=progress, fail_on=verdicts)
+            markdown, page = render(result, {c.name: s for c, s in specs})
+            write_all(out, {
+                "results.csv": results_frame(result.solutions).to_csv(index=False),
+                "comparison.csv": result.comparison.to_csv(index=False),
+                "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
+                "report.md": markdown,
+                "report.html": page,
+            })
+            if junit is not None:
+                write_all(junit.parent, {junit.name: junit_xml(result)})
+    except OutputError as error:
+        raise fail_input(str(error)) from None
     typer.echo(f"{result.summary} -> {out}/report.md")
     raise typer.Exit(result.exit_status)
 
 
 def check_outputs(out: Path, junit: Path | None) -> None:
-    """Refuse, before any computing, an ``--out`` or ``--junit`` that cannot be written."""
+    """Refuse, before any computing and before anything is created, an ``--out`` or
+    ``--junit`` that cannot be written."""
     from mechcheck.output import OutputError, check_writable_directory, check_writable_file
 
     try:
@@ -146,7 +151,8 @@ def sweep_command(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
         Path("mechcheck-sweep"),
     workers: Annotated[int | None, typer.Option(
-        help="Local worker processes (default: one per core; 0: in this process).")] = None,
+        help="Local worker processes (default: one per core; 0: in this process; at most "
+             f"{MAX_WORKERS_PER_CORE} per core, and never more than the sweep's tasks).")] = None,
     dask: Annotated[str | None, typer.Option(
         help="Address of an existing Dask scheduler to run the sweep on.")] = None,
     fail_on: Annotated[str, typer.Option(
@@ -162,6 +168,7 @@ def sweep_command(
 ) -> None:
     """Sweep θ12 over a range for every case and backend; resumable, Parquet output."""
     from mechcheck.casefile import builtin_sweep_files, load_specs
+    from mechcheck.output import OutputError
     from mechcheck.sweep import parse_range, plan
     from mechcheck.sweep_run import run_sweep_command
 
@@ -175,17 +182,24 @@ def sweep_command(
         tasks = plan([c for c, _ in specs], names, grid, driver_grid)
     except (CaseError, ValueError, registry.BackendUnavailable) as error:
         raise fail_input(str(error)) from None
+    try:
+        check_workers(workers)
+    except ExecutorUnavailable as error:
+        raise fail_input(str(error)) from None
     check_outputs(out, junit)
     # SIGTERM (a CI job cancelled, `kill`) unwinds like Ctrl-C: the pool is shut down and
     # its workers terminated on the way out, instead of being orphaned.
     signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
-    if fresh:
-        for folder in ("results", "status"):
-            shutil.rmtree(out / folder, ignore_errors=True)
     poses = max(len(driver_grid) if c.mechanism == "linkage" and driver_grid is not None
                 else len(grid) for c, _ in specs)
-    status = run_sweep_command(specs, tasks, poses, out, workers=workers, dask=dask,
-                               fail_on=verdicts, junit=junit, quiet=quiet, figures=figures)
+    try:
+        status = run_sweep_command(specs, tasks, poses, out, workers=workers, dask=dask,
+                                   fail_on=verdicts, junit=junit, quiet=quiet, figures=figures,
+                                   fresh=fresh)
+    except ExecutorUnavailable as error:
+        raise fail_input(str(error)) from None
+    except OutputError as error:
+        raise fail_input(str(error)) from None
     raise typer.Exit(status)
 
 
@@ -280,6 +294,11 @@ def main() -> None:
     except KeyboardInterrupt:
         sys.exit(130)
     except Exception as error:
+        from mechcheck.output import OutputError
+
+        if isinstance(error, OutputError):  # a full disk in a command that does not say so
+            sys.stderr.write(f"mechcheck: error: {error}\n")
+            sys.exit(2)
         if os.environ.get("MECHCHECK_TRACEBACK"):
             raise
         sys.stderr.write(f"mechcheck: internal error: {type(error).__name__}: {error} (this is a "

@@ -15,8 +15,11 @@ import signal
 import threading
 import time
 from collections.abc import Iterator
-from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the command line imports this module; the pool only when it sweeps
+    from concurrent.futures import Executor
 
 #: How often a worker checks that the sweep that started it still runs, s.
 PARENT_POLL_S = 0.5
@@ -53,22 +56,74 @@ def _watch_parent(parent: int) -> None:
     threading.Thread(target=watch, name="mechcheck-parent-watch", daemon=True).start()
 
 
-@contextmanager
-def executor_for(workers: int | None = None, dask_address: str | None = None) -> Iterator[Executor]:
-    """An executor: Dask's when an address is given, else ``workers`` local processes
-    (default: one per core), or the calling process itself for ``workers = 0``."""
-    if dask_address:
-        from distributed import Client  # optional dependency: only for --dask
+#: The most local worker processes a sweep may ask for, per core: beyond a few per core
+#: they only queue for the cores, each holding its own simulators in memory, so a larger
+#: ``--workers`` is far more likely a typo than a plan.
+MAX_WORKERS_PER_CORE = 4
 
-        with Client(dask_address) as client:
-            yield client.get_executor()
+#: How long a sweep waits for the ``--dask`` scheduler to answer, s: long enough for a
+#: scheduler across a network, short enough that a wrong address is reported promptly.
+DASK_CONNECT_TIMEOUT_S = 5.0
+
+
+class ExecutorUnavailable(Exception):
+    """``--workers`` or ``--dask`` cannot be used: one line naming the option and value."""
+
+
+def max_workers() -> int:
+    """The largest ``--workers`` this machine accepts."""
+    return MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)
+
+
+def check_workers(workers: int | None) -> None:
+    """Raise :class:`ExecutorUnavailable` unless ``workers`` is None (one per core) or
+    0 … :func:`max_workers`."""
+    if workers is not None and not 0 <= workers <= max_workers():
+        raise ExecutorUnavailable(
+            f"--workers {workers}: must be 0 (in this process) to {max_workers()} "
+            f"({MAX_WORKERS_PER_CORE} per core of this machine)")
+
+
+@contextmanager
+def _dask_executor(address: str) -> Iterator[Executor]:
+    try:
+        from distributed import Client  # optional dependency: only for --dask
+    except ImportError:
+        raise ExecutorUnavailable(f"--dask {address}: needs the 'distributed' package "
+                                  "(pip install 'mechcheck[dask]')") from None
+    try:
+        client = Client(address, timeout=DASK_CONNECT_TIMEOUT_S)
+    except OSError as error:  # nothing answers there, or not in time
+        raise ExecutorUnavailable(f"--dask {address}: cannot connect to a scheduler within "
+                                  f"{DASK_CONNECT_TIMEOUT_S:g} s ({error})") from None
+    except (ValueError, TypeError) as error:
+        raise ExecutorUnavailable(f"--dask {address}: not a scheduler address ({error})") from None
+    with client:
+        yield client.get_executor()
+
+
+@contextmanager
+def executor_for(workers: int | None = None, dask_address: str | None = None,
+                 tasks: int | None = None) -> Iterator[Executor]:
+    """An executor: Dask's when an address is given, else ``workers`` local processes
+    (default: one per core; never more than ``tasks``), or the calling process itself for
+    ``workers = 0``. :class:`ExecutorUnavailable` for a scheduler that does not answer
+    within :data:`DASK_CONNECT_TIMEOUT_S`."""
+    if dask_address:
+        with _dask_executor(dask_address) as executor:
+            yield executor
         return
     if workers == 0:
         from mechcheck.sweep import LocalExecutor
 
         yield LocalExecutor()
         return
-    pool = ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1,
+    from concurrent.futures import ProcessPoolExecutor
+
+    count = workers or os.cpu_count() or 1
+    if tasks is not None:
+        count = max(1, min(count, tasks))
+    pool = ProcessPoolExecutor(max_workers=count,
                                initializer=_watch_parent, initargs=(os.getpid(),))
     try:
         yield pool

@@ -2,7 +2,8 @@
 :class:`~mechcheck.analytic.linkage.Linkage`.
 
 pydantic checks the structure (unknown and missing keys, types); the Linkage value checks
-the rules of LINKAGES.md itself. Lengths and points are converted from ``length_unit`` to
+the rules of LINKAGES.md and the bounds of every number itself (with lengths quoted in
+the file's unit). Lengths and points are converted from ``length_unit`` to
 metres and angles from degrees to radians here, at the border; velocities and
 accelerations are already SI (rad/s, m/s).
 """
@@ -27,9 +28,12 @@ from mechcheck.analytic.linkage import (
     PointLoad,
     TorsionSpring,
 )
-from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, validated
+from mechcheck.analytic.values import LENGTH_UNITS, finite, lengths_quoted_in
+from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, needs_an_effect, validated
 
-PointRef = str | Pair
+#: A point name or [x, y], checked by :func:`linkage_from_spec` (pydantic would name the
+#: key of a bad pair after its union branch, ``at.str``).
+PointRef = Any
 
 
 class LinkSpec(Strict):
@@ -113,7 +117,7 @@ class LinkageCaseSpec(Strict):
 
 def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
     """The Linkage of a validated table: lengths to metres, degrees to radians."""
-    scale = 1e-3 if spec.length_unit == "mm" else 1.0
+    scale = LENGTH_UNITS[spec.length_unit]
     points = {name: (p[0] * scale, p[1] * scale) for name, p in spec.points.items()}
 
     def where(ref: PointRef, key: str) -> Vec2:
@@ -121,7 +125,10 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
             if ref not in points:
                 raise CaseError(f"unknown point {ref!r}", key=key)
             return points[ref]
-        return (ref[0] * scale, ref[1] * scale)
+        if not isinstance(ref, list) or len(ref) != 2:
+            raise CaseError(f"must be a point name or [x, y], got {ref!r}", key=key)
+        # Type and finiteness before scaling: true × 1e-3 would pass as a number.
+        return (finite(ref[0], key, math.inf) * scale, finite(ref[1], key, math.inf) * scale)
 
     kinds = {j.name: j.kind for j in spec.joints}
     springs: list[LinearSpring | TorsionSpring] = []
@@ -136,35 +143,34 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
                          for k, end in enumerate(s.ends))
             springs.append(LinearSpring(s.name, (ends[0], ends[1]), s.stiffness,
                                         s.free_length * scale, s.damping))
+    for i, ld in enumerate(spec.loads):
+        needs_an_effect(ld, f"loads[{i}]")
     f = spec.friction
-    return Linkage(
-        points=points,
-        links=tuple(Link(link.name, tuple(link.points)) for link in spec.links),
-        joints=tuple(Joint(j.name, j.kind, (j.links[0], j.links[1]), j.at,
-                           None if j.axis is None else (j.axis[0], j.axis[1])) for j in spec.joints),
-        drivers=tuple(_driver(d, i, kinds, scale) for i, d in enumerate(spec.drivers)),
-        loads=tuple(PointLoad(ld.link, where(ld.at, f"loads[{i}].at"),
-                              force_vector(ld.force, f"loads[{i}].force"), ld.torque)
-                    for i, ld in enumerate(spec.loads)),
-        masses=tuple(LinkMass(m.link, m.mass, where(m.com, f"masses[{i}].com"), m.inertia)
-                     for i, m in enumerate(spec.masses)),
-        springs=tuple(springs),
-        gravity=(spec.gravity[0], spec.gravity[1]),
-        friction=None if f is None else JointFriction(
-            f.mu, {k: v * scale for k, v in f.pin_radius.items()}, dict(f.joint_mu),
-            dict(f.viscous)),
-    )
+    with lengths_quoted_in(spec.length_unit):
+        return Linkage(
+            points=points,
+            links=tuple(Link(link.name, tuple(link.points)) for link in spec.links),
+            joints=tuple(Joint(j.name, j.kind, (j.links[0], j.links[1]), j.at,
+                               None if j.axis is None else (j.axis[0], j.axis[1])) for j in spec.joints),
+            drivers=tuple(_driver(d, i, kinds, scale) for i, d in enumerate(spec.drivers)),
+            loads=tuple(PointLoad(ld.link, where(ld.at, f"loads[{i}].at"),
+                                  force_vector(ld.force, f"loads[{i}].force"), ld.torque)
+                        for i, ld in enumerate(spec.loads)),
+            masses=tuple(LinkMass(m.link, m.mass, where(m.com, f"masses[{i}].com"), m.inertia)
+                         for i, m in enumerate(spec.masses)),
+            springs=tuple(springs),
+            gravity=(spec.gravity[0], spec.gravity[1]),
+            friction=None if f is None else JointFriction(
+                f.mu, {k: v * scale for k, v in f.pin_radius.items()}, dict(f.joint_mu),
+                dict(f.viscous)),
+        )
 
 
 def _spring_end(end: list[Any], key: str, where: Any) -> tuple[str, Vec2]:
     """``[link, point name]`` or ``[link, [x, y]]``."""
     if len(end) != 2 or not isinstance(end[0], str):
-        raise CaseError("must be [link, point name] or [link, [x, y]]", key=key)
-    ref = end[1]
-    if not isinstance(ref, str) and not (isinstance(ref, list) and len(ref) == 2
-                                         and all(isinstance(v, int | float) for v in ref)):
-        raise CaseError("must be [link, point name] or [link, [x, y]]", key=key)
-    return end[0], where(ref, key)
+        raise CaseError(f"must be [link, point name] or [link, [x, y]], got {end!r}", key=key)
+    return end[0], where(end[1], key)
 
 
 def _driver(d: DriverSpec, i: int, kinds: Mapping[str, str], scale: float) -> Driver:

@@ -26,7 +26,6 @@ mechcheck, so it imports nothing heavy until a case file is collected.
 from __future__ import annotations
 
 import fnmatch
-import tomllib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -73,12 +72,16 @@ def _may_hold_cases(path: Path) -> bool:
     """Whether ``--mechcheck`` should treat a ``.toml`` file as a case file.
 
     A readable TOML file without a ``case`` key (``pyproject.toml``) is not one;
-    a file that cannot be read or parsed is, so that its error is reported.
+    a file that cannot be read or parsed is, so that its error is reported. It is read
+    as ``mechcheck run`` reads a case file: a FIFO or device is never opened, and a
+    file larger than the cap never read whole.
     """
+    from mechcheck.analytic.values import CaseError
+    from mechcheck.casefile import parse_toml, read_case_text
+
     try:
-        with open(path, "rb") as handle:
-            return "case" in tomllib.load(handle)
-    except (OSError, ValueError, RecursionError):  # unreadable, not UTF-8, not TOML
+        return "case" in parse_toml(read_case_text(path), str(path))
+    except CaseError:  # not a regular file, too large, unreadable, not UTF-8, not TOML
         return True
 
 

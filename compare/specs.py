@@ -99,5 +99,13 @@ def force_vector(spec: dict[str, Any] | None, key: str) -> tuple[float, float]:
         return (polar.magnitude * math.cos(a), polar.magnitude * math.sin(a))
     if "x" in spec or "y" in spec:
         xy = validated(CartesianForceSpec, spec, key)
-        return (xy.x, xy.y)
+        return (finite(xy.x, f"{key}.x"), finite(xy.y, f"{key}.y"))
     raise CaseError("must be { magnitude = .., angle = .. } or { x = .., y = .. }", key=key)
+
+
+def needs_an_effect(load: BaseModel, key: str) -> None:
+    """A load table gives a ``force``, a ``torque`` or both: one with neither is a mistake
+    (a key misspelt or left out), not a load of zero."""
+    if "force" not in load.model_fields_set and "torque" not in load.model_fields_set:
+        raise CaseError("a load needs a 'force', a 'torque' or both, and has neither",
+                        key=f"{key}.force")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 import sys
 import time
 from concurrent.futures import Executor, Future
@@ -15,7 +16,7 @@ from mechcheck.casefile import AnySpec
 from mechcheck.executors import executor_for
 from mechcheck.figures import draw_sweep, figure_file, sweep_plot, warm_up
 from mechcheck.junit import junit_sweep_xml
-from mechcheck.output import write_all
+from mechcheck.output import OutputError, locked_folder, write_all
 from mechcheck.report import render_sweep, sweep_view_model
 from mechcheck.sweep import LocalExecutor, SweepTask, run_sweep
 from mechcheck.tables import sweep_comparison
@@ -54,7 +55,11 @@ def forget_figures(out: Path, cases: list[Case]) -> None:
     """Remove the cases' figures an earlier run drew (``--no-figures``): a report without
     them must not sit beside figures of other results."""
     for case in cases:
-        (out / "figures" / figure_file(case.name)).unlink(missing_ok=True)
+        path = out / "figures" / figure_file(case.name)
+        try:
+            path.unlink(missing_ok=True)
+        except OSError as error:
+            raise OutputError(f"cannot remove {path}: {error.strerror or error}") from None
 
 
 def warm_figures(executor: Executor, figures: int) -> None:
@@ -69,9 +74,28 @@ def warm_figures(executor: Executor, figures: int) -> None:
 def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask], n_poses: int,
                       out: Path, *, workers: int | None, dask: str | None,
                       fail_on: tuple[str, ...], junit: Path | None, quiet: bool,
-                      figures: bool = True) -> int:
-    """Run, compare and report a sweep (``figures``: draw each case's); returns the exit
-    status."""
+                      figures: bool = True, fresh: bool = False) -> int:
+    """Run, compare and report a sweep (``figures``: draw each case's; ``fresh``: discard
+    the parts of an earlier run first); returns the exit status.
+
+    The executor is reached first, so that an unreachable ``--dask`` creates nothing in
+    ``out``; then ``out`` is locked (:func:`~mechcheck.output.locked_folder`) until the
+    last file is written. Raises :class:`~mechcheck.output.OutputError` or
+    :class:`~mechcheck.executors.ExecutorUnavailable` for the command line to report.
+    """
+    with executor_for(workers, dask, tasks=len(tasks)) as executor, \
+            locked_folder(out, "--out"):
+        if fresh:
+            for folder in ("results", "status"):
+                shutil.rmtree(out / folder, ignore_errors=True)
+        return _sweep_and_report(executor, specs, tasks, n_poses, out, fail_on=fail_on,
+                                 junit=junit, quiet=quiet, figures=figures)
+
+
+def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
+                      tasks: list[SweepTask], n_poses: int, out: Path, *,
+                      fail_on: tuple[str, ...], junit: Path | None, quiet: bool,
+                      figures: bool) -> int:
     cases = [c for c, _ in specs]
     start = time.perf_counter()
     bar = None
@@ -86,20 +110,24 @@ def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask],
             bar.n = done
             bar.refresh()
 
-    with executor_for(workers, dask) as executor:
+    try:
         outcome = run_sweep(tasks, out, executor, progress=progress)
+    except OutputError as error:
+        raise OutputError(f"{error} (the parts already finished are kept: the same command "
+                          "resumes from them)") from None
+    finally:
         if bar is not None:
             bar.close()
-        wall = time.perf_counter() - start
-        if figures:
-            warm_figures(executor, len(cases))
-        # Each table read once from all its parts (a read per case and backend took a
-        # third of a resumed sweep's comparing).
-        results, statuses = outcome.read(), outcome.read(kind="status")
-        comparison = compare_sweep(cases, results, statuses)
-        drawing = draw_figures(executor, cases, results, statuses, comparison) if figures else {}
-        comparison_buffer = comparison.to_parquet(index=False)  # while the figures are drawn
-        pngs = {name: future.result() for name, future in drawing.items()}
+    wall = time.perf_counter() - start
+    if figures:
+        warm_figures(executor, len(cases))
+    # Each table read once from all its parts (a read per case and backend took a
+    # third of a resumed sweep's comparing).
+    results, statuses = outcome.read(), outcome.read(kind="status")
+    comparison = compare_sweep(cases, results, statuses)
+    drawing = draw_figures(executor, cases, results, statuses, comparison) if figures else {}
+    comparison_buffer = comparison.to_parquet(index=False)  # while the figures are drawn
+    pngs = {name: future.result() for name, future in drawing.items()}
     model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, pngs,
                              title="mechcheck sweep report", n_poses=n_poses, wall_time_s=wall,
                              executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)

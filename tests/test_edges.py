@@ -9,6 +9,7 @@ import math
 import os
 import stat
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -84,15 +85,16 @@ def test_a_directory_a_symlink_loop_and_an_unreadable_file(tmp_path: Path,
     (tmp_path / "b").symlink_to(tmp_path / "a")
     assert_refused(["run", str(tmp_path / "a"), "-q"], str(tmp_path / "a"), "cannot be read")
     locked = case_file(tmp_path, name="locked.toml")
-    real = Path.read_bytes
+    real = os.open
 
-    def denied(self: Path) -> bytes:  # as root, chmod 000 would not stop the read
-        if self == locked:
-            raise PermissionError(13, "Permission denied", str(self))
-        return real(self)
+    def denied(path: Any, flags: int, *args: Any, **kwargs: Any) -> int:
+        if Path(path) == locked:  # as root, chmod 000 would not stop the read
+            raise PermissionError(13, "Permission denied", str(path))
+        return real(path, flags, *args, **kwargs)
 
-    monkeypatch.setattr(Path, "read_bytes", denied)
-    assert_refused(["run", str(locked), "-q"], str(locked), "permission denied")
+    monkeypatch.setattr(os, "open", denied)
+    assert_refused(["run", str(locked), "-q", "--out", str(tmp_path / "o")], str(locked),
+                   "permission denied")
 
 
 # -- 2. extreme magnitudes ------------------------------------------------------------------
