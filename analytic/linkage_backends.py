@@ -12,9 +12,11 @@ from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import LinearSpring, Linkage
+from mechcheck.analytic.linkage_equilibrium import unstable_reason
 from mechcheck.analytic.linkage_forces import (
     LinkageResults,
     coefficient_matrix,
@@ -68,34 +70,77 @@ def lock_message(linkage: Linkage, fraction: float, target: Array | None = None)
 
 
 def verdict(case: Case, results: LinkageResults, index: int) -> tuple[Status, str] | None:
-    """Why a pose has no unique forces, or None."""
-    linkage = case.linkage
-    if results.stable is not None and not np.isfinite(results.stable[index]):
-        return "no_solution", ("no equilibrium pose of the free coordinates was found from the "
-                               "drawn pose")
-    if not results.pose.assembled[index]:
-        return "no_solution", lock_message(linkage, float(results.pose.locked_at[index]),
-                                           results.pose.drivers[index])
-    if linkage.redundant:
-        return "indeterminate", ("the joints' constraints are redundant at the drawn pose "
-                                 f"(rank {linkage.joint_rank} < {2 * len(linkage.joints)}): the "
-                                 "reactions are not unique")
-    cond = float(results.condition[index])
-    if results.singular[index]:
-        return "singular", (f"condition number {cond:.3g} exceeds 1e+08: the pose is at or next "
-                            "to a toggle or dead point, where statics is singular; forces withheld")
-    if results.undirected is not None and results.undirected[index]:
-        return "indeterminate", (f"the ends of spring {results.undirected[index]} meet at this pose "
-                                 "while it carries a tension: a force without a line of action, "
-                                 "so the forces are not unique; forces withheld")
-    if results.indeterminate[index]:
-        return "indeterminate", (f"the relative motion at {results.reversing[index]} reverses at "
-                                 "this pose: Coulomb friction there may take any value within "
-                                 "its bound, so the forces are not unique; forces withheld")
-    if not results.converged[index]:
-        return "no_solution", ("the friction equations have no solution with the assumed senses "
-                               "of motion (the linkage self-locks)")
+    """Why a pose has no unique forces, or None: the first rule of :func:`_verdict_rules`
+    that holds at the pose."""
+    for holds, status, message in _verdict_rules(case, results):
+        if holds[index]:
+            return status, message(index)
     return None
+
+
+def pose_verdicts(case: Case, results: LinkageResults) -> tuple[NDArray[np.object_],
+                                                                 NDArray[np.object_]]:
+    """Every pose's verdict (``"ok"`` where it has forces) and its message: :func:`verdict`
+    at every pose, looked up only where a rule holds."""
+    n = results.pose.q.shape[0]
+    statuses = np.full(n, "ok", dtype=object)
+    messages = np.full(n, "", dtype=object)
+    rules = _verdict_rules(case, results)
+    flagged = np.zeros(n, dtype=bool)
+    for holds, _, _ in rules:
+        flagged |= holds
+    for index in np.flatnonzero(flagged):
+        found = verdict(case, results, int(index))
+        if found is not None:
+            statuses[index], messages[index] = found
+    if results.stable is not None:   # an answer, but the reader must learn it is unstable
+        for index in np.flatnonzero((statuses == "ok") & (results.stable == 0.0)):
+            messages[index] = unstable_reason(case.linkage, results.pose.drivers[index])
+    return statuses, messages
+
+
+Rule = tuple[NDArray[np.bool_], Status, Callable[[int], str]]
+
+
+def _verdict_rules(case: Case, results: LinkageResults) -> list[Rule]:
+    """The verdicts a pose can have, in the order they are decided: where each holds, and
+    its message at a pose."""
+    linkage = case.linkage
+    pose = results.pose
+    n = pose.q.shape[0]
+    every = np.ones(n, dtype=bool)
+    rules: list[Rule] = []
+    if results.stable is not None:
+        rules.append((~np.isfinite(results.stable), "no_solution", lambda i: (
+            "no equilibrium pose of the free coordinates was found from the drawn pose")))
+    rules.append((~pose.assembled, "no_solution", lambda i: lock_message(
+        linkage, float(pose.locked_at[i]), pose.drivers[i])))
+    if linkage.redundant:
+        rules.append((every, "indeterminate", lambda i: (
+            f"the joints' constraints are redundant (rank {linkage.joint_rank} < "
+            f"{2 * len(linkage.joints)}): the reactions are not unique")))
+    if linkage.drawn_at_change_point:
+        rules.append((every, "singular", lambda i: (
+            f"the linkage is drawn on a change point (its joints' constraints are dependent "
+            f"there, rank {linkage.drawn_rank} < {linkage.joint_rank}): statics is singular "
+            "at the drawing, and which branch the linkage takes when driven from it is not "
+            "determined; draw it a little way off the change point")))
+    rules.append((results.singular, "singular", lambda i: (
+        f"condition number {float(results.condition[i]):.3g} exceeds 1e+08: the pose is at or "
+        "next to a toggle or dead point, where statics is singular; forces withheld")))
+    if results.undirected is not None:
+        undirected = results.undirected
+        rules.append((undirected != "", "indeterminate", lambda i: (
+            f"the ends of spring {undirected[i]} meet at this pose while it carries a tension: "
+            "a force without a line of action, so the forces are not unique; forces withheld")))
+    rules.append((results.reversing != "", "indeterminate", lambda i: (
+        f"the relative motion at {results.reversing[i]} reverses at this pose: Coulomb friction "
+        "there may take any value within its bound, so the forces are not unique; forces "
+        "withheld")))
+    rules.append((~results.converged, "no_solution", lambda i: (
+        "the friction equations have no solution with the assumed senses of motion (the "
+        "linkage self-locks)")))
+    return rules
 
 
 def solution_from(case: Case, backend: str, results: LinkageResults, *, method: str,
@@ -119,6 +164,12 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
     if results.stable is not None:
         diagnostics["stable"] = "yes" if results.stable[index] == 1.0 else (
             "no" if results.stable[index] == 0.0 else "not found")
+        # An unstable pose is still the answer (its forces hold there), but the reader must
+        # learn that the search found no stable one, and why.
+        if results.stable[index] == 0.0 and verdict(case, results, index) is None:
+            return Solution(case.name, backend, values, diagnostics=diagnostics,
+                            units=quantity_units(linkage),
+                            message=unstable_reason(linkage, results.pose.drivers[index]))
     found = verdict(case, results, index)
     units = quantity_units(linkage)
     if found is not None:

@@ -258,6 +258,29 @@ def _pose_list(values: pd.Series, limit: int = 20) -> str:
     return ", ".join(items) + (f" … ({more} more)" if more > 0 else "")
 
 
+def verdict_groups(statuses: pd.DataFrame) -> list[dict[str, str]]:
+    """One case's poses without numbers, grouped by verdict and by the backends that gave it:
+    which poses, and why (the first pose's reason; the status table has each pose's)."""
+    rest = statuses[statuses["status"] != "ok"]
+    backends = sorted({str(b) for b in statuses["backend"].unique()})
+    # Each (pose, verdict) with the set of backends that gave it there.
+    who_gave: dict[tuple[str, tuple[str, ...]], list[float]] = {}
+    for (theta, status), group in rest.groupby(["theta12", "status"], observed=True, sort=True):
+        who = tuple(sorted(str(b) for b in group["backend"]))
+        who_gave.setdefault((str(status), who), []).append(float(theta))  # type: ignore[arg-type]
+    out = []
+    for (status, who), poses in sorted(who_gave.items()):
+        mine = rest[(rest["status"] == status) & rest["backend"].isin(who)
+                    & rest["theta12"].isin(poses)]
+        first = mine[(mine["theta12"] == poses[0]) & (mine["backend"] == who[0])]
+        reason = str(first["message"].iloc[0]) if len(first) else ""
+        if mine["message"].nunique() > 1:
+            reason += " (first pose; other poses' reasons in the status table)"
+        out.append({"status": status, "backends": "every backend" if list(who) == backends
+                    else ", ".join(who), "poses": _pose_list(pd.Series(poses)), "reason": reason})
+    return out
+
+
 def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: pd.DataFrame,
                      comparison: pd.DataFrame, figures: dict[str, bytes], *, title: str,
                      n_poses: int, wall_time_s: float, executed: int, reused: int,
@@ -281,16 +304,6 @@ def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: 
     for case in cases:
         st = statuses[statuses["case"] == case.name]
         ref = st[st["backend"] == REFERENCE]
-        others = {}
-        # Verdicts the reference does not share (singular and indeterminate poses are
-        # listed once, from the reference, below).
-        unusual = st[(st["backend"] != REFERENCE)
-                     & ~st["status"].isin(["ok", "singular", "indeterminate"])]
-        poses_in_case = int((st["backend"] == REFERENCE).sum())
-        for key, group in unusual.groupby(["backend", "status"], observed=True):
-            label = " ".join(map(str, key))
-            others[label] = ("every pose" if len(group) == poses_in_case
-                             else _pose_list(group["theta12"]))
         spec = specs.get(case.name)
         mine = failed[failed["case"] == case.name] if len(failed) else failed
         case_views.append({
@@ -300,11 +313,9 @@ def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: 
             "figure": figure_file(case.name) if case.name in figures else None,
             "figure_b64": base64.b64encode(figures[case.name]).decode()
             if case.name in figures else None,
-            "singular": _pose_list(ref.loc[ref["status"] == "singular", "theta12"]),
-            "indeterminate": _pose_list(ref.loc[ref["status"] == "indeterminate", "theta12"]),
+            "verdicts": verdict_groups(st),
             "near_singular": _pose_list(ref.loc[(ref["condition_number"] > 1e4)
                                                 & (ref["status"] == "ok"), "theta12"]),
-            "other_verdicts": others,
             "failures": mine.head(30).to_dict("records"),
         })
     return {

@@ -83,8 +83,13 @@ def gated(reference: Solution, name: str) -> Solution | None:
         return None
     diagnostics = {k: v for k, v in reference.diagnostics.items() if k == "condition_number"}
     return Solution(reference.case, name, {}, status=reference.status,
-                    message=f"{reference.message}; not run (the pose verdict of {reference.backend})",
+                    message=gated_message(reference.message, reference.backend),
                     diagnostics=diagnostics, units=reference.units)
+
+
+def gated_message(message: str, reference: str) -> str:
+    """The message of a backend not run at a pose the reference gave a pose verdict."""
+    return f"{message}; not run (the pose verdict of {reference})"
 
 
 def solve_gated(name: str, case: Case, reference: Solution | None = None) -> Solution:
@@ -103,8 +108,12 @@ def call_backend(backend: registry.SolveFunction, name: str, case: Case) -> Solu
     try:
         return finite_only(backend(case))
     except Exception as error:
-        last = traceback.format_exception_only(error)[-1].strip()
-        return Solution(case.name, name, {}, status="error", message=last)
+        return Solution(case.name, name, {}, status="error", message=crash_message(error))
+
+
+def crash_message(error: BaseException) -> str:
+    """A backend's crash in one line: the exception's last line."""
+    return traceback.format_exception_only(error)[-1].strip()
 
 
 def finite_only(solution: Solution) -> Solution:
@@ -120,10 +129,14 @@ def finite_only(solution: Solution) -> Solution:
     finite = {q: v for q, v in solution.values.items() if math.isfinite(v)}
     if solution.status != "ok":
         return dataclasses.replace(solution, values=finite)
-    return dataclasses.replace(
-        solution, values={}, status="error",
-        message=f"{solution.backend} produced non-finite {', '.join(bad)} (NaN or infinity): "
-                "the numbers overflowed or the method broke down; no number is reported")
+    return dataclasses.replace(solution, values={}, status="error",
+                               message=non_finite_message(solution.backend, bad))
+
+
+def non_finite_message(backend: str, quantities: Sequence[str]) -> str:
+    """The ``error`` verdict's message of a backend that gave a number that is not finite."""
+    return (f"{backend} produced non-finite {', '.join(quantities)} (NaN or infinity): the "
+            "numbers overflowed or the method broke down; no number is reported")
 
 
 def run(cases: Sequence[Case], backend_names: Sequence[str], *,

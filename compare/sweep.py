@@ -31,17 +31,18 @@ import pyarrow.parquet as pq
 
 from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.solution import QUANTITY_UNITS, Solution, table_values
-from mechcheck.analytic.values import MAX_ANGLE_DEG
+from mechcheck.analytic.solution import QUANTITY_UNITS, Solution, kind_of_unit, table_values
+from mechcheck.analytic.values import MAX_ANGLE_DEG, MAX_DRIVER_ROTATION_DEG, MAX_DRIVER_TRAVEL
 from mechcheck.backends import REFERENCE, BackendUnavailable
-from mechcheck.output import file_stem, write_all
+from mechcheck.output import OutputError, file_stem, write_all
+from mechcheck.run import POSE_VERDICTS, crash_message, finite_only, gated_message, non_finite_message
 
 #: The most poses a sweep takes per case: ten times the 10⁶-pose analytic sweep the
 #: benchmarks time (about 8 s); a larger grid is far more likely a typo than a plan.
 MAX_SWEEP_POSES = 10_000_000
 
 #: Bump when the part format or a backend's meaning changes: old parts are then ignored.
-PART_FORMAT = 1
+PART_FORMAT = 2
 #: Poses per task. Vector backends: large chunks keep numpy efficient while
 #: parts stay small enough to resume from (≈ 0.2 s of work each). Simulators:
 #: a chunk is one continuation run; 60 poses of 1° let two workers share a turn.
@@ -49,7 +50,7 @@ VECTOR_CHUNK = 200_000
 SIMULATOR_CHUNK = 60
 
 RESULT_COLUMNS = ["case", "backend", "theta12", "quantity", "value", "unit"]
-STATUS_COLUMNS = ["case", "backend", "theta12", "status", "condition_number"]
+STATUS_COLUMNS = ["case", "backend", "theta12", "status", "condition_number", "message"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,12 +137,35 @@ def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray
     tasks = []
     for case in cases:
         grid = theta12_deg if case.mechanism != "linkage" or driver_grid is None else driver_grid
+        if case.mechanism == "linkage":
+            check_driver_grid(case, grid, "--theta12" if driver_grid is None else "--driver")
         for name in names:
             size = VECTOR_CHUNK if registry.get(name).vectorised else SIMULATOR_CHUNK
             for chunk, start in enumerate(range(0, len(grid), size)):
                 part = np.array(grid[start:start + size], dtype=float)
                 tasks.append(SweepTask(case, name, part, chunk, task_digest(case, name, part)))
     return tasks
+
+
+def check_driver_grid(case: Case, grid: np.ndarray, option: str) -> None:
+    """Refuse a linkage's sweep grid beyond the bounds of its first driver's values (a case
+    file's own bounds: :data:`~mechcheck.analytic.values.MAX_DRIVER_ROTATION_DEG` and
+    :data:`~mechcheck.analytic.values.MAX_DRIVER_TRAVEL` times the linkage's size)."""
+    if not case.linkage.drivers or not grid.size:
+        return
+    reach = float(np.abs(grid).max())
+    driver = case.linkage.drivers[0]
+    if case.linkage.joint(driver.joint).kind == "revolute":
+        if reach > MAX_DRIVER_ROTATION_DEG:
+            raise ValueError(f"{option}: case '{case.name}': a rotation of {reach:g}° of "
+                             f"{driver.joint}; a linkage's driver turns at most "
+                             f"±{MAX_DRIVER_ROTATION_DEG:g}° (ten turns) from its drawn pose")
+        return
+    bound = MAX_DRIVER_TRAVEL * case.linkage.scale * 1000.0
+    if reach > bound * (1.0 + 1e-12):
+        raise ValueError(f"{option}: case '{case.name}': a displacement of {reach:g} mm of "
+                         f"{driver.joint}; a linkage's driver moves at most ±{bound:.6g} mm "
+                         f"({MAX_DRIVER_TRAVEL:g} × its size) from its drawn pose")
 
 
 UNITS = ["N", "N*m", "deg", "m"]
@@ -208,11 +232,44 @@ def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
         results = solver(task.case, grid)
     except ValueError:  # the method refuses this case (Coulomb friction)
         return _not_applicable(task)
-    verdicts = pose_statuses(results)
-    status_values = np.where(verdicts == "", "ok", verdicts)
+    statuses, messages = pose_verdicts(task.case, results)
+    values = dict(results.values)
+    if task.backend != REFERENCE:
+        # Run behind the pose gate as `run` does: at a pose verdict (the analytic backends
+        # share the reference's pose analysis) the backend is not run and gives no number.
+        gated = np.isin(statuses, POSE_VERDICTS)
+        messages = np.where(gated, [gated_message(str(m), REFERENCE) for m in messages], messages)
+        values = {q: np.where(gated, np.nan, v) for q, v in values.items()}
+    statuses, messages = _non_finite_errors(task.backend, statuses, messages, values)
+    # A pose with a verdict keeps its pose (as `run`'s Solution does), no force.
+    units = units_of(task.case)
+    values = {q: v if kind_of_unit(units[q]) == "pose" else np.where(statuses == "ok", v, np.nan)
+              for q, v in values.items()}
     status = pd.DataFrame({"case": task.case.name, "backend": task.backend, "theta12": theta_deg,
-                           "status": status_values, "condition_number": results.condition})
-    return _long_frame(task.case, task.backend, theta_deg, results.values), status
+                           "status": statuses.astype(str), "condition_number": results.condition,
+                           "message": messages.astype(str)})
+    return _long_frame(task.case, task.backend, theta_deg, values), status
+
+
+def _non_finite_errors(backend: str, statuses: np.ndarray, messages: np.ndarray,
+                       values: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """A pose without a verdict whose values are not all finite is an ``error``, as ``run``
+    judges a backend's Solution (:func:`mechcheck.run.finite_only`), and keeps no number:
+    its rows are dropped from ``values`` (written in place)."""
+    ok = statuses == "ok"
+    bad = {q: ok & ~np.isfinite(v) for q, v in values.items()}
+    broken = np.zeros(statuses.shape, dtype=bool)
+    for hit in bad.values():
+        broken |= hit
+    if not broken.any():
+        return statuses, messages
+    statuses, messages = statuses.copy(), messages.copy()
+    for index in np.flatnonzero(broken):
+        statuses[index] = "error"
+        messages[index] = non_finite_message(backend, [q for q, hit in bad.items() if hit[index]])
+    for q, v in values.items():
+        values[q] = np.where(broken, np.nan, v)
+    return statuses, messages
 
 
 def _not_applicable(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -220,7 +277,8 @@ def _not_applicable(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     of case, or its method refuses the case."""
     status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
                            "theta12": np.asarray(task.theta12_deg), "status": "not_applicable",
-                           "condition_number": np.nan})
+                           "condition_number": np.nan,
+                           "message": "the method does not apply to this case"})
     return pd.DataFrame(columns=RESULT_COLUMNS), status
 
 
@@ -229,18 +287,30 @@ def gated_poses(case: Case, grid: np.ndarray) -> tuple[list[str], np.ndarray]:
     reference's verdict at each pose (``""`` where it has forces) and its condition number.
     Simulators are run only where the verdict is empty, so every backend of a sweep shows
     one verdict at a pose whose forces do not exist or are not unique."""
+    verdicts, _, condition = reference_verdicts(case, grid)
+    return [v if v in POSE_VERDICTS else "" for v in verdicts], condition
+
+
+def reference_verdicts(case: Case, grid: np.ndarray) -> tuple[list[str], list[str], np.ndarray]:
+    """The reference's verdict, message and condition number at each pose of the grid."""
     reference = registry.get(REFERENCE).sweeper(case.mechanism == "linkage")
     assert reference is not None
     results = reference(case, grid)
-    return [str(v) for v in pose_statuses(results)], np.asarray(results.condition, dtype=float)
+    statuses, messages = pose_verdicts(case, results)
+    return ([str(v) for v in statuses], [str(m) for m in messages],
+            np.asarray(results.condition, dtype=float))
 
 
-def pose_statuses(results: Any) -> np.ndarray:
-    """Each pose's verdict in vectorised results (PoseResults or LinkageResults), ``""``
-    where it has forces."""
-    return np.select(
-        [~results.assembled, results.singular, results.indeterminate, ~results.converged],
-        ["no_solution", "singular", "indeterminate", "no_solution"], default="")
+def pose_verdicts(case: Case, results: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Each pose's verdict (``"ok"`` where it has forces) and message in vectorised results,
+    decided as ``run`` decides them for one pose."""
+    if case.mechanism == "linkage":
+        from mechcheck.analytic.linkage_backends import pose_verdicts as linkage_verdicts
+
+        return linkage_verdicts(case, results)
+    from mechcheck.analytic.forces import pose_verdicts as preset_verdicts
+
+    return preset_verdicts(case, results)
 
 
 def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -250,21 +320,30 @@ def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     if sweep_fn is None:
         return _not_applicable(task)
     grid = driver_grid_si(task.case, theta_deg) if linkage else np.radians(theta_deg)
-    verdicts, condition = gated_poses(task.case, grid)
-    passing = np.flatnonzero([v == "" for v in verdicts])
-    solutions: list[Solution] = sweep_fn(task.case, grid[passing], task.backend) if len(passing) else []
-    statuses = list(verdicts)
+    verdicts, reasons, condition = reference_verdicts(task.case, grid)
+    passing = np.flatnonzero([v not in POSE_VERDICTS for v in verdicts])
+    statuses = [v if v in POSE_VERDICTS else "ok" for v in verdicts]
+    messages = [gated_message(m, REFERENCE) if v in POSE_VERDICTS else ""
+                for v, m in zip(verdicts, reasons, strict=True)]
     conditions = condition.copy()
     values = {q: np.full(len(theta_deg), np.nan) for q in units_of(task.case)}
+    try:
+        solutions: list[Solution] = sweep_fn(task.case, grid[passing], task.backend) \
+            if len(passing) else []
+    except Exception as error:   # as `run` does: a crash is this backend's `error` verdict
+        for i in passing:
+            statuses[i], messages[i] = "error", crash_message(error)
+        solutions = []
     for i, s in zip(passing, solutions, strict=True):
-        statuses[i] = s.status
+        s = finite_only(s)
+        statuses[i], messages[i] = s.status, s.message
         conditions[i] = float(s.diagnostics.get("condition_number", condition[i]))
         for q, v in s.values.items():
             values[q][i] = v
     present = {q: v for q, v in values.items() if np.isfinite(v).any()}
     status = pd.DataFrame({
         "case": task.case.name, "backend": task.backend, "theta12": theta_deg,
-        "status": statuses, "condition_number": conditions,
+        "status": statuses, "condition_number": conditions, "message": messages,
     })
     return _long_frame(task.case, task.backend, theta_deg, present), status
 
@@ -342,7 +421,11 @@ def prune_stale_parts(parts_dir: Path, tasks: Sequence[SweepTask]) -> int:
     for folder in ("results", "status"):
         for path in (parts_dir / folder).glob("*"):
             if path.is_file() and (path.name.startswith(".") or path.stem not in current):
-                path.unlink()
+                try:
+                    path.unlink()
+                except OSError as error:
+                    raise OutputError(f"--out {parts_dir}: cannot remove an earlier sweep's part "
+                                      f"{path.name}: {error.strerror or error}") from None
                 removed += 1
     return removed
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from functools import cache
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import Joint, Link, Linkage, LinkMass
 from mechcheck.casefile import builtin_case_files, load_cases
 
 
@@ -36,3 +37,20 @@ link = 4
 at = [90.0, 0.0]
 force = {{ magnitude = 100.0, angle = 20.0 }}
 """
+
+
+def sliding_collar() -> Case:
+    """A bar pinned at O with a collar sliding freely along it, under gravity: its only
+    equilibria are unstable (the potential falls without bound as the collar slides off a
+    hanging bar, and a standing bar with the collar at O is an inverted pendulum), so the
+    free-coordinate search can end only on an unstable one (tests/test_free_equilibrium.py
+    derives it)."""
+    linkage = Linkage(
+        points={"O": (0.0, 0.0), "E": (1.0, 0.0), "G": (0.3, 0.0), "C": (0.5, 0.0)},
+        links=(Link("ground", ("O",)), Link("bar", ("O", "E", "G")), Link("collar", ("C",))),
+        joints=(Joint("O", "revolute", ("ground", "bar"), "O"),
+                Joint("sleeve", "prismatic", ("bar", "collar"), "C", (1.0, 0.0))),
+        masses=(LinkMass("bar", 2.0, (0.3, 0.0), 0.0), LinkMass("collar", 1.0, (0.5, 0.0), 0.0)),
+        gravity=(0.0, -9.81),
+    )
+    return Case(name="sliding-collar", geometry=linkage, theta12=0.0)

@@ -82,8 +82,9 @@ def q1_hand(case: Case) -> dict[str, float]:
     force = linkage.loads[0].force[0]
     mass = {m.link: m.mass for m in linkage.masses}
     k = linkage.springs[0].stiffness
+    ax, ay = linkage.points["A"]
     bx, by = linkage.points["B"]
-    drawn = math.atan2(bx, -by)  # phi_bar is the turn from the drawn pose
+    drawn = math.atan2(bx - ax, -(by - ay))  # phi_bar is the turn from the drawn pose
     return {"q_slide": force / k, "phi_bar": math.atan2(2.0 * force, mass["bar"] * G) - drawn,
             "S_spring": force, "F_A_x": -force, "F_A_y": mass["bar"] * G, "F_slide_x": 0.0,
             "F_slide_y": (mass["bar"] + mass.get("slider", 0.0)) * G}
@@ -111,8 +112,7 @@ def assert_q1_hand(case: Case, values: dict[str, float], backend: str) -> None:
 Q1_SYSTEMS = {
     "exam-k200-l0.5": q1(stiffness=200.0, length=0.5),
     "exam-k1000-l0.2": q1(stiffness=1000.0, length=0.2),
-    # Drawn part of the way toward the answer (−77° and 81°): from straight down, the
-    # analytic search reaches the upright, unstable equilibrium (README, open finding).
+    # Drawn part of the way toward the answer (−77° and 81°).
     "stiff-short-F-negative": q1(force=-25.0, mass=1.2, length=0.2, stiffness=1500.0,
                                  slider_mass=0.1, drawn=math.radians(-40.0)),
     "heavy-long-soft": q1(force=4.0, mass=8.0, length=1.5, stiffness=50.0, slider_mass=2.0),
@@ -150,8 +150,8 @@ def test_q1_equilibrium_balances_every_body(force: float, mass: float, length: f
     """The analytic engine's equilibrium, reached from the drawn pose, is the exam's:
     x = F/k, tan φ = 2F/(m·g), and bar and slider each balance (their hand free-body
     forces). The spring's stretch F/k is drawn up to one bar length (k = |F|/(stretch·l)):
-    the exam's regime, where the search from the hanging bar is expected to succeed. It
-    may end on the upright branch, φ + π, which it must then call unstable."""
+    the exam's regime. The search descends the potential, so it ends on the stable, hanging
+    branch; were it to end on the upright one, φ + π, it would have to call it unstable."""
     stiffness = abs(force) / max(stretch * length, 1e-3 * length)
     case = q1(force, mass, length, stiffness, slider_mass)
     solution = mechcheck.solve(case, "analytic")
@@ -187,8 +187,12 @@ def test_q1_simulators_find_the_equilibrium(backend: str, name: str, start: str)
         x, phi = Q1_STARTS[start]
         if backend == "mujoco":
             solution = settle_free(case, analytic_results(case), {"slide": x, "A": phi})
-        else:  # slider translated by x; bar turned by φ about A = origin, then translated
-            solution = pymunk_linkage.settle(case, seed=np.array([x, 0.0, 0.0, x, 0.0, phi]))
+        else:  # slider translated by x; bar turned by φ about A, then translated by x
+            # (coordinates are displacements of the drawing's reference point, S0)
+            ax, ay = case.linkage.points["A"]
+            c, s = math.cos(phi), math.sin(phi)
+            bar = (ax - (c * ax - s * ay) + x, ay - (s * ax + c * ay))
+            solution = pymunk_linkage.settle(case, seed=np.array([x, 0.0, 0.0, *bar, phi]))
     assert solution.status == "ok", solution.message
     assert_q1_hand(case, dict(solution.values), backend)
 

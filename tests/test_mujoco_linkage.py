@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, assume, example, given, settings
 
 import mechcheck
 from mechcheck.analytic.case import Case, CaseError, Friction, Load, Motion
-from mechcheck.analytic.linkage import Joint, Link, Linkage, LinkMass, PointLoad
+from mechcheck.analytic.linkage import Joint, Link, Linkage, PointLoad
 from mechcheck.analytic.linkage_backends import analytic_results, solution_from, solve
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.presets import linkage_of
@@ -36,7 +36,7 @@ from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.settle import SETTLE_RTOL
 from mechcheck.testing import assert_solution_close
 
-from .builtin import builtin_cases
+from .builtin import builtin_cases, sliding_collar
 from .strategies import (
     MAX_CONDITION,
     carries_a_force,
@@ -359,23 +359,11 @@ def test_exam_q1_equilibrium_is_found_from_either_side(start: dict[str, float]) 
     assert_close(case, sim)
 
 
-def inverted_pendulum() -> Case:
-    """A bar drawn standing straight up on a ground pin under gravity, nothing else: its
-    drawn pose is an equilibrium, and an unstable one."""
-    linkage = Linkage(
-        points={"O": (0.0, 0.0), "T": (0.0, 0.5)},
-        links=(Link("ground", ("O",)), Link("bar", ("O", "T"))),
-        joints=(Joint("O", "revolute", ("ground", "bar"), "O"),),
-        masses=(LinkMass("bar", 1.0, (0.0, 0.25), 0.02),),
-        gravity=(0.0, -9.81),
-    )
-    return Case(name="inverted-pendulum", geometry=linkage, theta12=0.0)
-
-
 def test_an_unstable_equilibrium_gets_a_verdict_not_a_number() -> None:
-    """Settling cannot reach an unstable equilibrium: the analytic backend finds it and
-    calls it unstable, and the mujoco backend says why it gives no forces."""
-    case = inverted_pendulum()
+    """Settling cannot reach an unstable equilibrium: the analytic backend finds the only
+    equilibrium the sliding collar has and calls it unstable, and the mujoco backend says why
+    it gives no forces."""
+    case = sliding_collar()
     assert solve(case).diagnostics["stable"] == "no"
     sim = settle(case)
     assert (sim.status, sim.message) == ("not_applicable", UNSTABLE) and not sim.values

@@ -31,7 +31,7 @@ from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
-from .builtin import builtin, builtin_cases
+from .builtin import builtin, builtin_cases, sliding_collar
 from .strategies import carries_a_force, four_bar_table, inner_joints, linkage_tables
 from .test_driven_friction import SENSED_RATE, coulomb_motion_unresolved
 from .test_linkage_identities import SETTINGS, case_of
@@ -464,14 +464,10 @@ def test_next_to_a_lock_a_held_linkage_that_leaves_its_assembly_is_not_settled()
 
 
 def test_an_unstable_free_equilibrium_is_not_settled_for_but_solved_at() -> None:
-    """Exam Q1 drawn with the bar standing up: the equilibrium reached from there is an
-    inverted pendulum (the analytic backend says unstable). Settling cannot measure it;
-    the constraint solve at that pose can."""
-    case = builtin("exam-q1-slider-bar")
-    linkage = case.linkage
-    points = dict(linkage.points) | {"B": (0.0, 0.6), "G": (0.0, 0.3)}
-    up = case.with_(name="exam-q1-standing", geometry=replace(
-        linkage, points=points, masses=(replace(linkage.masses[0], com=(0.0, 0.3)),)))
+    """A collar sliding freely on a pinned bar has only unstable equilibria (the analytic
+    backend ends on one and says so). Settling cannot measure it; the constraint solve at
+    that pose can."""
+    up = sliding_collar()
     settled = pm.settle(up)
     assert settled.status == "not_applicable" and "unstable" in settled.message
     assert_solution_close(up, pm.solve_at_pose(up), complete=True)
