@@ -69,18 +69,30 @@ def inertia_correction(base: dict[str, float], limit: dict[str, float], length: 
                 for q, v in limit.items() if kinds[q] != "pose"), default=0.0)
 
 
-def disagreement(a: dict[str, float], b: dict[str, float], length: float,
-                 units: dict[str, str] | None = None) -> float:
-    """Largest difference of forces (and torques/length) relative to the largest of them;
+def force_vector(values: dict[str, float], length: float,
+                 units: dict[str, str] | None = None) -> np.ndarray:
+    """The forces of ``values`` and its torques/length, without its pose quantities;
     ``units`` names the unit of each quantity of a linkage (its names do not say it)."""
     table = units or {}
+    kinds = {q: quantity_kind(q, table.get(q)) for q in values}
+    return np.array([x / length if kinds[q] == "torque" else x
+                     for q, x in values.items() if kinds[q] != "pose"])
 
-    def vector(v: dict[str, float]) -> np.ndarray:
-        kinds = {q: quantity_kind(q, table.get(q)) for q in v}
-        return np.array([x / length if kinds[q] == "torque" else x
-                         for q, x in v.items() if kinds[q] != "pose"])
-    va, vb = vector(a), vector(b)
-    return float(np.abs(va - vb).max()) / max(float(np.abs(vb).max()), FORCE_FLOOR_N)
+
+def force_size(values: dict[str, float], length: float,
+               units: dict[str, str] | None = None) -> float:
+    """The largest force (or torque/length) of ``values``, at least ``FORCE_FLOOR_N``: what
+    :func:`disagreement` is relative to."""
+    return max(float(np.abs(force_vector(values, length, units)).max(initial=0.0)),
+               FORCE_FLOOR_N)
+
+
+def disagreement(a: dict[str, float], b: dict[str, float], length: float,
+                 units: dict[str, str] | None = None) -> float:
+    """Largest difference of forces (and torques/length) relative to the largest of ``b``'s
+    (:func:`force_size`); ``units`` names the unit of each quantity of a linkage."""
+    va, vb = force_vector(a, length, units), force_vector(b, length, units)
+    return float(np.abs(va - vb).max()) / force_size(b, length, units)
 
 
 @dataclass

@@ -248,7 +248,7 @@ def inner_joints(linkage: Linkage) -> set[str]:
 def carries_a_force(reference: Solution, joints: set[str]) -> bool:
     """Whether one of ``joints`` carries a force above the rounding of ``reference``'s
     largest joint force. Where none does, every load goes straight to the ground and the
-    simulators' joint forces alternate about zero (README, MuJoCo, open finding)."""
+    simulators' joint forces alternate about zero (docs/limitations.md)."""
     magnitudes = {q: abs(v) for q, v in reference.values.items() if q.startswith("F_")}
     largest = max(magnitudes.values(), default=0.0)
     return any(v > ROUNDING * largest for q, v in magnitudes.items() if q[2:-2] in joints)

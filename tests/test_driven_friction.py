@@ -322,7 +322,7 @@ def test_the_friction_loop_gain_of_a_slide_is_mu_tan_phi(theta12: float, mu: flo
 def test_random_driven_friction_cases_agree(case: Case, backend: str) -> None:
     """Random driven four-bars and slider-cranks with Coulomb and viscous friction, both simulators.
 
-    Left out, each a separate open finding (issue 10 report), there before
+    Left out, each on the known-limitations page (docs/limitations.md), there before
     this test: a draw whose every coefficient is 0 (a frictionless case: one,
     unloaded and at rest at the reading next to a slider-crank's limit
     position, is ``not_settled`` in MuJoCo), ω = α = 0 (a static friction
@@ -336,7 +336,7 @@ def test_random_driven_friction_cases_agree(case: Case, backend: str) -> None:
     reading one step late in a viscous torque that is changing is 1e-6 N, over
     1e-4 of that floor: ``not_settled`` where every force is zero), a driven
     linkage whose time-step check stops at first order
-    (:func:`timestep_stops_at_first_order`; README, MuJoCo, open finding: friction loads
+    (:func:`timestep_stops_at_first_order`; docs/limitations.md: friction loads
     lag one step, in both simulators; massless, or fast: a draw of README's test command,
     2026-11-26, a slider-crank with masses at ω = 25 rad/s, α = −195 rad/s², friction loop
     gain 0.37, read 1.0e-4 apart at dt = 6.25e-6 and 3.13e-6 s in pymunk, where MuJoCo

@@ -412,9 +412,8 @@ NEXT_TO_A_LOCK: dict[str, Any] = {'name': 'random-linkage',
      'friction': {'mu': 0.25, 'pin_radius': {'O2': 0.0}}}
 
 
-#: A draw of README's test command (2026-11-26): a static four-bar with two point masses
-#: under g = 1 m/s², at rest after its first steps (1.8e-14 m/s) with no stop rule firing
-#: in 3000 (README, MuJoCo, open finding).
+#: A static four-bar with two point masses under g = 1 m/s², at rest after its first steps
+#: (1.8e-14 m/s): its forces hop on the model's rounding floor, which the stop rules allow.
 AT_REST_UNSTOPPED = four_bar_table(
     {"O2": [0.0, 0.0], "A": [0.15625, 0.0], "O4": [1.0, 0.0],
      "B": [0.578125, -0.9066540047752505]},
@@ -475,7 +474,7 @@ def test_mujoco_backend_on_random_linkages(table: dict[str, Any]) -> None:
     Left out: a draw whose loads all go straight to the ground, no joint between two moving
     links carrying a force beyond rounding (no load; only a torque the driver takes from
     the crank; a force at a ground pin; a spring pulling the crank along itself onto its
-    pin, :data:`ROUNDING_ONLY`; README, MuJoCo, open finding: the equality forces then
+    pin, :data:`ROUNDING_ONLY`; docs/limitations.md: the equality forces then
     alternate about zero from step to step and need not settle)."""
     case = random_case(table)
     reference = solve(case)
@@ -489,7 +488,7 @@ def test_mujoco_backend_on_random_linkages(table: dict[str, Any]) -> None:
         assert not any(q.startswith(("F_", "Q_", "M_", "S_")) for q in sim.values)
         return
     if sim.status == "not_settled" and at_rest_unstopped(sim):
-        # README, MuJoCo, open finding (AT_REST_UNSTOPPED, a draw of README's test command,
+        # AT_REST_UNSTOPPED (a draw of README's test command,
         # 2026-11-26): at rest, yet no stop rule fires in 3000 steps. No number, never a
         # wrong one.
         assert not any(q.startswith(("F_", "Q_", "M_", "S_")) for q in sim.values)

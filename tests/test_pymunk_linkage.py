@@ -154,7 +154,7 @@ def test_a_reading_the_solver_has_not_converged_goes_to_more_iterations() -> Non
 
 
 def assert_reading_or_reason(case: Case, solution: Solution) -> None:
-    """Every quantity within the policy's tolerance, or (README, pymunk, open findings) a
+    """Every quantity within the policy's tolerance, or (docs/limitations.md) a
     ``not_settled`` verdict with its reason and no force, or ``indeterminate`` where a
     Coulomb joint's motion is confirmed at rest or reversing at the reading (README,
     pymunk, slow drives)."""
@@ -383,7 +383,7 @@ def test_random_static_linkages_by_the_constraint_solve(table: dict[str, Any]) -
 @given(linkage_tables(friction=False, moving=False))
 def test_random_static_linkages_by_settling(table: dict[str, Any]) -> None:
     """The same random linkages, held and settled by simulation. Left out: draws where no
-    joint between two moving links carries a force (README, open finding; below)."""
+    joint between two moving links carries a force (docs/limitations.md; below)."""
     case = loaded_case(table)
     assume(carries_a_force(solve(case), inner_joints(case.linkage)))
     assert_solution_close(case, pm.settle(case), complete=True)
@@ -400,7 +400,7 @@ LOAD_ON_THE_GROUND_PIN = four_bar_table(
 
 
 def test_a_load_straight_into_the_ground_gives_no_wrong_number() -> None:
-    """README, open finding: with nothing between two moving links carrying a force,
+    """docs/limitations.md: with nothing between two moving links carrying a force,
     pymunk's forces there chatter about zero (3e-10 N here, against a 0.125 N load) and its
     settling need not stop. It then says ``not_settled`` with no number, never a wrong one;
     the random test above leaves such draws out."""

@@ -489,7 +489,7 @@ class BatchSettler:
                 np.asarray(self.rig.driver_eqs, dtype=np.int64), d.eq_active, m.eq_active0,
                 d.warning.number, d.qacc_warmstart, d.sensordata, d.qvel, targets, starts,
                 controls, first_chunk, CHUNK, left, early,
-                self.columns, self.column_scale, self.rig.weight), (
+                self.columns, self.column_scale, self.rig.weight, self.rig.rounding), (
                 np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty_like(starts))
 
     def run_chunk(self, wave: list[Pose], nstep: int) -> list[Settled | None]:
@@ -519,7 +519,8 @@ class BatchSettler:
         early = np.array([p.earliest - p.pass_steps for p in wave])
         at = np.arange(nstep)[None, :]
         speed[(at >= left[:, None]) | (at < early[:, None])] = np.inf
-        first, rule = first_stops(np.array([p.history for p in wave]), readings, speed)
+        first, rule = first_stops(np.array([p.history for p in wave]), readings, speed,
+                                  self.rig.rounding)
         out_of_budget = (left <= nstep) | ~np.isfinite(readings).all(axis=(1, 2))
         ended: list[tuple[int, int, str]] = []  # (pose in wave, step in chunk, rule or "")
         for k, pose in enumerate(wave):
@@ -549,9 +550,10 @@ class BatchSettler:
         if not rule or not finite:
             return self.result(pose, read, j, "", settled=False)
         forces = read.forces[j]
+        size = max(float(np.abs(pose.previous).max()), FORCE_FLOOR_N) \
+            if pose.previous is not None else FORCE_FLOOR_N
         if pose.previous is not None and pose.refinement.converged(
-                float(np.abs(forces - pose.previous).max())
-                / max(float(np.abs(pose.previous).max()), FORCE_FLOOR_N)):
+                float(np.abs(forces - pose.previous).max()) / size, self.rig.rounding / size):
             pose.carried = read.totals[j]  # what it ended with
             return self.result(pose, read, j, rule, settled=True)
         if pose.passes == MAX_PASSES:
@@ -600,16 +602,18 @@ def interpolated(i: int, coarse: list[int], forces: dict[int, Array],
     return forces.get(lo, forces.get(hi))
 
 
-def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, Array]:
+def first_stops(history: Array, readings: Array, speed: Array,
+                rounding: float = 0.0) -> tuple[Array, Array]:
     """:func:`vectorised_stops`, compiled where numba is installed (:mod:`.stop_kernel`: the
     same answers, without numpy's overhead on arrays this small)."""
     compiled = kernel(STOP_KERNEL)
     if compiled is not None:
-        return compiled.first_stops(history, readings, speed)
-    return vectorised_stops(history, readings, speed)
+        return compiled.first_stops(history, readings, speed, rounding)
+    return vectorised_stops(history, readings, speed, rounding)
 
 
-def vectorised_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, Array]:
+def vectorised_stops(history: Array, readings: Array, speed: Array,
+                     rounding: float = 0.0) -> tuple[Array, Array]:
     """For each pose of a wave, the first of its ``readings`` (P, T, m) at which
     :class:`.settle.DecayWatch` would say settled with the joints slower than
     :data:`.settle.VELOCITY_TOL` (``speed`` (P, T) at each reading): its index (−1 if
@@ -618,6 +622,8 @@ def vectorised_stops(history: Array, readings: Array, speed: Array) -> tuple[Arr
     ``history`` (P, FLOOR_WINDOW − 1, m) holds each pose's earlier readings of the pass,
     NaN where the pass has fewer: a window reaching back past the pass's first reading
     holds a NaN, and no rule fires on it, as no rule fires before its window is known.
+    ``rounding``: the model's rounding floor (N, :func:`.settle.rounding_floor`), the floor
+    rule's allowance where it is more than :data:`.settle.WOBBLE_RTOL` of a reading.
     """
     back = history.shape[1]
     # Each reading's change from the last (largest over the forces) and size, from the
@@ -635,21 +641,23 @@ def vectorised_stops(history: Array, readings: Array, speed: Array) -> tuple[Arr
     decay = (largest == 0.0) | (left <= SETTLE_RTOL)
     quiet = largest <= QUIET_RTOL
     here = size[:, STOP_WINDOW:]  # the size at each reading of the chunk
+    with np.errstate(invalid="ignore"):
+        wobble = np.maximum(WOBBLE_RTOL, rounding / here)  # :func:`.settle.wobble_allowed`
     # The floor's spread only where the rest of its rule holds and no single step in its
     # window is larger than the spread allowed (a spread is at least every step within
     # it): a window of 32 readings at every reading costs more than the rollout.
     floor = np.zeros_like(decay)
-    candidate = (largest <= WOBBLE_RTOL) & ~decay & ~quiet & (speed <= VELOCITY_TOL)
+    candidate = (largest <= wobble) & ~decay & ~quiet & (speed <= VELOCITY_TOL)
     if candidate.any():
         x = np.concatenate([history, readings], axis=1)
         jumps = np.abs(np.diff(x, axis=1)).max(axis=2)
         widest = sliding_window_view(jumps, FLOOR_WINDOW - 1, axis=1)[:, -readings.shape[1]:]
-        candidate &= widest.max(axis=2) <= WOBBLE_RTOL * here
+        candidate &= widest.max(axis=2) <= wobble * here
         p, t = np.nonzero(candidate)
         rows = (back + t + 1 - FLOOR_WINDOW)[:, None] + np.arange(FLOOR_WINDOW)
         window = x[p[:, None], rows]  # (candidates, FLOOR_WINDOW, m)
         spread = (window.max(axis=1) - window.min(axis=1)).max(axis=1)
-        floor[p, t] = spread / here[p, t] <= WOBBLE_RTOL
+        floor[p, t] = spread / here[p, t] <= wobble[p, t]
     rule = np.where(decay, 0, np.where(quiet, 1, np.where(floor, 2, -1)))
     fired = (rule >= 0) & (speed <= VELOCITY_TOL)
     first = np.where(fired.any(axis=1), fired.argmax(axis=1), -1)

@@ -52,6 +52,7 @@ from mechcheck.sim_models.mujoco.linkage_model import (
 )
 from mechcheck.sim_models.mujoco.model import STATIC, Settings, place_frames_exactly
 from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, load_wrenches, rows_times
+from mechcheck.sim_models.mujoco.settle import rounding_floor
 
 Array = NDArray[np.float64]
 
@@ -183,6 +184,11 @@ class LinkageRig:
         for joint, rows in self.drive_rows.items():
             if linkage.joint(joint).kind == "revolute":
                 self.efc_scale[rows] = 1.0 / self.scale  # torques as forces, for the stop rule
+        #: The spread of forces the positions' rounding makes at rest (N, the settling's
+        #: absolute allowance), from the model at the drawn pose: its sites' largest
+        #: coordinate sets the grid they sit on.
+        extent = max(self.scale, float(np.abs(self.data.site_xpos[:, :2]).max(initial=0.0)))
+        self.rounding = rounding_floor(float(m.body_mass.max()), extent, settings.timestep)
         self.carried = np.zeros(self.nefc)
         self.pairs = self._carried_layout()
         self.drive_dofs = np.array([self.dof[j] for j in self.drive_rows], dtype=int)
@@ -577,7 +583,8 @@ class LinkageRig:
 
     def _pose_columns(self, qpos: Array, site_xpos: Array) -> dict[str, Array]:
         plan = self.plan
-        points = site_xpos[:, plan.point_sites, :2].reshape(len(qpos), -1)
+        # Positions in the file's frame: the model is built about the reference point.
+        points = (site_xpos[:, plan.point_sites, :2] + self.linkage.offset).reshape(len(qpos), -1)
         out = dict(zip(plan.point_names, points.T, strict=True))
         out.update(zip(self.phi_names, rows_times(qpos, self.rotation).T, strict=True))
         out.update(zip(plan.joint_names, rows_times(qpos, plan.joint_rows).T, strict=True))

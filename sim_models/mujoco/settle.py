@@ -41,7 +41,7 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
-from mechcheck.sim_models.convergence import disagreement
+from mechcheck.sim_models.convergence import disagreement, force_size
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 
 #: Settled when the forces' remaining change, estimated from their observed
@@ -94,6 +94,23 @@ QUIET_RTOL = 1e-9
 #: ... and no joint moves faster than this (a point speed at the scale length,
 #: m/s; on the floor it is ~1e-12).
 VELOCITY_TOL = 1e-9
+#: At rest the forces cannot settle below what the rounding of the positions makes of them,
+#: whatever the loads: every site sits on a grid of ε·X (ε the machine epsilon, X the
+#: largest coordinate), and a body that hops one step of it to and fro reverses a velocity
+#: of ε·X/dt each step, a force of 2·m·ε·X/dt² each way (fictitious mass m, time step dt):
+#: a spread of this many m·ε·X/dt² (:func:`rounding_floor`). It is the floor rule's and the
+#: passes' absolute allowance besides their relative ones. Measured on every built-in
+#: linkage without loads or gravity, drawn from 0.1 to 100 times its size, and on chains of
+#: two and eight four-bars, at rest (joints at 1e-13 m/s or less): the equality forces'
+#: spread over :data:`FLOOR_WINDOW` readings was at most 0.74 of it, a sweep's reaction
+#: sensors' 0.92 (the counterbalanced bonnet at 0.6 m, alternating by ±2.4e-7 N from step
+#: to step). Seed E1 at 0.42 m: its driver's torque climbing in a sawtooth to ±5.5e-10 N
+#: while MuJoCo's solver took no step (its line search stops for a step under 1e-15), a
+#: sweep's sensors cycling by ±1.5e-8 N. Judged against the 0.01 N force floor alone, such a
+#: floor spreads wider than :data:`WOBBLE_RTOL` from about 0.2 m up, and an unloaded linkage
+#: of that size settled by chance or not at all (1e-19 m/s, ``not_settled``). Bodies hopping
+#: together with more than the heaviest one's mass could spread wider: not seen.
+ROUNDING_STEPS = 4.0
 #: Step budget of one settling run; a pose that has not settled by then is
 #: reported ``not_settled``. Ordinary poses settle in 30–60 steps; next to a
 #: change point the slow mode takes longer (about 270 steps at condition number
@@ -166,6 +183,19 @@ STEADY_RATIO = 0.05
 SLOW_CONTRACTION = 0.3
 
 
+def rounding_floor(mass: float, extent: float, timestep: float) -> float:
+    """The spread (N) of forces that the rounding of the positions alone makes at rest, in a
+    model whose heaviest body is ``mass`` (kg), whose sites lie within ``extent`` (m) of its
+    origin, stepped by ``timestep`` (s): :data:`ROUNDING_STEPS` × m·ε·X/dt²."""
+    return ROUNDING_STEPS * mass * float(np.finfo(float).eps) * extent / timestep ** 2
+
+
+def wobble_allowed(size: float, rounding: float) -> float:
+    """The floor rule's allowance for a reading of ``size`` (N), as a fraction of it:
+    :data:`WOBBLE_RTOL`, or the rounding floor ``rounding`` (N) where that is larger."""
+    return max(WOBBLE_RTOL, rounding / size)
+
+
 class SettlingRig(Protocol):
     """What settling needs of a model (:class:`~.linkage_rig.LinkageRig`)."""
 
@@ -174,6 +204,7 @@ class SettlingRig(Protocol):
     case: Case
     scale: float
     units: dict[str, str] | None
+    rounding: float  # :func:`rounding_floor`
 
     def apply_loads(self) -> None: ...
     def constraint_forces(self) -> np.ndarray: ...
@@ -213,7 +244,7 @@ def run_until_settled(rig: SettlingRig, max_steps: int | None = None,
     (:meth:`Refinement.minimum`)."""
     max_steps = MAX_STEPS if max_steps is None else max_steps
     m, d = rig.model, rig.data
-    watch = DecayWatch()
+    watch = DecayWatch(rig.rounding)
     settled = False
     step = 0
     for step in range(max_steps + 1):
@@ -236,12 +267,14 @@ class DecayWatch:
     still to come of a decay is below :data:`SETTLE_RTOL`, when the last changes
     are all below :data:`QUIET_RTOL`, or when the forces sit on their rounding
     floor, spread over :data:`FLOOR_WINDOW` readings by at most
-    :data:`WOBBLE_RTOL`. ``rule`` names the one that fired."""
+    :data:`WOBBLE_RTOL`, or by the model's ``rounding`` floor (N, :func:`rounding_floor`)
+    where that is more. ``rule`` names the one that fired."""
 
-    def __init__(self) -> None:
+    def __init__(self, rounding: float = 0.0) -> None:
         self.readings: deque[list[float]] = deque(maxlen=FLOOR_WINDOW)
         self.changes: list[float] = []
         self.rule = ""
+        self.rounding = rounding
 
     def settled(self, current: np.ndarray) -> bool:
         """Record ``current``; True when the forces have settled."""
@@ -254,13 +287,14 @@ class DecayWatch:
             self.changes.append(max(abs(a - b) for a, b in zip(values, previous, strict=True))
                                 / size)
         self.readings.append(values)
+        wobble = wobble_allowed(size, self.rounding)
         if remaining_change(self.changes) <= SETTLE_RTOL:
             self.rule = "decay"
         elif len(self.changes) >= STOP_WINDOW and max(self.changes[-STOP_WINDOW:]) <= QUIET_RTOL:
             self.rule = "quiet"
         elif (len(self.readings) == FLOOR_WINDOW
-              and max(self.changes[-STOP_WINDOW:]) <= WOBBLE_RTOL
-              and floor_spread(self.readings) / size <= WOBBLE_RTOL):
+              and max(self.changes[-STOP_WINDOW:]) <= wobble
+              and floor_spread(self.readings) / size <= wobble):
             self.rule = "floor"
         else:
             return False
@@ -318,7 +352,8 @@ def settle_refined(rig: SettlingRig, qpos: np.ndarray,
         if not result.settled or not np.all(np.isfinite(list(result.values.values()))):
             return replace(done, settled=False)
         if previous is not None and refinement.converged(
-                disagreement(result.values, previous.values, rig.scale, rig.units)):
+                disagreement(result.values, previous.values, rig.scale, rig.units),
+                rig.rounding / force_size(previous.values, rig.scale, rig.units)):
             return replace(done, refinement=refinement.last_difference)
         previous = result
         rig.carry(refinement.factor(rig.carried, rig.total_constraint_forces(), rig.efc_scale))
@@ -382,9 +417,11 @@ class Refinement:
         self.total += steps
         self.longest = max(self.longest, steps)
 
-    def converged(self, difference: float) -> bool:
+    def converged(self, difference: float, rounding: float = 0.0) -> bool:
         """Record ``difference`` (this pass's reading against the last pass's, relative
-        to the largest force); True when :func:`refinement_left` ≤ :data:`REFINE_RTOL`.
+        to the largest force); True when :func:`refinement_left` ≤ :data:`REFINE_RTOL`, or
+        ≤ ``rounding`` (the rounding floor, :func:`rounding_floor`, relative to the same
+        force) where that is more: two readings of one equilibrium differ by that much.
         Across an extrapolated carry it is no pass's difference and is not recorded."""
         if self.extrapolated:
             self.extrapolated = False
@@ -392,7 +429,7 @@ class Refinement:
             return False
         self.differences.append(difference)
         self.plain_run += 1
-        return refinement_left(self.differences, self.contraction) <= REFINE_RTOL
+        return refinement_left(self.differences, self.contraction) <= max(REFINE_RTOL, rounding)
 
     def steady_ratio(self) -> float | None:
         """The contraction of the last plain passes, if they contract steadily: the ratio

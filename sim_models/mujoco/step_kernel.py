@@ -33,14 +33,14 @@ def passes(step: Any, set_state: Any, get_state: Any, m: int, d: int, full: int,
            eq_active0: Array, warnings: Array, warmstart: Array, sensordata: Array,
            qvel: Array, targets: Array, starts: Array, controls: Array, first_chunk: int,
            chunk: int, readings_left: Array, earliest: Array, columns: Array,
-           column_scale: Array, weight: Array, ended_at: Array, rules: Array,
+           column_scale: Array, weight: Array, rounding: float, ended_at: Array, rules: Array,
            ended_state: Array) -> None:
     """One settling pass of each pose i: its drivers at ``targets[i]``, from ``starts[i]``
     (a FULLPHYSICS state), its loads ``controls[i]`` held, its first rollout ``first_chunk``
     steps long and the others ``chunk``. Writes the pass's last reading
     (``ended_at[i]``, counted from the pass's start), the rule that fired there (−1: none,
     the pass ran out of budget or read a number that is not finite) and the state it was
-    read at (``ended_state[i]``)."""
+    read at (``ended_state[i]``). ``rounding``: the floor rule's absolute allowance (N)."""
     back = FLOOR_WINDOW - 1
     m_read = columns.size
     history = np.empty((1, back, m_read))
@@ -79,7 +79,7 @@ def passes(step: Any, set_state: Any, get_state: Any, m: int, d: int, full: int,
                 for k in range(m_read):
                     reading[0, 0, k] = sensordata[columns[k]] * column_scale[k]
                     finite = finite and math.isfinite(reading[0, 0, k])
-                first, rule = first_stops(history, reading, speed)
+                first, rule = first_stops(history, reading, speed, rounding)
                 history[0, :back - 1] = history[0, 1:]
                 history[0, back - 1] = reading[0, 0]
                 if first[0] >= 0:

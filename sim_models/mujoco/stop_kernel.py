@@ -55,10 +55,12 @@ def largest_step(new: Array, old: Array) -> float:
 
 
 @njit(cache=True)
-def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, Array]:
+def first_stops(history: Array, readings: Array, speed: Array,
+                rounding: float = 0.0) -> tuple[Array, Array]:
     """:func:`.batch_settle.first_stops`: per pose, the first reading at which a rule fires
     with the joints slower than VELOCITY_TOL (−1 if none), and the rule (the last reading's
-    where none fires, as numpy's indexing gives)."""
+    where none fires, as numpy's indexing gives); ``rounding``, the floor rule's absolute
+    allowance (N)."""
     poses, back, m = history.shape
     chunk = readings.shape[1]
     first = np.full(poses, -1, dtype=np.int64)
@@ -87,12 +89,13 @@ def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, A
                 ratio = larger(ratio, step)
             left = largest * ratio / (1.0 - ratio) if ratio < 1.0 else math.inf
             here = size[STOP_WINDOW + t]
+            wobble = larger(WOBBLE_RTOL, rounding / here)  # :func:`.settle.wobble_allowed`
             rule = -1
             if largest == 0.0 or left <= SETTLE_RTOL:
                 rule = 0
             elif largest <= QUIET_RTOL:
                 rule = 1
-            elif largest <= WOBBLE_RTOL and speed[p, t] <= VELOCITY_TOL:
+            elif largest <= wobble and speed[p, t] <= VELOCITY_TOL:
                 if not jumps_known:
                     whole[:back] = history[p]
                     whole[back:] = readings[p]
@@ -102,7 +105,7 @@ def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, A
                 widest = jumps[t]
                 for i in range(t + 1, t + back):
                     widest = larger(widest, jumps[i])
-                if widest <= WOBBLE_RTOL * here:
+                if widest <= wobble * here:
                     start = back + t + 1 - FLOOR_WINDOW  # the floor window's first reading
                     spread = 0.0
                     for j in range(m):
@@ -111,7 +114,7 @@ def first_stops(history: Array, readings: Array, speed: Array) -> tuple[Array, A
                             low = -larger(-low, -whole[i, j])
                             high = larger(high, whole[i, j])
                         spread = larger(spread, high - low)
-                    if spread / here <= WOBBLE_RTOL:
+                    if spread / here <= wobble:
                         rule = 2
             rules[p] = rule
             if rule >= 0 and speed[p, t] <= VELOCITY_TOL:

@@ -223,6 +223,9 @@ class DriveEnd:
     #: How far the last step's reading moves when that step is solved again with
     #: :data:`SOLVER_CHECK_FACTOR` times the iterations (relative, as the convergence checks).
     solver_disagreement: float = 0.0
+    #: The bodies' largest distance from the prescribed pose at the instant, in any of the
+    #: twins (m, :func:`.linkage.pose_drifts`).
+    drift: float = 0.0
 
 
 @dataclass
@@ -313,8 +316,13 @@ def run_drive(twins: Twins, motion: Motion, steps: int, dt: float) -> DriveEnd:
     pose = {k: float(v[0]) for k, v in pose_table(linkage, q[None, :]).items()}
     reactions_now, correction = twins.reading()
     rate_error = float(np.abs(driver_rates(base) - prescribed[0]).max(initial=0.0))
+    # Every twin's: one that left the assembly spoils the extrapolation of both.
+    radius = np.array([gyration_radius(linkage, link) for link in linkage.moving_links])
+    instant = solve_pose(linkage, *motion.at(times[steps:steps + 1]))
+    drift = float(pose_drifts(radius, np.array([coordinates(m) for m in twins.models]),
+                              np.repeat(instant.q, len(twins.models), axis=0)).max())
     unsolved = resolve_last_step(twins, *before_last, reactions_now, dt)
-    return DriveEnd(pose | reactions_now, q, rate_error, correction, unsolved)
+    return DriveEnd(pose | reactions_now, q, rate_error, correction, unsolved, drift)
 
 
 def step_once(twins: Twins, history: list[Values], dt: float) -> None:
@@ -385,14 +393,27 @@ def build_twins(case: Case, motion: Motion, dt: float, iterations: int) -> Twins
 
 
 def read_drive(case: Case, motion: Motion, steps: int, dt: float, iterations: int) -> DriveEnd:
-    """One reading, free of fictitious inertia (:class:`Twins`); a run that diverges reads
-    NaN, which no convergence rule accepts."""
+    """One reading, free of fictitious inertia (:class:`Twins`); a run that diverges, or
+    that leaves the assembly it was started on (:func:`left_assembly`), reads NaN forces,
+    which no convergence rule accepts: the next rung of :data:`ITERATIONS` runs instead.
+
+    Gauss–Seidel that stops short of the constraint solve can throw a linkage onto its
+    other assembly within tens of steps, and runs that agree there are another linkage's:
+    the crank shaper turned 160° (condition number 31) flipped its output dyad (link5
+    1.3 rad over, the ram 0.135 m off) after 37 steps at 100 iterations and 86 at 400
+    (time step 1e-4 s), and held at 1600; its lead-ins at 400 iterations then agreed to
+    1e-7 on the flipped linkage."""
     twins = build_twins(case, motion, dt, iterations)
+    units = quantity_units(case.linkage)
     try:
-        return run_drive(twins, motion, steps, dt)
+        end = run_drive(twins, motion, steps, dt)
     except Diverged:
-        units = quantity_units(case.linkage)
         return DriveEnd(dict.fromkeys(units, math.nan), coordinates(twins.base), math.nan)
+    if left_assembly(end.drift, case.linkage.scale):
+        kinds = {q: quantity_kind(q, units.get(q)) for q in end.values}
+        return replace(end, values={q: v if kinds[q] == "pose" else math.nan
+                                    for q, v in end.values.items()})
+    return end
 
 
 def drive_at_timestep(case: Case, dt: float, lead_time: float) -> Solution:
@@ -461,10 +482,24 @@ def driven_solution(case: Case, results: LinkageResults, out: Convergence, end: 
     pose = {k: v for k, v in out.values.items() if quantity_kind(k, units.get(k)) == "pose"}
     if not out.converged:
         return Solution(case.name, BACKEND, pose, status="not_settled",
-                        message=out.verdict() + self_locking_note(results),
+                        message=unconverged(out, end, linkage.scale) + self_locking_note(results),
                         diagnostics=diagnostics, units=units)
     left = left_assembly(float(diagnostics["pose_drift"]), linkage.scale)
     if left:
         return Solution(case.name, BACKEND, pose, status="not_settled", diagnostics=diagnostics,
                         units=units, message=left)
     return Solution(case.name, BACKEND, out.values, diagnostics=diagnostics, units=units)
+
+
+def unconverged(out: Convergence, end: DriveEnd, scale: float) -> str:
+    """Why a driven run gives no number: its last run left the assembly (at the most
+    Gauss–Seidel iterations tried, :func:`read_drive`), or a convergence check failed."""
+    left = left_assembly(end.drift, scale)
+    if not left:
+        return out.verdict()
+    if out.lead_limit:   # the lead-in could not be made long enough: that, not the solver
+        return f"{left}; {out.verdict()}"
+    tried = ", ".join(str(n) for n in ITERATIONS)
+    return (f"{left}; pymunk's Gauss–Seidel solve did not hold the linkage at any of "
+            f"{tried} iterations a step (the last run: {out.lead_steps} steps of "
+            f"{out.dt:.3g} s): it needs more iterations a step than this backend tries")
