@@ -201,11 +201,14 @@ class _Search:
         self.placed.update(links)
         self.used.update([group.joint.name] if isinstance(group, Crank)
                          else (j.name for j in group.joints))
+        # A dyad's middle joint joins two unplaced links, and it may start one once a link
+        # next to either is placed: the joints of the new links' unplaced neighbours.
         near = set()
         for link in links:
             for k in self.at_link[link]:
                 for other in self.linkage.joints[k].links:
-                    near.update(self.at_link[other])
+                    if other not in self.placed:
+                        near.update(self.at_link[other])
         for k in sorted(near):
             heapq.heappush(self.candidates, k)
 
