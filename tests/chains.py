@@ -21,13 +21,14 @@ PITCH = 140.0
 
 
 def four_bar_chain(loops: int, *, offset: tuple[float, float] = (0.0, 0.0),
-                   name: str = "chain") -> dict[str, Any]:
-    """The ``[[case]]`` table of a chain of ``loops`` four-bar loops (mm), drawn ``offset``
-    (mm) from where loop 0's ground pivot would be at the origin."""
+                   scale: float = 1.0, name: str = "chain") -> dict[str, Any]:
+    """The ``[[case]]`` table of a chain of ``loops`` four-bar loops (mm), drawn ``scale``
+    times E1's size and ``offset`` (mm) from where loop 0's ground pivot would be at the
+    origin."""
     ox, oy = offset
 
     def at(k: int, p: tuple[float, float]) -> list[float]:
-        return [PITCH * k + p[0] + ox, p[1] + oy]
+        return [scale * (PITCH * k + p[0]) + ox, scale * p[1] + oy]
 
     points = {"O0": at(0, (0.0, 0.0))}
     links: list[dict[str, Any]] = [{"name": "ground", "points": ["O0"]},

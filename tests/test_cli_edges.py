@@ -19,49 +19,25 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
 
 from mechcheck import output, sweep as sweep_module
 from mechcheck.casefile import MAX_CASE_FILE_BYTES
-from mechcheck.cli import app
 from mechcheck.executors import MAX_WORKERS_PER_CORE
 from mechcheck.output import LOCK_FILE, OutputError, write_all
 
 from .builtin import rocker_load_case
+from .test_edges import case_file, one_line, run_cli
 
-GOOD = rocker_load_case("demo")
 #: The quickest sweep: one analytic task of three poses.
 QUICK = ["-q", "-b", "analytic", "--workers", "0", "--theta12", "0:30:10"]
 #: Long enough for a cold interpreter to import mechcheck and refuse; far below a hang.
 TIMEOUT_S = 60
 
 
-def run_cli(args: list[str]) -> tuple[int, str, str]:
-    result = CliRunner().invoke(app, args)
-    return result.exit_code, result.stdout, result.stderr
-
-
 def run_process(args: list[str], timeout: float = TIMEOUT_S) -> subprocess.CompletedProcess[str]:
     """The real command line in its own process; a hang raises TimeoutExpired (and is killed)."""
     return subprocess.run([sys.executable, "-m", "mechcheck", *args], capture_output=True,
                           text=True, timeout=timeout, check=False)
-
-
-def one_line(code: int, err: str, *fragments: str) -> str:
-    """Exit 2 and exactly one line on stderr holding every fragment."""
-    lines = err.strip().splitlines()
-    assert code == 2, err
-    assert len(lines) == 1, err
-    assert lines[0].startswith("mechcheck: error: "), lines[0]
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
-    return lines[0]
-
-
-def case_file(tmp_path: Path, text: str = GOOD, name: str = "c.toml") -> Path:
-    path = tmp_path / name
-    path.write_text(text)
-    return path
 
 
 def snapshot(folder: Path) -> dict[str, bytes]:

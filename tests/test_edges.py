@@ -34,15 +34,21 @@ def run_cli(args: list[str]) -> tuple[int, str, str]:
     return result.exit_code, result.stdout, result.stderr
 
 
-def assert_refused(args: list[str], *fragments: str) -> str:
-    """Exit 2, exactly one line on stderr holding every fragment, and no traceback."""
-    code, _, err = run_cli(args)
+def one_line(code: int, err: str, *fragments: str) -> str:
+    """Exit 2 and exactly one line on stderr, the CLI's, holding every fragment."""
     lines = err.strip().splitlines()
     assert code == 2, err
     assert len(lines) == 1, err
+    assert lines[0].startswith("mechcheck: error: "), lines[0]
     for fragment in fragments:
         assert fragment in lines[0], lines[0]
     return lines[0]
+
+
+def assert_refused(args: list[str], *fragments: str) -> str:
+    """Exit 2, exactly one line on stderr holding every fragment, and no traceback."""
+    code, _, err = run_cli(args)
+    return one_line(code, err, *fragments)
 
 
 def case_file(tmp_path: Path, text: str = GOOD, name: str = "c.toml") -> Path:

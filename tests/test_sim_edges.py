@@ -15,6 +15,7 @@ from mechcheck import load_cases
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import solve
 from mechcheck.analytic.solution import FORCE_FLOOR_N
+from mechcheck.casefile import parse_cases
 from mechcheck.sim_models import linkage_motion
 from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
 from mechcheck.sim_models.mujoco import backend as mj
@@ -29,68 +30,16 @@ from mechcheck.testing import assert_solution_close
 from .builtin import builtin
 from .chains import four_bar_chain, toml_of
 
-# Seed E1 drawn at θ12 = 60° (compare/cases/linkages/seed_e1_fourbar.toml derives the points).
-E1_POINTS = {"A0": (0.0, 0.0), "B0": (140.0, 0.0), "A": (40.0, 69.2820323),
-             "B": (126.62002551, 119.25173492), "C": (49.01961837, 138.69850358),
-             "D": (129.96501913, 89.43880119)}
 FORCES = ("F_", "Q_")
 
 
-def unloaded_e1(tmp_path: Path, scale: float) -> Case:
-    """Seed E1's four-bar drawn ``scale`` times its size (mm), no load, no gravity, a 1 kg
+def unloaded_e1(scale: float) -> Case:
+    """Seed E1's four-bar drawn ``scale`` times its size, no load, no gravity, a 1 kg
     coupler mass: nothing for any joint to hold."""
-    points = "\n".join(f"{p} = [{x * scale!r}, {y * scale!r}]" for p, (x, y) in E1_POINTS.items())
-    text = f"""
-[[case]]
-name = "e1-unloaded-x{scale:g}"
-mechanism = "linkage"
-length_unit = "mm"
-[case.points]
-{points}
-[[case.links]]
-name = "ground"
-points = ["A0", "B0"]
-[[case.links]]
-name = "crank"
-points = ["A0", "A"]
-[[case.links]]
-name = "coupler"
-points = ["A", "B", "C"]
-[[case.links]]
-name = "rocker"
-points = ["B0", "B", "D"]
-[[case.joints]]
-name = "A0"
-kind = "revolute"
-links = ["ground", "crank"]
-at = "A0"
-[[case.joints]]
-name = "A"
-kind = "revolute"
-links = ["crank", "coupler"]
-at = "A"
-[[case.joints]]
-name = "B"
-kind = "revolute"
-links = ["coupler", "rocker"]
-at = "B"
-[[case.joints]]
-name = "B0"
-kind = "revolute"
-links = ["ground", "rocker"]
-at = "B0"
-[[case.drivers]]
-joint = "A0"
-rotation = 0.0
-[[case.masses]]
-link = "coupler"
-mass = 1.0
-com = "C"
-inertia = 0.001
-"""
-    path = tmp_path / f"e1_unloaded_{scale:g}.toml"
-    path.write_text(text)
-    return load_cases(path)[0]
+    table = four_bar_chain(1, scale=scale, name=f"e1-unloaded-x{scale:g}")
+    table["loads"] = []
+    table["masses"] = [{"link": "coupler1", "mass": 1.0, "com": "C1", "inertia": 0.001}]
+    return parse_cases({"case": [table]}, "e1_unloaded.toml")[0][0]
 
 
 def largest_force(values: dict[str, float], length: float) -> float:
@@ -106,7 +55,7 @@ def test_an_unloaded_four_bar_settles_to_zero_forces_in_mujoco(tmp_path: Path, s
     the 0.01 N force floor, alone and in a batched sweep, at E1's size and up to eight times
     it (at 4× and 8× its joints came to rest at 1e-19 m/s on forces that hop on a rounding
     floor of ~1e-9 N, and no stop rule fired: not_settled)."""
-    case = unloaded_e1(tmp_path, scale)
+    case = unloaded_e1(scale)
     length = case.linkage.scale
     allowed = 1e-6 * FORCE_FLOOR_N
     alone = mj.settle(case)
@@ -121,7 +70,7 @@ def test_an_unloaded_four_bar_settles_to_zero_forces_in_mujoco(tmp_path: Path, s
 def test_an_unloaded_four_bar_settles_to_zero_forces_in_pymunk(tmp_path: Path) -> None:
     """The same unloaded four-bar at four times E1's size in pymunk: zero forces (by hand)
     within the same 1e-8 N."""
-    case = unloaded_e1(tmp_path, 4.0)
+    case = unloaded_e1(4.0)
     solution = pm.settle(case)
     assert solution.status == "ok", solution.message
     assert largest_force(solution.values, case.linkage.scale) <= 1e-6 * FORCE_FLOOR_N
@@ -262,7 +211,6 @@ def test_an_unloaded_sweep_reads_nothing_beyond_the_models_rounding(tmp_path: Pa
     1e-7 N, fail the comparison: docs/limitations.md, "Unloaded linkages read rounding".)"""
     import tomllib
 
-    from mechcheck.casefile import parse_cases
     from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
     from mechcheck.sweep import LocalExecutor, plan, run_sweep
 
