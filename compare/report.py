@@ -258,6 +258,10 @@ def _pose_list(values: pd.Series, limit: int = 20) -> str:
     return ", ".join(items) + (f" … ({more} more)" if more > 0 else "")
 
 
+#: The note :func:`mechcheck.run.gated_message` appends to the reference's reason.
+GATED_NOTE = r"; not run \(the pose verdict of [^)]*\)$"
+
+
 def verdict_groups(statuses: pd.DataFrame) -> list[dict[str, str]]:
     """One case's poses without numbers, grouped by verdict and by the backends that gave it:
     which poses, and why (the first pose's reason; the status table has each pose's)."""
@@ -274,7 +278,9 @@ def verdict_groups(statuses: pd.DataFrame) -> list[dict[str, str]]:
                     & rest["theta12"].isin(poses)]
         first = mine[(mine["theta12"] == poses[0]) & (mine["backend"] == who[0])]
         reason = str(first["message"].iloc[0]) if len(first) else ""
-        if mine["message"].nunique() > 1:
+        # The gated backends repeat the reference's reason with a note: one reason.
+        reasons = mine["message"].astype(str).str.replace(GATED_NOTE, "", regex=True)
+        if reasons.nunique() > 1:
             reason += " (first pose; other poses' reasons in the status table)"
         out.append({"status": status, "backends": "every backend" if list(who) == backends
                     else ", ".join(who), "poses": _pose_list(pd.Series(poses)), "reason": reason})

@@ -235,10 +235,13 @@ def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     statuses, messages = pose_verdicts(task.case, results)
     values = dict(results.values)
     if task.backend != REFERENCE:
-        # Run behind the pose gate as `run` does: at a pose verdict (the analytic backends
-        # share the reference's pose analysis) the backend is not run and gives no number.
-        gated = np.isin(statuses, POSE_VERDICTS)
-        messages = np.where(gated, [gated_message(str(m), REFERENCE) for m in messages], messages)
+        # Behind the pose gate, as `run` runs it: at the reference's pose verdict the
+        # backend is not run, gives no number and repeats the reference's reason.
+        verdicts, reasons, _ = reference_verdicts(task.case, grid)
+        gated = np.isin(verdicts, POSE_VERDICTS)
+        statuses = np.where(gated, np.array(verdicts, dtype=object), statuses)
+        messages = np.where(gated, np.array([gated_message(r, REFERENCE) for r in reasons],
+                                            dtype=object), messages)
         values = {q: np.where(gated, np.nan, v) for q, v in values.items()}
     statuses, messages = _non_finite_errors(task.backend, statuses, messages, values)
     # A pose with a verdict keeps its pose (as `run`'s Solution does), no force.
