@@ -12,10 +12,11 @@ R(φ)·P0 + t. The ground (``"ground"``) never moves.
 
 Examples
 --------
+>>> from mechcheck.analytic.joint_kinds import REVOLUTE
 >>> rocker = Linkage(
 ...     points={"O": (0.0, 0.0), "A": (1.0, 0.0)},
 ...     links=(Link("ground", ("O",)), Link("arm", ("O", "A"))),
-...     joints=(Joint("O", "revolute", ("ground", "arm"), "O"),),
+...     joints=(Joint("O", REVOLUTE, ("ground", "arm"), "O"),),
 ...     drivers=(Driver("O", 0.5),),
 ... )
 >>> rocker.moving_links, rocker.gruebler, rocker.dof
@@ -24,17 +25,17 @@ Examples
 
 from __future__ import annotations
 
-import math
 import re
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mechcheck.analytic import linalg
+from mechcheck.analytic.joint_kinds import KINDS, JointKind
 from mechcheck.analytic.linalg import Batched
 from mechcheck.analytic.linkage_kinematics import (
     constraint_system,
@@ -63,7 +64,6 @@ if TYPE_CHECKING:
     from mechcheck.analytic.linkage_assur import AssurPlan
 
 IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
-JointKind = Literal["revolute", "prismatic"]
 
 
 def _identifier(name: object, key: str) -> str:
@@ -74,8 +74,6 @@ def _identifier(name: object, key: str) -> str:
 
 
 def _point(value: Vec2, key: str) -> Vec2:
-    if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
-        raise CaseError(f"must be a pair [x, y], got {value!r}", key=key)
     return pair(value, key)
 
 
@@ -96,7 +94,8 @@ class Link:
 
 @dataclass(frozen=True)
 class Joint:
-    """A revolute or prismatic joint between ``links[0]`` and ``links[1]`` at point ``at``.
+    """A joint of some kind (:mod:`.joint_kinds`) between ``links[0]`` and ``links[1]`` at
+    point ``at``; a kind given by its name (as a case file writes it) is held as its value.
 
     Prismatic: ``axis`` is the sliding direction at the drawn pose, fixed in ``links[0]``
     (a unit vector after construction); ``at`` is carried by ``links[1]``.
@@ -107,6 +106,10 @@ class Joint:
     links: tuple[str, str]
     at: str
     axis: Vec2 | None = None
+
+    def __post_init__(self) -> None:
+        if isinstance(self.kind, str) and self.kind in KINDS:
+            object.__setattr__(self, "kind", KINDS[self.kind])
 
 
 @dataclass(frozen=True)
@@ -257,8 +260,9 @@ class Linkage:
         _identifier(joint.name, f"{key}.name")
         if self._joint_name_counts[joint.name] > 1:
             raise CaseError(f"duplicate joint name {joint.name!r}", key=f"{key}.name")
-        if joint.kind not in ("revolute", "prismatic"):
-            raise CaseError(f"must be 'revolute' or 'prismatic', got {joint.kind!r}", key=f"{key}.kind")
+        if not isinstance(joint.kind, JointKind):
+            names = " or ".join(repr(name) for name in KINDS)
+            raise CaseError(f"must be {names}, got {joint.kind!r}", key=f"{key}.kind")
         links = self._links_by_name
         if len(joint.links) != 2 or joint.links[0] == joint.links[1]:
             raise CaseError("must name two different links", key=f"{key}.links")
@@ -267,25 +271,7 @@ class Linkage:
                 raise CaseError(f"unknown link {name!r}", key=f"{key}.links")
         if joint.at not in self.points:
             raise CaseError(f"unknown point {joint.at!r}", key=f"{key}.at")
-        first, second = (links[name] for name in joint.links)
-        if joint.kind == "revolute" and joint.axis is not None:
-            raise CaseError("a revolute joint has no axis: only a prismatic joint slides along one",
-                            key=f"{key}.axis")
-        if joint.kind == "revolute":
-            if joint.at not in first.points or joint.at not in second.points:
-                raise CaseError(f"both links must carry point {joint.at!r} (a revolute joint "
-                                "pins them there)", key=f"{key}.at")
-            return joint
-        if joint.at not in second.points:
-            raise CaseError(f"links[1] ({second.name!r}) must carry point {joint.at!r}",
-                            key=f"{key}.at")
-        if joint.axis is None:
-            raise CaseError("a prismatic joint needs its sliding direction", key=f"{key}.axis")
-        ax, ay = _point(joint.axis, f"{key}.axis")
-        length = math.hypot(ax, ay)
-        if length == 0.0:
-            raise CaseError("must not be zero", key=f"{key}.axis")
-        return Joint(joint.name, joint.kind, joint.links, joint.at, (ax / length, ay / length))
+        return joint.kind.checked(joint, links, key)
 
     def _check_points_joined(self) -> None:
         """Every pair of links carrying one point is joined there, directly or through
@@ -296,7 +282,7 @@ class Linkage:
                 carried_by.setdefault(point, []).append(link.name)
         pinned_at: dict[str, list[tuple[str, str]]] = {}
         for j in self.joints:
-            if j.kind == "revolute":
+            if j.kind.pins:
                 pinned_at.setdefault(j.at, []).append(j.links)
         for name in self.points:
             carriers = carried_by.get(name, [])
@@ -323,12 +309,13 @@ class Linkage:
             if d.joint in seen:
                 raise CaseError(f"joint {d.joint!r} is driven twice", key=f"{key}.joint")
             seen.add(d.joint)
-            # The file's key: a revolute joint is driven by a rotation, a prismatic one by a
-            # displacement; both bounded, as the pose is reached by continuation.
-            if joints[d.joint].kind == "revolute":
-                driver_rotation(d.value, f"{key}.rotation")
+            # The file's key: a joint that turns is driven by a rotation, one that slides by
+            # a displacement; both bounded, as the pose is reached by continuation.
+            kind = joints[d.joint].kind
+            if kind.rotates:
+                driver_rotation(d.value, f"{key}.{kind.driver_key}")
             else:
-                driver_displacement(d.value, self.scale, f"{key}.displacement")
+                driver_displacement(d.value, self.scale, f"{key}.{kind.driver_key}")
             for name in ("velocity", "acceleration"):
                 finite(getattr(d, name), f"{key}.{name}")
             if isinstance(d.sense, bool) or d.sense not in (-1, 0, 1):
@@ -382,7 +369,7 @@ class Linkage:
             if isinstance(s, LinearSpring):
                 self._check_linear_spring(s, key)
             elif isinstance(s, TorsionSpring):
-                if s.joint not in joints or joints[s.joint].kind != "revolute":
+                if s.joint not in joints or not joints[s.joint].kind.pins:
                     raise CaseError(f"must name a revolute joint, got {s.joint!r}", key=f"{key}.joint")
                 nonnegative(s.stiffness, f"{key}.stiffness")
                 bounded_angle(s.free_rotation, f"{key}.free_rotation")
@@ -424,7 +411,7 @@ class Linkage:
             for name, value in getattr(f, table).items():
                 if name not in joints:
                     raise CaseError(f"unknown joint {name!r}", key=f"friction.{table}.{name}")
-                if table == "pin_radius" and joints[name].kind != "revolute":
+                if table == "pin_radius" and not joints[name].kind.pins:
                     raise CaseError("a pin radius belongs to a revolute joint",
                                     key=f"friction.{table}.{name}")
                 nonnegative(value, f"friction.{table}.{name}")
@@ -581,9 +568,7 @@ class Linkage:
         f = self.friction
         if f is None:
             return False
-        pins = any(f.coefficient(n) * r > 0.0 for n, r in f.pin_radius.items())
-        slides = any(j.kind == "prismatic" and f.coefficient(j.name) > 0.0 for j in self.joints)
-        return pins or slides
+        return any(j.kind.coulomb_coefficient(f, j) > 0.0 for j in self.joints)
 
     @cached_property
     def scale(self) -> float:

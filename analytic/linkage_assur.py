@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from mechcheck.analytic.joint_kinds import REVOLUTE
 from mechcheck.analytic.values import GROUND, Vec2
 
 if TYPE_CHECKING:
@@ -134,7 +135,7 @@ def assur_plan(linkage: Linkage) -> AssurPlan | None:
     placed can start a new dyad, so each is looked at again only then (a heap of candidates
     in file order): the plan of a chain of n loops costs O(n log n), not O(n²)."""
     if (len(linkage.drivers) != 1 or linkage.dof != 1 or linkage.redundant
-            or any(j.kind != "revolute" for j in linkage.joints)):
+            or any(j.kind is not REVOLUTE for j in linkage.joints)):
         return None
     search = _Search(linkage)
     groups: list[Group] = []

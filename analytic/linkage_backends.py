@@ -44,12 +44,10 @@ def quantity_units(linkage: Linkage) -> dict[str, str]:
     for link in linkage.moving_links:
         units[f"phi_{link}"] = "deg"
     for joint in linkage.joints:
-        units[f"F_{joint.name}_x"] = units[f"F_{joint.name}_y"] = "N"
-        units[f"q_{joint.name}"] = "deg" if joint.kind == "revolute" else "m"
-        if joint.kind == "prismatic":
-            units[f"M_{joint.name}"] = "N*m"
+        units |= joint.kind.quantities(joint)
+        units[f"q_{joint.name}"] = joint.kind.coordinate_unit
     for driver in linkage.drivers:
-        units[f"Q_{driver.joint}"] = "N*m" if linkage.joint(driver.joint).kind == "revolute" else "N"
+        units[f"Q_{driver.joint}"] = linkage.joint(driver.joint).kind.effort_unit
     for spring in linkage.springs:
         units[f"S_{spring.name}"] = "N" if isinstance(spring, LinearSpring) else "N*m"
     return units
@@ -61,11 +59,8 @@ def lock_message(linkage: Linkage, fraction: float, target: Array | None = None)
     parts = []
     values = [d.value for d in linkage.drivers] if target is None else target.tolist()
     for driver, full in zip(linkage.drivers, values, strict=True):
-        value = fraction * full
-        if linkage.joint(driver.joint).kind == "revolute":
-            parts.append(f"rotation {math.degrees(value):.6g}° of {driver.joint}")
-        else:
-            parts.append(f"displacement {value:.6g} m of {driver.joint}")
+        kind = linkage.joint(driver.joint).kind
+        parts.append(f"{kind.describe(fraction * full)} of {driver.joint}")
     return "the linkage locks at " + ", ".join(parts) + " on the way from the drawn pose"
 
 

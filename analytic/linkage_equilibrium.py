@@ -259,7 +259,7 @@ def _runaway(units: _Units, q: Array) -> str:
     linkage = units.linkage
     pose = _static_pose(linkage, q[None, :], units.values[None, :])
     travel = {joint.name: abs(float(pose.joint_coordinate(joint)[0][0]))
-              for joint in linkage.joints if joint.kind == "prismatic"}
+              for joint in linkage.joints if not joint.kind.rotates}
     far = max(travel, key=lambda name: travel[name], default="")
     return far if far and not travel[far] <= RUNAWAY * linkage.scale else ""
 

@@ -36,14 +36,8 @@ from mechcheck.analytic.linkage_kinematics import (
     solve_batched,
     solve_pose,
 )
-from mechcheck.analytic.linkage_loads import (
-    ForceLayout,
-    cross,
-    joint_frame,
-    known_vector,
-    spring_force,
-    undirected_springs,
-)
+from mechcheck.analytic.linkage_loads import known_vector, spring_force, undirected_springs
+from mechcheck.analytic.rigid import ForceLayout
 
 #: Above this condition number of the scaled equilibrium matrix the pose is singular and
 #: its forces withheld (the same line as the closed-form presets, for the same reason).
@@ -56,60 +50,23 @@ FRICTION_ITERATIONS = 50
 REVERSAL_RTOL = 1e-12
 
 
-def _force_on(m: Batched, layout: ForceLayout, link: str, col: int, direction: Array,
-              point: Array, sign: float) -> None:
-    """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
-    r = layout.row(link)
-    if r < 0:
-        return
-    m.add(r, col, sign * direction[:, 0])
-    m.add(r + 1, col, sign * direction[:, 1])
-    m.add(r + 2, col, sign * cross(point, direction))
-
-
-def _couple_on(m: Batched, layout: ForceLayout, link: str, col: int, sign: float) -> None:
-    r = layout.row(link)
-    if r >= 0:
-        m.add(r + 2, col, sign)
-
-
 def coefficient_matrix(pose: LinkagePose) -> Array:
-    """K (N, 3n, 2j + d): how each unknown enters each link's equilibrium."""
+    """K (N, 3n, unknowns): how each unknown enters each link's equilibrium."""
     return coefficient_entries(pose).dense()
 
 
 def coefficient_entries(pose: LinkagePose) -> Batched:
-    """K as entries (:class:`~.linalg.Batched`): a few per joint, whatever the linkage's size."""
+    """K as entries (:class:`~.linalg.Batched`): each joint's reactions as its kind puts them
+    in, then each driver's effort, a few entries per joint whatever the linkage's size."""
     linkage = pose.linkage
     layout = ForceLayout(linkage)
-    n = pose.q.shape[0]
-    k = Batched(layout.rows, layout.columns, n)
-    ones = np.ones(n)
-    ex = np.stack([ones, 0 * ones], axis=1)
-    ey = np.stack([0 * ones, ones], axis=1)
-    frames = {j.name: joint_frame(pose, j) for j in linkage.joints}
+    k = Batched(layout.rows, layout.columns, pose.q.shape[0])
+    frames = {j.name: j.kind.frame(pose, j) for j in linkage.joints}
     for joint in linkage.joints:
-        i, j = joint.links
-        c0, c1 = layout.joint_columns(joint)
-        frame = frames[joint.name]
-        for link, sign in ((j, 1.0), (i, -1.0)):
-            if joint.kind == "revolute":
-                _force_on(k, layout, link, c0, ex, frame.point, sign)
-                _force_on(k, layout, link, c1, ey, frame.point, sign)
-            else:
-                assert frame.n is not None
-                _force_on(k, layout, link, c0, frame.n, frame.point, sign)
-                _couple_on(k, layout, link, c1, sign)
+        joint.kind.react(k, layout, joint, frames[joint.name])
     for index, driver in enumerate(linkage.drivers):
         joint = linkage.joint(driver.joint)
-        col = layout.driver_column(index)
-        frame = frames[joint.name]
-        for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
-            if joint.kind == "revolute":
-                _couple_on(k, layout, link, col, sign)
-            else:
-                assert frame.u is not None
-                _force_on(k, layout, link, col, frame.u, frame.point, sign)
+        joint.kind.exert(k, layout, layout.driver_column(index), joint, frames[joint.name])
     return k
 
 
@@ -134,10 +91,7 @@ def coulomb_terms(pose: LinkagePose) -> list[CoulombTerm]:
     moving = solve_pose(linkage, pose.drivers, senses, np.zeros_like(senses))
     terms = []
     for joint in linkage.joints:
-        if joint.kind == "revolute":
-            coefficient = f.coefficient(joint.name) * f.pin_radius.get(joint.name, 0.0)
-        else:
-            coefficient = f.coefficient(joint.name)
+        coefficient = joint.kind.coulomb_coefficient(f, joint)
         if coefficient <= 0.0:
             continue
         _, rate, _ = moving.joint_coordinate(joint)
@@ -145,47 +99,21 @@ def coulomb_terms(pose: LinkagePose) -> list[CoulombTerm]:
         spin = np.abs(moving.qdot).copy()
         spin[:, 0::3] /= linkage.scale
         spin[:, 1::3] /= linkage.scale
-        speed = spin.max(axis=1) * (1.0 if joint.kind == "revolute" else linkage.scale)
+        speed = spin.max(axis=1) * linkage.scale / joint.kind.length(linkage.scale)
         sense = np.where(np.abs(rate) > REVERSAL_RTOL * speed, np.sign(rate), 0.0)
         terms.append(CoulombTerm(joint, coefficient, sense))
     return terms
 
 
 def friction_residual(pose: LinkagePose, terms: list[CoulombTerm], x: Array) -> tuple[Array, Array]:
-    """φ(x) (N, 3n) and ∂φ/∂x (N, 3n, 2j + d) of the Coulomb terms."""
-    linkage = pose.linkage
-    layout = ForceLayout(linkage)
+    """φ(x) (N, 3n) and ∂φ/∂x (N, 3n, unknowns) of the Coulomb terms, each as its joint's
+    kind applies it."""
+    layout = ForceLayout(pose.linkage)
     n = x.shape[0]
     phi = np.zeros((n, layout.rows))
     dphi = np.zeros((n, layout.rows, layout.columns))
     for t in terms:
-        i, j = t.joint.links
-        c0, c1 = layout.joint_columns(t.joint)
-        if t.joint.kind == "revolute":
-            mag = np.hypot(x[:, c0], x[:, c1])
-            safe = np.where(mag > 0.0, mag, 1.0)
-            moment = -t.coefficient * t.sense * mag
-            grad = (-t.coefficient * t.sense)[:, None] * (x[:, [c0, c1]] / safe[:, None])
-            for link, sign in ((j, 1.0), (i, -1.0)):
-                r = layout.row(link)
-                if r < 0:
-                    continue
-                phi[:, r + 2] += sign * moment
-                dphi[:, r + 2, c0] += sign * grad[:, 0]
-                dphi[:, r + 2, c1] += sign * grad[:, 1]
-            continue
-        frame = joint_frame(pose, t.joint)
-        assert frame.u is not None
-        along = -t.coefficient * t.sense * np.abs(x[:, c0])
-        d_along = -t.coefficient * t.sense * np.sign(x[:, c0])
-        for link, sign in ((j, 1.0), (i, -1.0)):
-            r = layout.row(link)
-            if r < 0:
-                continue
-            lever = cross(frame.point, frame.u)
-            for row_offset, coef in ((0, frame.u[:, 0]), (1, frame.u[:, 1]), (2, lever)):
-                phi[:, r + row_offset] += sign * coef * along
-                dphi[:, r + row_offset, c0] += sign * coef * d_along
+        t.joint.kind.coulomb(pose, layout, t.joint, t.coefficient, t.sense, x, phi, dphi)
     return phi, dphi
 
 
@@ -244,11 +172,9 @@ def condition(pose: LinkagePose, k: Batched | Array) -> Array:
     layout = ForceLayout(linkage)
     cols = np.ones(layout.columns)
     for joint in linkage.joints:
-        if joint.kind == "prismatic":
-            cols[layout.joint_columns(joint)[1]] *= linkage.scale
+        cols[list(layout.joint_columns(joint))] = joint.kind.reaction_lengths(linkage.scale)
     for index, driver in enumerate(linkage.drivers):
-        if linkage.joint(driver.joint).kind == "revolute":
-            cols[layout.driver_column(index)] *= linkage.scale
+        cols[layout.driver_column(index)] = linkage.joint(driver.joint).kind.length(linkage.scale)
     rows = np.ones(layout.rows)
     rows[2::3] = 1.0 / linkage.scale
     first = entries.scaled(np.broadcast_to(rows, (entries.poses, rows.size)), cols)
@@ -346,29 +272,19 @@ def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
 
 
 def force_quantities(pose: LinkagePose, x: Array, terms: list[CoulombTerm]) -> dict[str, Array]:
-    """F_<joint>_x/_y (prismatic: N·n plus the friction and viscous force along the axis),
-    M_<joint>, Q_<joint> and S_<spring>, from the unknowns x."""
+    """Each joint's reactions as its kind reports them (a slide's force with its friction
+    along the axis), Q_<joint> and S_<spring>, from the unknowns x."""
     linkage = pose.linkage
     layout = ForceLayout(linkage)
-    sliding = {t.joint.name: t for t in terms if t.joint.kind == "prismatic"}
-    f = linkage.friction
+    coulomb = {t.joint.name: t for t in terms}
     out: dict[str, Array] = {}
     for joint in linkage.joints:
-        c0, c1 = layout.joint_columns(joint)
-        if joint.kind == "revolute":
-            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = x[:, c0], x[:, c1]
-            continue
-        frame = joint_frame(pose, joint)
-        assert frame.u is not None and frame.n is not None
+        columns = list(layout.joint_columns(joint))
         along = np.zeros(x.shape[0])
-        if joint.name in sliding:
-            t = sliding[joint.name]
-            along = along - t.coefficient * t.sense * np.abs(x[:, c0])
-        if f is not None and f.viscous.get(joint.name, 0.0):
-            along = along - f.viscous[joint.name] * pose.joint_coordinate(joint)[1]
-        force = x[:, c0][:, None] * frame.n + along[:, None] * frame.u
-        out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = force[:, 0], force[:, 1]
-        out[f"M_{joint.name}"] = x[:, c1]
+        if joint.name in coulomb:   # the friction force along its axis (0 at a pin)
+            t = coulomb[joint.name]
+            along = joint.kind.sliding_friction(t.coefficient, t.sense, x[:, columns])
+        out |= joint.kind.reported(pose, joint, x[:, columns], along)
     for index, driver in enumerate(linkage.drivers):
         out[f"Q_{driver.joint}"] = x[:, layout.driver_column(index)]
     for spring in linkage.springs:

@@ -2,12 +2,10 @@
 vectorised over poses.
 
 Each moving link k has coordinates (t_x, t_y, φ): its rigid displacement from the drawn
-pose, so a point P0 it carries is at R(φ)·P0 + t. The constraints are
-
-- revolute joint (i, j) at P0: p_i(P0) − p_j(P0) = 0 (two rows);
-- prismatic joint (i, j) at A0 along u0 (normal n0): φ_j − φ_i = 0 and
-  n_i·(p_j(A0) − p_i(A0)) = 0, n_i = R(φ_i)·n0 (two rows);
-- driver on a revolute joint: φ_j − φ_i = q; on a prismatic one: u_i·(p_j(A0) − p_i(A0)) = q.
+pose, so a point P0 it carries is at R(φ)·P0 + t (:mod:`.rigid`). Each joint's kind
+(:mod:`.joint_kinds`) writes its constraint rows, and a driver's row on it: a pin's
+p_i(P0) − p_j(P0) = 0 and φ_j − φ_i = q, a slide's φ_j − φ_i = 0, n_i·(p_j − p_i) = 0
+and u_i·(p_j − p_i) = q.
 
 The pose is the one reached **continuously from the drawn pose**: every driver moves from
 0 to its value along s ∈ [0, 1] in small steps, each closed by Newton's method from the
@@ -28,12 +26,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic import linalg
 from mechcheck.analytic.linalg import Batched
-from mechcheck.analytic.values import GROUND
+from mechcheck.analytic.rigid import Array, Constraints, Layout, Motion, perp, rotate
 
 if TYPE_CHECKING:
     from mechcheck.analytic.linkage import Joint, Linkage
-
-Array = NDArray[np.float64]
 
 #: Largest driver step of the continuation: 2° of rotation, or 2 % of the linkage's size
 #: of displacement. Small enough that Newton, started from the last pose, converges in a
@@ -45,36 +41,6 @@ CLOSURE_RTOL = 1e-13
 NEWTON_ITERATIONS = 25
 #: Bisection steps on s when locating where a linkage locks: 2⁻⁴⁰ of the driver's travel.
 LOCK_BISECTIONS = 40
-
-
-def perp(v: Array) -> Array:
-    """v turned +90°."""
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
-
-
-def rotate(angle: Array, v: Array) -> Array:
-    """R(angle)·v for arrays of angles (N,) and a vector (2,) or vectors (N, 2)."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where each moving link's three coordinates sit in q, and the constraint rows."""
-
-    linkage: Linkage
-
-    def index(self, link: str) -> int:
-        """Column of the link's t_x (t_y and φ follow); −1 for the ground."""
-        return -1 if link == GROUND else 3 * self.linkage.link_number[link]
-
-    @property
-    def size(self) -> int:
-        return 3 * len(self.linkage.moving_links)
-
-    @property
-    def rows(self) -> int:
-        return 2 * len(self.linkage.joints) + len(self.linkage.drivers)
 
 
 @dataclass(frozen=True)
@@ -127,52 +93,14 @@ class LinkagePose:
 
     def joint_coordinate(self, joint: Joint) -> tuple[Array, Array, Array]:
         """q, q̇, q̈ of a joint: relative rotation (rad) or displacement along the axis (m)."""
-        i, j = joint.links
-        if joint.kind == "revolute":
-            (pi, wi, ai), (pj, wj, aj) = self.angle(i), self.angle(j)
-            return pj - pi, wj - wi, aj - ai
-        a0 = self.linkage.points[joint.at]
-        assert joint.axis is not None
-        phi_i, w_i, a_i = self.angle(i)
-        u = rotate(phi_i, np.array(joint.axis))
-        pj, vj, accj = self.point(j, a0)
-        pi, vi, acci = self.point(i, a0)
-        d, dd, ddd = pj - pi, vj - vi, accj - acci
-        du = w_i[:, None] * perp(u)
-        ddu = a_i[:, None] * perp(u) - (w_i**2)[:, None] * u
-        return (_dot(u, d), _dot(du, d) + _dot(u, dd),
-                _dot(ddu, d) + 2 * _dot(du, dd) + _dot(u, ddd))
+        return joint.kind.coordinate(self, joint)
 
     @property
     def assembled(self) -> NDArray[np.bool_]:
         return np.all(np.isfinite(self.q), axis=1)
 
 
-def _dot(a: Array, b: Array) -> Array:
-    return np.einsum("...i,...i->...", a, b)
-
-
 # -- constraints ------------------------------------------------------------------------
-
-def _link_point(layout: Layout, q: Array, link: str, p0: Array) -> tuple[Array, Array]:
-    """(position (N, 2), ∂position/∂φ (N, 2)) of a drawn point on ``link`` at coordinates q."""
-    k = layout.index(link)
-    if k < 0:
-        return np.broadcast_to(p0, (q.shape[0], 2)).copy(), np.zeros((q.shape[0], 2))
-    r = rotate(q[:, k + 2], p0)
-    return q[:, k:k + 2] + r, perp(r)
-
-
-def _put(jac: Batched, row: int, layout: Layout, link: str, d_t: Array | None,
-         d_phi: Array | float) -> None:
-    """Add ∂(row)/∂(t_x, t_y, φ) of ``link`` (nothing for the ground); ``d_t`` None: zero."""
-    k = layout.index(link)
-    if k >= 0:
-        if d_t is not None:
-            jac.add(row, k, d_t[:, 0])
-            jac.add(row, k + 1, d_t[:, 1])
-        jac.add(row, k + 2, d_phi)
-
 
 def residual_and_jacobian(linkage: Linkage, q: Array, targets: Array, *,
                           drivers: bool = True) -> tuple[Array, Array]:
@@ -185,122 +113,38 @@ def residual_and_jacobian(linkage: Linkage, q: Array, targets: Array, *,
 def constraint_system(linkage: Linkage, q: Array, targets: Array, *,
                       drivers: bool = True) -> tuple[Array, Batched]:
     """Φ (N, m) and J = ∂Φ/∂q as entries (:class:`~.linalg.Batched`), as
-    :func:`residual_and_jacobian`."""
+    :func:`residual_and_jacobian`: each joint's rows as its kind writes them, then each
+    driver's row on its joint."""
     layout = Layout(linkage)
     n = q.shape[0]
-    rows = layout.rows if drivers else 2 * len(linkage.joints)
-    phi = np.zeros((n, rows))
-    jac = Batched(rows, layout.size, n)
+    rows = layout.rows if drivers else layout.joint_rows
+    c = Constraints(layout, q, np.zeros((n, rows)), Batched(rows, layout.size, n))
     row = 0
     for joint in linkage.joints:
-        i, j = joint.links
-        p0 = np.array(linkage.points[joint.at])
-        if joint.kind == "revolute":
-            pi, dpi = _link_point(layout, q, i, p0)
-            pj, dpj = _link_point(layout, q, j, p0)
-            phi[:, row:row + 2] = pi - pj
-            for c in range(2):
-                ki, kj = layout.index(i), layout.index(j)
-                if ki >= 0:
-                    jac.add(row + c, ki + c, 1.0)
-                    jac.add(row + c, ki + 2, dpi[:, c])
-                if kj >= 0:
-                    jac.add(row + c, kj + c, -1.0)
-                    jac.add(row + c, kj + 2, -dpj[:, c])
-        else:
-            _angle_lock(layout, q, jac, phi, row, i, j)
-            _slide_row(layout, q, jac, phi, row + 1, joint, linkage, normal=True)
-        row += 2
-    joints = {jt.name: jt for jt in linkage.joints}
+        joint.kind.constrain(c, joint, row)
+        row += joint.kind.rows
     for k, driver in enumerate(linkage.drivers if drivers else ()):
-        joint = joints[driver.joint]
-        i, j = joint.links
-        if joint.kind == "revolute":
-            _angle_lock(layout, q, jac, phi, row, i, j)
-        else:
-            _slide_row(layout, q, jac, phi, row, joint, linkage, normal=False)
-        phi[:, row] -= targets[:, k]
+        joint = linkage.joint(driver.joint)
+        joint.kind.drive(c, joint, row)
+        c.phi[:, row] -= targets[:, k]
         row += 1
-    return phi, jac
-
-
-def _angle_lock(layout: Layout, q: Array, jac: Batched, phi: Array, row: int, i: str,
-                j: str) -> None:
-    """Row φ_j − φ_i."""
-    for link, sign in ((j, 1.0), (i, -1.0)):
-        k = layout.index(link)
-        if k >= 0:
-            phi[:, row] += sign * q[:, k + 2]
-        _put(jac, row, layout, link, None, sign)
-
-
-def _slide_row(layout: Layout, q: Array, jac: Batched, phi: Array, row: int, joint: Joint,
-               linkage: Linkage, *, normal: bool) -> None:
-    """Row w_i·(p_j(A0) − p_i(A0)), w = n (the slide's normal) or u (its axis), fixed in i."""
-    i, j = joint.links
-    assert joint.axis is not None
-    a0 = np.array(linkage.points[joint.at])
-    w0 = perp(np.array(joint.axis)) if normal else np.array(joint.axis)
-    ki = layout.index(i)
-    phi_i = q[:, ki + 2] if ki >= 0 else np.zeros(q.shape[0])
-    w = rotate(phi_i, w0)
-    pj, dpj = _link_point(layout, q, j, a0)
-    pi, dpi = _link_point(layout, q, i, a0)
-    d = pj - pi
-    phi[:, row] += _dot(w, d)
-    _put(jac, row, layout, j, w, _dot(w, dpj))
-    _put(jac, row, layout, i, -w, _dot(perp(w), d) - _dot(w, dpi))
+    return c.phi, c.jac
 
 
 def quadratic_terms(linkage: Linkage, q: Array, qdot: Array) -> Array:
     """J̇·q̇ (N, m): the part of Φ̈ that does not hold q̈, for J·q̈ = a − J̇·q̇."""
     layout = Layout(linkage)
-    n = q.shape[0]
-    out = np.zeros((n, layout.rows))
-
-    def spin(link: str) -> Array:
-        k = layout.index(link)
-        return qdot[:, k + 2] if k >= 0 else np.zeros(n)
-
-    def rotated(link: str, p0: Array) -> Array:
-        k = layout.index(link)
-        return rotate(q[:, k + 2], p0) if k >= 0 else np.zeros((n, 2))
-
-    def velocity(link: str, p0: Array) -> Array:
-        k = layout.index(link)
-        return qdot[:, k:k + 2] + spin(link)[:, None] * perp(rotated(link, p0)) if k >= 0 \
-            else np.zeros((n, 2))
-
-    def slide(joint: Joint, w0: Array) -> Array:
-        i, j = joint.links
-        a0 = np.array(linkage.points[joint.at])
-        ki = layout.index(i)
-        w = rotate(q[:, ki + 2], w0) if ki >= 0 else np.broadcast_to(w0, (n, 2))
-        pos_j = _link_point(layout, q, j, a0)[0]
-        pos_i = _link_point(layout, q, i, a0)[0]
-        d = pos_j - pos_i
-        dd = velocity(j, a0) - velocity(i, a0)
-        wi = spin(i)
-        ddd = -(spin(j) ** 2)[:, None] * rotated(j, a0) + (wi**2)[:, None] * rotated(i, a0)
-        return (-(wi**2) * _dot(w, d) + 2 * wi * _dot(perp(w), dd) + _dot(w, ddd))
-
+    m = Motion(layout, q, qdot)
+    out = np.zeros((q.shape[0], layout.rows))
     row = 0
     for joint in linkage.joints:
-        i, j = joint.links
-        if joint.kind == "revolute":
-            p0 = np.array(linkage.points[joint.at])
-            out[:, row:row + 2] = (-(spin(i) ** 2)[:, None] * rotated(i, p0)
-                                   + (spin(j) ** 2)[:, None] * rotated(j, p0))
-        else:
-            assert joint.axis is not None
-            out[:, row + 1] = slide(joint, perp(np.array(joint.axis)))
-        row += 2
-    joints = {jt.name: jt for jt in linkage.joints}
+        joint.kind.accelerate(m, joint, out, row)
+        row += joint.kind.rows
     for driver in linkage.drivers:
-        joint = joints[driver.joint]
-        if joint.kind == "prismatic":
-            assert joint.axis is not None
-            out[:, row] = slide(joint, np.array(joint.axis))
+        joint = linkage.joint(driver.joint)
+        terms = joint.kind.drive_acceleration(m, joint)
+        if terms is not None:
+            out[:, row] = terms
         row += 1
     return out
 
@@ -332,10 +176,9 @@ def unit_scales(linkage: Linkage, *, drivers: bool = True) -> tuple[Array, Array
     cols[2::3] = 1.0 / size
     rows: list[float] = []
     for joint in linkage.joints:
-        rows += [1.0, 1.0] if joint.kind == "revolute" else [size, 1.0]
+        rows += joint.kind.row_lengths(size)
     if drivers:
-        kinds = {j.name: j.kind for j in linkage.joints}
-        rows += [size if kinds[d.joint] == "revolute" else 1.0 for d in linkage.drivers]
+        rows += [linkage.joint(d.joint).kind.length(size) for d in linkage.drivers]
     return np.array(rows), cols
 
 
@@ -369,7 +212,7 @@ def _newton(linkage: Linkage, q: Array, targets: Array) -> tuple[Array, NDArray[
 def _step_size(linkage: Linkage, driver: int) -> float:
     """The continuation's largest step of a driver (rad or m)."""
     kind = linkage.joint(linkage.drivers[driver].joint).kind
-    return STEP_ROTATION if kind == "revolute" else STEP_DISPLACEMENT * linkage.scale
+    return STEP_ROTATION if kind.rotates else STEP_DISPLACEMENT * linkage.scale
 
 
 def _steps(linkage: Linkage, values: Array) -> int:

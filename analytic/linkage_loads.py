@@ -6,77 +6,12 @@ forces whose equilibrium the free coordinates seek (:mod:`.linkage_equilibrium`)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, TorsionSpring
-from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, perp, rotate
-from mechcheck.analytic.values import GROUND
-
-
-def cross(r: Array, f: Array) -> Array:
-    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
-
-
-@dataclass(frozen=True)
-class ForceLayout:
-    """Columns of the unknowns and rows of the links."""
-
-    linkage: Linkage
-
-    def row(self, link: str) -> int:
-        """First of the link's three rows; −1 for the ground (no equations)."""
-        return -1 if link == GROUND else 3 * self.linkage.link_number[link]
-
-    def joint_columns(self, joint: Joint) -> tuple[int, int]:
-        k = self.linkage.joint_number[joint.name]
-        return 2 * k, 2 * k + 1
-
-    def driver_column(self, index: int) -> int:
-        return 2 * len(self.linkage.joints) + index
-
-    @property
-    def rows(self) -> int:
-        return 3 * len(self.linkage.moving_links)
-
-    @property
-    def columns(self) -> int:
-        return 2 * len(self.linkage.joints) + len(self.linkage.drivers)
-
-
-@dataclass(frozen=True)
-class JointFrame:
-    """A joint's point (current) and, for a prismatic joint, its axis u and normal n."""
-
-    point: Array
-    u: Array | None
-    n: Array | None
-
-
-def joint_frame(pose: LinkagePose, joint: Joint) -> JointFrame:
-    point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
-    if joint.kind == "revolute":
-        return JointFrame(point, None, None)
-    assert joint.axis is not None
-    u = rotate(pose.angle(joint.links[0])[0], np.array(joint.axis))
-    return JointFrame(point, u, perp(u))
-
-
-def add_force(b: Array, layout: ForceLayout, link: str, force: Array, point: Array) -> None:
-    r = layout.row(link)
-    if r < 0:
-        return
-    b[:, r] += force[:, 0]
-    b[:, r + 1] += force[:, 1]
-    b[:, r + 2] += cross(point, force)
-
-
-def add_couple(b: Array, layout: ForceLayout, link: str, torque: Array) -> None:
-    r = layout.row(link)
-    if r >= 0:
-        b[:, r + 2] += torque
+from mechcheck.analytic.linkage import LinearSpring, Linkage, TorsionSpring
+from mechcheck.analytic.linkage_kinematics import LinkagePose
+from mechcheck.analytic.rigid import Array, ForceLayout
 
 
 def known_vector(pose: LinkagePose) -> Array:
@@ -87,13 +22,13 @@ def known_vector(pose: LinkagePose) -> Array:
     b = np.zeros((n, layout.rows))
     for load in linkage.loads:
         at = pose.point(load.link, load.at)[0]
-        add_force(b, layout, load.link, np.broadcast_to(np.array(load.force), (n, 2)), at)
-        add_couple(b, layout, load.link, np.full(n, load.torque))
+        layout.add_force(b, load.link, np.broadcast_to(np.array(load.force), (n, 2)), at)
+        layout.add_couple(b, load.link, np.full(n, load.torque))
     g = np.array(linkage.gravity)
     for m in linkage.masses:
         com, _, acc = pose.point(m.link, m.com)
-        add_force(b, layout, m.link, m.mass * (g[None, :] - acc), com)
-        add_couple(b, layout, m.link, -m.inertia * pose.angle(m.link)[2])
+        layout.add_force(b, m.link, m.mass * (g[None, :] - acc), com)
+        layout.add_couple(b, m.link, -m.inertia * pose.angle(m.link)[2])
     for spring in linkage.springs:
         _add_spring(b, layout, pose, spring)
     _add_viscous(b, layout, pose)
@@ -154,32 +89,23 @@ def _add_spring(b: Array, layout: ForceLayout, pose: LinkagePose,
     s = spring_force(pose, spring)
     if isinstance(spring, TorsionSpring):
         i, j = pose.linkage.joint(spring.joint).links
-        add_couple(b, layout, j, -s)
-        add_couple(b, layout, i, s)
+        layout.add_couple(b, j, -s)
+        layout.add_couple(b, i, s)
         return
     (la, pa), (lb, pb) = spring.ends
     a = pose.point(la, pa)[0]
     bb = pose.point(lb, pb)[0]
     e = spring_axis(pose.linkage, bb - a)[1]
-    add_force(b, layout, la, s[:, None] * e, a)    # tension pulls a toward b
-    add_force(b, layout, lb, -s[:, None] * e, bb)
+    layout.add_force(b, la, s[:, None] * e, a)    # tension pulls a toward b
+    layout.add_force(b, lb, -s[:, None] * e, bb)
 
 
 def _add_viscous(b: Array, layout: ForceLayout, pose: LinkagePose) -> None:
-    """−c·q̇ on links[1] (and the reverse on links[0]) at every joint with a viscous term."""
+    """−c·q̇ on links[1] (and the reverse on links[0]) at every joint with a viscous term,
+    as each joint's kind applies it (a couple at a pin, a force along a slide)."""
     f = pose.linkage.friction
     if f is None:
         return
     for name, c in f.viscous.items():
         joint = pose.linkage.joint(name)
-        _, rate, _ = pose.joint_coordinate(joint)
-        i, j = joint.links
-        if joint.kind == "revolute":
-            add_couple(b, layout, j, -c * rate)
-            add_couple(b, layout, i, c * rate)
-        else:
-            frame = joint_frame(pose, joint)
-            assert frame.u is not None
-            force = -c * rate[:, None] * frame.u
-            add_force(b, layout, j, force, frame.point)
-            add_force(b, layout, i, -force, frame.point)
+        joint.kind.viscous(b, layout, pose, joint, c)

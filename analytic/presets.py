@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 from mechcheck.analytic.case import Case, FourBarGeometry, Vec2
+from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage import (
     Driver,
@@ -72,14 +73,14 @@ def linkage_of(case: Case) -> Linkage:
     links = [Link("ground", ("A0", "B0") if "B0" in points else ("A0",)),
              Link("crank", ("A0", "A")), Link("coupler", ("A", "B")),
              Link(rocker, ("B0", "B") if "B0" in points else ("B",))]
-    joints = [Joint("A0", "revolute", ("ground", "crank"), "A0"),
-              Joint("A", "revolute", ("crank", "coupler"), "A"),
-              Joint("B", "revolute", ("coupler", rocker), "B")]
+    joints = [Joint("A0", REVOLUTE, ("ground", "crank"), "A0"),
+              Joint("A", REVOLUTE, ("crank", "coupler"), "A"),
+              Joint("B", REVOLUTE, ("coupler", rocker), "B")]
     if isinstance(case.geometry, FourBarGeometry):
-        joints.append(Joint("B0", "revolute", ("ground", rocker), "B0"))
+        joints.append(Joint("B0", REVOLUTE, ("ground", rocker), "B0"))
     else:
         axis = (math.cos(case.ground_angle), math.sin(case.ground_angle))
-        joints.append(Joint("slide", "prismatic", ("ground", rocker), "B", axis))
+        joints.append(Joint("slide", PRISMATIC, ("ground", rocker), "B", axis))
     return Linkage(
         points=points, links=tuple(links), joints=tuple(joints),
         drivers=(_driver_of(case),),

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
+from mechcheck.analytic.joint_kinds import JointKind
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage import Linkage
 
@@ -219,7 +220,7 @@ class DriverRange:
     searched travel (a revolute driver then turns fully)."""
 
     joint: str
-    kind: str
+    kind: JointKind
     low: float | None
     high: float | None
     travel: float
@@ -232,7 +233,7 @@ def driver_ranges(linkage: Linkage) -> list[DriverRange]:
     out = []
     for k, driver in enumerate(linkage.drivers):
         kind = linkage.joint(driver.joint).kind
-        travel = RANGE_TURN if kind == "revolute" else RANGE_SIZES * linkage.scale
+        travel = RANGE_TURN if kind.rotates else RANGE_SIZES * linkage.scale
         values = np.zeros((2, len(linkage.drivers)))
         values[:, k] = (-travel, travel)
         _, locked = positions(linkage, values)

@@ -198,7 +198,8 @@ def too_close(points: Sequence[tuple[str, Vec2]]) -> tuple[str, str, float] | No
 
 
 def pair(value: Vec2, key: str) -> Vec2:
-    if len(value) != 2:
+    """Two finite numbers, or one error naming ``key``."""
+    if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
         raise CaseError(f"must be a pair [x, y], got {value!r}", key=key)
     return (finite(value[0], f"{key}[0]"), finite(value[1], f"{key}[1]"))
 

@@ -110,10 +110,10 @@ def _names(case: Case) -> tuple[str, str, list[tuple[str, str]], str]:
                 [(f"|F{j}|", f"F{j}") for j in ("12", "23", "34", "14")], "θ12 [deg]")
     linkage = case.linkage
     first = linkage.drivers[0].joint
-    revolute = linkage.joint(first).kind == "revolute"
-    return (f"Q_{first}", "N·m" if revolute else "N",
+    turns = linkage.joint(first).kind.rotates
+    return (f"Q_{first}", "N·m" if turns else "N",
             [(f"|F_{j.name}|", f"F_{j.name}") for j in linkage.joints],
-            f"driver {first} from the drawn pose [{'deg' if revolute else 'mm'}]")
+            f"driver {first} from the drawn pose [{'deg' if turns else 'mm'}]")
 
 
 def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,

@@ -17,6 +17,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field
 
 from mechcheck.analytic.case import CaseError, Vec2
+from mechcheck.analytic.joint_kinds import kind_named
 from mechcheck.analytic.linkage import (
     Driver,
     Joint,
@@ -150,7 +151,7 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
         return Linkage(
             points=points,
             links=tuple(Link(link.name, tuple(link.points)) for link in spec.links),
-            joints=tuple(Joint(j.name, j.kind, (j.links[0], j.links[1]), j.at,
+            joints=tuple(Joint(j.name, kind_named(j.kind), (j.links[0], j.links[1]), j.at,
                                None if j.axis is None else (j.axis[0], j.axis[1])) for j in spec.joints),
             drivers=tuple(_driver(d, i, kinds, scale) for i, d in enumerate(spec.drivers)),
             loads=tuple(PointLoad(ld.link, where(ld.at, f"loads[{i}].at"),
@@ -174,18 +175,19 @@ def _spring_end(end: list[Any], key: str, where: Any) -> tuple[str, Vec2]:
 
 
 def _driver(d: DriverSpec, i: int, kinds: Mapping[str, str], scale: float) -> Driver:
-    """A driver's value in its joint's unit: ``rotation`` (deg) for a revolute joint,
-    ``displacement`` (length_unit) for a prismatic one."""
+    """A driver's value in its joint's unit: ``rotation`` (deg) for a joint that turns,
+    ``displacement`` (length_unit) for one that slides."""
     key = f"drivers[{i}]"
-    kind = kinds.get(d.joint)
-    if kind is None:
+    name = kinds.get(d.joint)
+    if name is None:
         raise CaseError(f"unknown joint {d.joint!r}", key=f"{key}.joint")
-    wanted, other = ("rotation", "displacement") if kind == "revolute" else ("displacement",
-                                                                              "rotation")
+    kind = kind_named(name)
+    wanted = kind.driver_key
+    other = "displacement" if wanted == "rotation" else "rotation"
     if getattr(d, other) is not None:
         raise CaseError(f"a {kind} joint is driven by '{wanted}', not '{other}'",
                         key=f"{key}.{other}")
     value = getattr(d, wanted) or 0.0
-    value = math.radians(value) if kind == "revolute" else value * scale
+    value = math.radians(value) if kind.rotates else value * scale
     sense = {"increasing": 1, "decreasing": -1, None: 0}[d.sense]
     return Driver(d.joint, value, d.velocity, d.acceleration, sense)

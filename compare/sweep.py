@@ -155,7 +155,7 @@ def check_driver_grid(case: Case, grid: np.ndarray, option: str) -> None:
         return
     reach = float(np.abs(grid).max())
     driver = case.linkage.drivers[0]
-    if case.linkage.joint(driver.joint).kind == "revolute":
+    if case.linkage.joint(driver.joint).kind.rotates:
         if reach > MAX_DRIVER_ROTATION_DEG:
             raise ValueError(f"{option}: case '{case.name}': a rotation of {reach:g}° of "
                              f"{driver.joint}; a linkage's driver turns at most "
@@ -218,7 +218,7 @@ def driver_grid_si(case: Case, grid: np.ndarray) -> np.ndarray:
     """A linkage's sweep grid (deg of a revolute first driver, mm of a prismatic one) in the
     engine's units (rad, m)."""
     kind = case.linkage.joint(case.linkage.drivers[0].joint).kind
-    return np.radians(grid) if kind == "revolute" else grid / 1000.0
+    return np.radians(grid) if kind.rotates else grid / 1000.0
 
 
 def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:

@@ -127,13 +127,14 @@ def describe_linkage(case: Case) -> list[str]:
     """A linkage's links, joints, mobility (formula and rank), each driver's reachable range
     with its lock positions, and, for one driver, the mechanical advantage at the pose."""
     from mechcheck.analytic import theory
+    from mechcheck.analytic.joint_kinds import KINDS
 
     linkage = case.linkage
-    kinds = [j.kind for j in linkage.joints]
+    kinds = ", ".join(f"{sum(1 for j in linkage.joints if j.kind is kind)} {name}"
+                      for name, kind in KINDS.items())
     lines = [f"{case.name} (linkage)",
              f"  links: {len(linkage.links)} ({', '.join(link.name for link in linkage.links)})",
-             f"  joints: {len(linkage.joints)} ({kinds.count('revolute')} revolute, "
-             f"{kinds.count('prismatic')} prismatic)",
+             f"  joints: {len(linkage.joints)} ({kinds})",
              f"  mobility: Gruebler–Kutzbach 3(n − 1) − 2j = {linkage.gruebler}; by the rank of "
              f"the constraint Jacobian at the drawn pose: {linkage.dof}"
              + ("" if linkage.gruebler == linkage.dof else
@@ -141,14 +142,14 @@ def describe_linkage(case: Case) -> list[str]:
              f"  drivers: {len(linkage.drivers)}; free coordinates: "
              f"{linkage.dof - len(linkage.drivers)}"]
     for r in theory.driver_ranges(linkage):
-        unit, f = ("°", math.degrees) if r.kind == "revolute" else (" m", float)
+        unit, f = ("°", math.degrees) if r.kind.rotates else (" m", float)
         ends = [("locks at " + f"{f(v):+.6f}{unit}") if v is not None else
                 (f"no lock within {f(r.travel):g}{unit}") for v in (r.low, r.high)]
-        full = r.kind == "revolute" and r.low is None and r.high is None
+        full = r.kind.rotates and r.low is None and r.high is None
         lines.append(f"  driver {r.joint}: " + ("turns fully" if full else
                                                 f"decreasing: {ends[0]}; increasing: {ends[1]}"))
     for label, load, effort in theory.mechanical_advantage(case):
-        unit = "N·m" if linkage.joint(linkage.drivers[0].joint).kind == "revolute" else "N"
+        unit = "N·m" if linkage.joint(linkage.drivers[0].joint).kind.rotates else "N"
         lines.append(f"  mechanical advantage ({label}): {load:g} N against {effort:+.6g} {unit} "
                      f"at the driver: |F|/|Q| = {load / abs(effort) if effort else math.inf:.6g}"
                      f" N per {unit}")

@@ -60,9 +60,7 @@ def coulomb_joints(case: Case) -> list[Joint]:
     f = case.linkage.friction
     if f is None:
         return []
-    return [j for j in case.linkage.joints
-            if f.coefficient(j.name) * (f.pin_radius.get(j.name, 0.0)
-                                        if j.kind == "revolute" else 1.0) > 0.0]
+    return [j for j in case.linkage.joints if j.kind.coulomb_coefficient(f, j) > 0.0]
 
 
 def at_rest_reason(case: Case, window: float, rest_speed: float = REST_SPEED) -> str:
@@ -83,7 +81,7 @@ def at_rest_reason(case: Case, window: float, rest_speed: float = REST_SPEED) ->
     for joint in joints:
         _, rate, _ = pose.joint_coordinate(joint)
         before, now = float(rate[0]), float(rate[1])
-        per_length = case.linkage.scale if joint.kind == "prismatic" else 1.0
+        per_length = 1.0 if joint.kind.rotates else case.linkage.scale
         if abs(now) <= rest_speed * per_length or before * now <= 0.0:
             return (f"the relative motion at the Coulomb joint {joint.name} is at rest at the "
                     f"reading (slower than {rest_speed * per_length:g}, the speed this "

@@ -56,7 +56,7 @@ def drive_both_ways(simulator: str, case: Case, joint: str,
 def driver_length(case: Case, joint: str) -> float:
     """What a driver's coordinate is divided by to run the turning protocol: 1 for a
     revolute driver (rad), the linkage's size for a prismatic one (m)."""
-    return 1.0 if case.linkage.joint(joint).kind == "revolute" else case.linkage.scale
+    return 1.0 if case.linkage.joint(joint).kind.rotates else case.linkage.scale
 
 
 def held_at_drawn(case: Case) -> Case:

@@ -93,7 +93,7 @@ def turns(case: Case, link: str) -> bool:
     tree = spanning_tree(case.linkage)
     while link != GROUND:
         t = tree.parent_joint(link)
-        if t.joint.kind == "revolute":
+        if t.joint.kind.rotates:
             return True
         link = t.parent
     return False

@@ -46,7 +46,7 @@ def friction_loads(rig: LinkageRig, values: dict[str, float],
     for joint in linkage.joints:
         sign = float(np.sign(senses[joint.name]))
         i, j = joint.links
-        if joint.kind == "revolute":
+        if joint.kind.pins:
             moment = -f.coefficient(joint.name) * f.pin_radius.get(joint.name, 0.0) \
                 * magnitude(values, f"F_{joint.name}") * sign
             for link, share in ((j, 1.0), (i, -1.0)):

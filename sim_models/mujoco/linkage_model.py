@@ -76,7 +76,7 @@ def _priority(linkage: Linkage, joint: Joint) -> int:
     """Order in which joints enter the tree: prismatic joints first (a loop can only be
     closed at a revolute joint), then driven joints (a joint equality needs a MuJoCo
     joint), then joints with a torsional spring (joint stiffness), then the rest."""
-    if joint.kind == "prismatic":
+    if not joint.kind.pins:
         return 0
     if any(d.joint == joint.name for d in linkage.drivers):
         return 1
@@ -108,7 +108,7 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
             root[a] = b
             chosen.append(joint)
             continue
-        if joint.kind == "prismatic":
+        if not joint.kind.pins:
             loop = [*_path(chosen, *joint.links), joint.name]
             raise Unbuildable(f"the loop through joints {', '.join(loop)} has no revolute "
                               "joint: the MuJoCo model closes every loop with a connect at a "
@@ -259,7 +259,7 @@ def drive_armature(linkage: Linkage, joint: Joint, settings: Settings) -> float:
     if not settings.drive_armature or not any(d.joint == joint.name for d in linkage.drivers):
         return 0.0
     reference = max((m.mass for m in linkage.masses), default=1.0)
-    lever = linkage.scale**2 if joint.kind == "revolute" else 1.0
+    lever = linkage.scale**2 if joint.kind.rotates else 1.0
     return DRIVE_ARMATURE_INERTIA * reference * lever
 
 
@@ -293,7 +293,7 @@ def _add_body(parent: mujoco.MjsBody, tree: LinkageTree, linkage: Linkage, t: Tr
         # Only Izz matters for hinges about z; Ixx = Iyy = Izz passes MuJoCo's triangle check.
         inertia=[izz, izz, izz], explicitinertial=True)
     joint = t.joint
-    if joint.kind == "revolute":
+    if joint.kind.rotates:
         axis = [0.0, 0.0, t.sign]
         kind = mujoco.mjtJoint.mjJNT_HINGE
     else:

@@ -157,7 +157,7 @@ class LinkageRig:
         for k, link in enumerate(linkage.moving_links):
             while link != GROUND:
                 t = self.tree.parent_joint(link)
-                if t.joint.kind == "revolute":
+                if t.joint.kind.rotates:
                     self.rotation[k, self.dof[t.joint.name]] = t.sign
                 link = t.parent
         self.loads = self._load_table()
@@ -182,7 +182,7 @@ class LinkageRig:
                            if (rows := self.equality_rows(e)).size}
         self.efc_scale = np.ones(self.nefc)
         for joint, rows in self.drive_rows.items():
-            if linkage.joint(joint).kind == "revolute":
+            if linkage.joint(joint).kind.rotates:
                 self.efc_scale[rows] = 1.0 / self.scale  # torques as forces, for the stop rule
         #: The spread of forces the positions' rounding makes at rest (N, the settling's
         #: absolute allowance), from the model at the drawn pose: its sites' largest
@@ -506,12 +506,12 @@ class LinkageRig:
     def _read_plan(self) -> ReadPlan:
         linkage = self.linkage
         drivers = list(self.drive_rows)
-        pins = [t for t in self.tree.tree if t.joint.kind == "revolute"]
+        pins = [t for t in self.tree.tree if t.joint.kind.pins]
         loops = list(self.loop_rows)
-        slides = [t.joint for t in self.tree.tree if t.joint.kind == "prismatic"]
+        slides = [t.joint for t in self.tree.tree if not t.joint.kind.pins]
         order = [f"Q_{j}" for j in drivers]
         for joint in linkage.joints:
-            order += ([f"M_{joint.name}"] if joint.kind == "prismatic" else []) \
+            order += ([f"M_{joint.name}"] if not joint.kind.pins else []) \
                 + [f"F_{joint.name}_x", f"F_{joint.name}_y"]
         order += [f"S_{spring.name}" for spring in linkage.springs]
         order += [f"{axis}_{p}" for p in self.point_sites for axis in "xy"]

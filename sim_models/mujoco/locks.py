@@ -46,7 +46,7 @@ def servo_customizer(case: Case, joint: str) -> Callable[[mujoco.MjSpec], None]:
         spec.equality(f"drive_{joint}").active = False
         for t in spanning_tree(linkage).tree:
             if t.joint.name != joint:
-                scale = unit if t.joint.kind == "revolute" else SETTLE_MASS
+                scale = unit if t.joint.kind.rotates else SETTLE_MASS
                 spec.joint(t.joint.name).damping = [JOINT_DAMPING * scale, 0.0, 0.0]
         add_servo(spec, joint, unit, length)
 

@@ -38,8 +38,9 @@ from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
 from mechcheck.analytic.linkage_kinematics import (
     Array,
     LinkagePose,
+    constraint_system,
     positions,
-    residual_and_jacobian,
+    unit_scales,
 )
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
@@ -104,12 +105,9 @@ def pose_table(linkage: Linkage, q: Array) -> dict[str, Array]:
 def loop_violations(linkage: Linkage, q: Array) -> Array:
     """Largest violation of any joint (loop closure) per pose q (M, 3n), m: pin gaps,
     distances off a slide, and a slide's angle error × the linkage's size."""
-    phi, _ = residual_and_jacobian(linkage, q, np.zeros((q.shape[0], len(linkage.drivers))),
-                                   drivers=False)
-    weights = np.ones(phi.shape[1])
-    for k, joint in enumerate(linkage.joints):
-        if joint.kind == "prismatic":
-            weights[2 * k] = linkage.scale
+    phi, _ = constraint_system(linkage, q, np.zeros((q.shape[0], len(linkage.drivers))),
+                               drivers=False)
+    weights, _ = unit_scales(linkage, drivers=False)   # angle rows as lengths
     return np.asarray(np.abs(phi * weights).max(axis=1, initial=0.0), dtype=float)
 
 

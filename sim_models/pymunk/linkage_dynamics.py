@@ -192,7 +192,7 @@ def drive_to(model: LinkageModel, values: Array) -> None:
     linkage = model.linkage
     for driver, value in zip(linkage.drivers, values, strict=True):
         joint = linkage.joint(driver.joint)
-        if joint.kind == "revolute":
+        if joint.kind.rotates:
             model.drives[joint.name].phase = float(value)
         else:
             model.held[joint.name].anchor_a = along(joint, linkage.points[joint.at], float(value))

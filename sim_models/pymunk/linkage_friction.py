@@ -46,7 +46,7 @@ def joint_rate(model: LinkageModel, joint: Joint) -> float:
     """q̇ of a joint from the bodies' velocities: ω_b − ω_a, or the speed of ``at`` on
     links[1] relative to links[0] along the axis."""
     a, b = (model.body(link) for link in joint.links)
-    if joint.kind == "revolute":
+    if joint.kind.rotates:
         return float(b.angular_velocity - a.angular_velocity)
     point = b.local_to_world(model.linkage.points[joint.at])
     relative = b.velocity_at_world_point(point) - a.velocity_at_world_point(point)
@@ -72,7 +72,7 @@ def friction_loads(model: LinkageModel, state: Values, viscous: bool = True) -> 
         name = joint.name
         rate = state[f"qdot_{name}"]
         fx, fy = state[f"F_{name}_x"], state[f"F_{name}_y"]
-        if joint.kind == "revolute":
+        if joint.kind.pins:
             arm = f.coefficient(name) * f.pin_radius.get(name, 0.0)
             coulomb = arm * math.hypot(fx, fy)
         else:
@@ -96,7 +96,7 @@ def apply_joint_friction(model: LinkageModel, link: str, body: pymunk.Body,
         if value is None or link not in joint.links:
             continue
         share = 1.0 if joint.links[1] == link else -1.0
-        if joint.kind == "revolute":
+        if joint.kind.pins:
             body.torque += share * value
             continue
         ux, uy = axis_now(model, joint)
@@ -110,7 +110,7 @@ def with_sliding(model: LinkageModel, values: Values, loads: JointLoads) -> Valu
     out = dict(values)
     for joint in model.linkage.joints:
         value = loads.get(joint.name)
-        if value is not None and joint.kind == "prismatic":
+        if value is not None and not joint.kind.pins:
             ux, uy = axis_now(model, joint)
             out[f"F_{joint.name}_x"] += value * ux
             out[f"F_{joint.name}_y"] += value * uy

@@ -230,7 +230,7 @@ def make_joints(model: LinkageModel) -> None:
     for joint in linkage.joints:
         a, b = (model.body(link) for link in joint.links)
         at = linkage.points[joint.at]
-        if joint.kind == "revolute":
+        if joint.kind.pins:
             model.pins[joint.name] = pymunk.PivotJoint(a, b, at, at)
             if joint.name in driven:
                 model.drives[joint.name] = pymunk.GearJoint(a, b, driven[joint.name], 1.0)
@@ -307,7 +307,7 @@ def reaction_names(model: LinkageModel) -> list[str]:
     drives and springs; a held slide's Q_ comes before its F_."""
     names = []
     for joint in model.linkage.joints:
-        if joint.kind == "revolute":
+        if joint.kind.pins:
             names += [f"F_{joint.name}_x", f"F_{joint.name}_y"]
         else:
             held = [f"Q_{joint.name}"] if joint.name in model.held else []
@@ -331,7 +331,7 @@ def compile_readout(model: LinkageModel) -> Readout:
             x, y = impulse_cells(model.held[name])
             held.append(HeldSlide(name, (x, y), model.body(joint.links[0]), joint.axis))
         else:
-            pin = model.pins[name] if joint.kind == "revolute" else model.grooves[name]
+            pin = model.pins[name] if joint.kind.pins else model.grooves[name]
             forces += zip((f"F_{name}_x", f"F_{name}_y"), impulse_cells(pin), strict=True)
     couples = [(f"M_{name}", impulse_cells(lock)[0]) for name, lock in model.locks.items()]
     couples += [(f"Q_{name}", impulse_cells(gear)[0]) for name, gear in model.drives.items()]

@@ -54,7 +54,7 @@ def hold_first_driver(model: LinkageModel, value: float) -> None:
     """Move the first driver's lock to ``value`` (rad or m from the drawn pose)."""
     linkage = model.linkage
     joint = linkage.joint(linkage.drivers[0].joint)
-    if joint.kind == "revolute":
+    if joint.kind.rotates:
         model.drives[joint.name].phase = value
     else:
         model.held[joint.name].anchor_a = along(joint, linkage.points[joint.at], value)

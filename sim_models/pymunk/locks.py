@@ -72,7 +72,7 @@ def dampers(model: LinkageModel, driven: str) -> list[pymunk.Constraint]:
         if joint.name == driven:
             continue
         a, b = (model.body(link) for link in joint.links)
-        if joint.kind == "revolute":
+        if joint.kind.rotates:
             out.append(pymunk.DampedRotarySpring(a, b, 0.0, 0.0, JOINT_DAMPING * unit))
         else:
             at = linkage.points[joint.at]
@@ -103,7 +103,7 @@ class LinkageServo:
         impulses), the driver's gear (or a prismatic driver's hold) replaced by the
         motor."""
         model = build_linkage_model(self.built, TURN_SETTINGS, self.drawn)
-        if self.joint.kind == "revolute":
+        if self.joint.kind.rotates:
             model.space.remove(model.drives[self.joint.name])
             a, b = (model.body(link) for link in self.joint.links)
             # SimpleMotor drives ω_b − ω_a to −rate.
@@ -121,7 +121,7 @@ class LinkageServo:
         model.space.step(self.timestep)
         # The loop gap is not sampled here (it costs more than the step); the lock is read
         # from the driver's coordinate and the motor's torque alone.
-        if self.joint.kind == "revolute":
+        if self.joint.kind.rotates:
             a, b = (model.body(link) for link in self.joint.links)
             return Sample(float(b.angle - a.angle), math.nan, math.nan,
                           torque_on_b(motor, self.timestep), math.nan)

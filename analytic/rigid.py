@@ -1,0 +1,257 @@
+"""The building blocks every joint kind writes its equations with: planar vectors, where a
+link's coordinates sit, a point carried by a link, and the rows and columns of the two
+systems the engine assembles (the constraint Jacobian and the member-equilibrium matrix).
+
+Each moving link k has coordinates (t_x, t_y, φ): its rigid displacement from the drawn
+pose, so a point P0 it carries is at R(φ)·P0 + t. Nothing here knows which kinds of joint
+exist (:mod:`.joint_kinds` does); the engine's modules and the kinds both build on it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mechcheck.analytic.linalg import Batched
+from mechcheck.analytic.values import GROUND
+
+if TYPE_CHECKING:
+    from mechcheck.analytic.linkage import Joint, Linkage
+
+Array = NDArray[np.float64]
+
+
+def perp(v: Array) -> Array:
+    """v turned +90°."""
+    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
+
+
+def rotate(angle: Array, v: Array) -> Array:
+    """R(angle)·v for arrays of angles (N,) and a vector (2,) or vectors (N, 2)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
+
+
+def dot(a: Array, b: Array) -> Array:
+    return np.einsum("...i,...i->...", a, b)
+
+
+def cross(r: Array, f: Array) -> Array:
+    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where each moving link's three coordinates sit in q, and where each joint's and each
+    driver's constraint rows start."""
+
+    linkage: Linkage
+
+    def index(self, link: str) -> int:
+        """Column of the link's t_x (t_y and φ follow); −1 for the ground."""
+        return -1 if link == GROUND else 3 * self.linkage.link_number[link]
+
+    @property
+    def size(self) -> int:
+        return 3 * len(self.linkage.moving_links)
+
+    @cached_property
+    def joint_rows(self) -> int:
+        """Rows of all the joints' constraints (each kind brings its own number)."""
+        return sum(j.kind.rows for j in self.linkage.joints)
+
+    @property
+    def rows(self) -> int:
+        return self.joint_rows + len(self.linkage.drivers)
+
+
+@dataclass
+class Constraints:
+    """Φ (N, m) and J = ∂Φ/∂q (entries) being written, row by row, at coordinates q (N, 3n)."""
+
+    layout: Layout
+    q: Array
+    phi: Array
+    jac: Batched
+
+    @property
+    def linkage(self) -> Linkage:
+        return self.layout.linkage
+
+    def angle(self, link: str) -> Array:
+        k = self.layout.index(link)
+        return self.q[:, k + 2] if k >= 0 else np.zeros(self.q.shape[0])
+
+    def point(self, link: str, p0: Array) -> tuple[Array, Array]:
+        """(position (N, 2), ∂position/∂φ (N, 2)) of a drawn point on ``link``."""
+        k = self.layout.index(link)
+        n = self.q.shape[0]
+        if k < 0:
+            return np.broadcast_to(p0, (n, 2)).copy(), np.zeros((n, 2))
+        r = rotate(self.q[:, k + 2], p0)
+        return self.q[:, k:k + 2] + r, perp(r)
+
+    def put(self, row: int, link: str, d_t: Array | None, d_phi: Array | float) -> None:
+        """Add ∂(row)/∂(t_x, t_y, φ) of ``link`` (nothing for the ground); ``d_t`` None: 0."""
+        k = self.layout.index(link)
+        if k >= 0:
+            if d_t is not None:
+                self.jac.add(row, k, d_t[:, 0])
+                self.jac.add(row, k + 1, d_t[:, 1])
+            self.jac.add(row, k + 2, d_phi)
+
+    def coincide(self, row: int, joint: Joint) -> None:
+        """Two rows p_i(P0) − p_j(P0) = 0: the joint's links hold its point together."""
+        i, j = joint.links
+        p0 = np.array(self.linkage.points[joint.at])
+        pi, dpi = self.point(i, p0)
+        pj, dpj = self.point(j, p0)
+        self.phi[:, row:row + 2] = pi - pj
+        ki, kj = self.layout.index(i), self.layout.index(j)
+        for c in range(2):
+            if ki >= 0:
+                self.jac.add(row + c, ki + c, 1.0)
+                self.jac.add(row + c, ki + 2, dpi[:, c])
+            if kj >= 0:
+                self.jac.add(row + c, kj + c, -1.0)
+                self.jac.add(row + c, kj + 2, -dpj[:, c])
+
+    def angle_lock(self, row: int, joint: Joint) -> None:
+        """Row φ_j − φ_i."""
+        i, j = joint.links
+        for link, sign in ((j, 1.0), (i, -1.0)):
+            k = self.layout.index(link)
+            if k >= 0:
+                self.phi[:, row] += sign * self.q[:, k + 2]
+            self.put(row, link, None, sign)
+
+    def along(self, row: int, joint: Joint, w0: Array) -> None:
+        """Row w_i·(p_j(A0) − p_i(A0)), with w (drawn w0) fixed in the joint's links[0]."""
+        i, j = joint.links
+        a0 = np.array(self.linkage.points[joint.at])
+        w = rotate(self.angle(i), w0)
+        pj, dpj = self.point(j, a0)
+        pi, dpi = self.point(i, a0)
+        d = pj - pi
+        self.phi[:, row] += dot(w, d)
+        self.put(row, j, w, dot(w, dpj))
+        self.put(row, i, -w, dot(perp(w), d) - dot(w, dpi))
+
+
+@dataclass
+class Motion:
+    """The links' motion at coordinates q and rates q̇ (N, 3n), for the J̇·q̇ terms."""
+
+    layout: Layout
+    q: Array
+    qdot: Array
+
+    @property
+    def linkage(self) -> Linkage:
+        return self.layout.linkage
+
+    def spin(self, link: str) -> Array:
+        k = self.layout.index(link)
+        return self.qdot[:, k + 2] if k >= 0 else np.zeros(self.q.shape[0])
+
+    def rotated(self, link: str, p0: Array) -> Array:
+        """R(φ)·P0 of a drawn point on ``link``."""
+        k = self.layout.index(link)
+        return rotate(self.q[:, k + 2], p0) if k >= 0 else np.zeros((self.q.shape[0], 2))
+
+    def position(self, link: str, p0: Array) -> Array:
+        k = self.layout.index(link)
+        n = self.q.shape[0]
+        return self.q[:, k:k + 2] + self.rotated(link, p0) if k >= 0 \
+            else np.broadcast_to(p0, (n, 2)).copy()
+
+    def velocity(self, link: str, p0: Array) -> Array:
+        k = self.layout.index(link)
+        return self.qdot[:, k:k + 2] + self.spin(link)[:, None] * perp(self.rotated(link, p0)) \
+            if k >= 0 else np.zeros((self.q.shape[0], 2))
+
+    def along(self, joint: Joint, w0: Array) -> Array:
+        """J̇·q̇ of the row w_i·(p_j(A0) − p_i(A0)) (:meth:`Constraints.along`)."""
+        i, j = joint.links
+        a0 = np.array(self.linkage.points[joint.at])
+        n = self.q.shape[0]
+        ki = self.layout.index(i)
+        w = rotate(self.q[:, ki + 2], w0) if ki >= 0 else np.broadcast_to(w0, (n, 2))
+        d = self.position(j, a0) - self.position(i, a0)
+        dd = self.velocity(j, a0) - self.velocity(i, a0)
+        wi = self.spin(i)
+        ddd = (-(self.spin(j) ** 2)[:, None] * self.rotated(j, a0)
+               + (wi**2)[:, None] * self.rotated(i, a0))
+        return -(wi**2) * dot(w, d) + 2 * wi * dot(perp(w), dd) + dot(w, ddd)
+
+
+@dataclass(frozen=True)
+class ForceLayout:
+    """Rows of the links' equilibrium (ΣFx, ΣFy, ΣM each) and columns of the unknowns: each
+    joint's reactions (as many as its kind has constraint rows), then each driver's effort."""
+
+    linkage: Linkage
+
+    def row(self, link: str) -> int:
+        """First of the link's three rows; −1 for the ground (no equations)."""
+        return -1 if link == GROUND else 3 * self.linkage.link_number[link]
+
+    @cached_property
+    def _first_columns(self) -> dict[str, int]:
+        out, column = {}, 0
+        for joint in self.linkage.joints:
+            out[joint.name] = column
+            column += joint.kind.rows
+        return out
+
+    def joint_columns(self, joint: Joint) -> tuple[int, ...]:
+        first = self._first_columns[joint.name]
+        return tuple(range(first, first + joint.kind.rows))
+
+    def driver_column(self, index: int) -> int:
+        return self.joint_unknowns + index
+
+    @cached_property
+    def joint_unknowns(self) -> int:
+        return sum(j.kind.rows for j in self.linkage.joints)
+
+    @property
+    def rows(self) -> int:
+        return 3 * len(self.linkage.moving_links)
+
+    @property
+    def columns(self) -> int:
+        return self.joint_unknowns + len(self.linkage.drivers)
+
+    def force_on(self, k: Batched, link: str, col: int, direction: Array, point: Array,
+                 sign: float) -> None:
+        """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
+        r = self.row(link)
+        if r < 0:
+            return
+        k.add(r, col, sign * direction[:, 0])
+        k.add(r + 1, col, sign * direction[:, 1])
+        k.add(r + 2, col, sign * cross(point, direction))
+
+    def couple_on(self, k: Batched, link: str, col: int, sign: float) -> None:
+        r = self.row(link)
+        if r >= 0:
+            k.add(r + 2, col, sign)
+
+    def add_force(self, b: Array, link: str, force: Array, point: Array) -> None:
+        """A known force (N, 2) at ``point`` into the known vector b (N, 3n)."""
+        r = self.row(link)
+        if r < 0:
+            return
+        b[:, r] += force[:, 0]
+        b[:, r + 1] += force[:, 1]
+        b[:, r + 2] += cross(point, force)
+
+    def add_couple(self, b: Array, link: str, torque: Array) -> None:
+        r = self.row(link)
+        if r >= 0:
+            b[:, r + 2] += torque
