@@ -83,8 +83,13 @@ def unassembled_verdict(case: Case, theta12: float) -> tuple[Status, str]:
     outside the range that assembles, ``singular`` at a change point inside it."""
     at = f"θ12 = {math.degrees(theta12):.6g}°"
     if in_assembly_range(case, theta12):
-        return ("singular", f"{at} is a change point of this {case.mechanism}: the links fold "
-                            "onto one line, where the branches meet and the position of the "
-                            "coupler is not determined; statics is singular there")
+        return ("singular", change_point_message(case, theta12))
     return ("no_solution", f"the {case.mechanism} cannot be assembled at {at} "
                            f"({case.branch} branch): {assembly_range_text(case)}")
+
+
+def change_point_message(case: Case, theta12: float) -> str:
+    """Why a preset has no unique forces at a change point θ12 (rad)."""
+    return (f"θ12 = {math.degrees(theta12):.6g}° is a change point of this {case.mechanism}: "
+            "the links fold onto one line, where the branches meet and the position of the "
+            "coupler is not determined; statics is singular there")

@@ -320,6 +320,12 @@ class Case:
         return "slider_crank" if isinstance(self.geometry, SliderCrankGeometry) else "linkage"
 
     @property
+    def is_preset(self) -> bool:
+        """A four-bar or slider-crank: every backend runs it as its linkage
+        (:mod:`mechcheck.analytic.presets`)."""
+        return not isinstance(self.geometry, Linkage)
+
+    @property
     def linkage(self) -> Linkage:
         """A linkage case's linkage (for the four-bar or slider-crank as a linkage, see
         :func:`mechcheck.analytic.presets.linkage_of`)."""

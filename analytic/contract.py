@@ -9,11 +9,14 @@ listing the backends (``mechcheck backends``, ``--help``) imports no simulator a
 
 What the functions take and return:
 
-- ``solve``: ``(Case) -> Solution``, one case at its own pose;
-- ``sweep``, vectorised: ``(Case, θ12 in rad) -> PoseResults``; a simulator's:
-  ``(Case, θ12 in rad, backend name) -> list[Solution]``, one per pose;
-- ``linkage_sweep``: the same for a linkage, over its first driver's values (rad or m from
-  the drawn pose); vectorised: ``-> LinkageResults``.
+- ``solve``: ``(Case) -> Solution``, one linkage case at its own pose;
+- ``sweep``: over a linkage's first driver's values (rad or m from the drawn pose),
+  vectorised: ``(Case, values) -> LinkageResults``; a simulator's:
+  ``(Case, values, backend name) -> list[Solution]``, one per pose.
+
+A backend sees only linkages: :meth:`Backend.solver` and :meth:`Backend.sweeper` run a
+four-bar or slider-crank as its linkage and read it under the preset's names
+(:mod:`mechcheck.analytic.presets`), the same way for every backend.
 
 The harness calls a backend only at poses that pass the pose gate (:func:`mechcheck.run.gated`,
 :func:`mechcheck.sweep.gated_poses`): where the reference's pose analysis says ``singular``,
@@ -23,11 +26,18 @@ verdict.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.util
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from mechcheck.analytic.case import Case
+    from mechcheck.analytic.solution import Solution
 
 #: How a backend's numbers are judged (the tolerance policy's rows,
 #: :mod:`mechcheck.tolerance`): ``reference`` (the analytic backend, which the others are
@@ -56,15 +66,13 @@ class Backend:
     """One backend, as its package declares it."""
 
     name: str
-    #: ``"module:function"``: ``(Case) -> Solution``.
+    #: ``"module:function"``: ``(Case) -> Solution``, of a linkage case.
     solve: str
     family: Family
     #: One line for ``mechcheck backends``.
     summary: str = ""
-    #: ``"module:function"`` of its sweep over θ12 (None: it has none).
-    sweep: str | None = None
     #: ``"module:function"`` of its sweep of a linkage's first driver (None: it has none).
-    linkage_sweep: str | None = None
+    sweep: str | None = None
     #: True: the sweeps are vectorised solvers returning arrays; False: a simulator's,
     #: returning one Solution per pose.
     vectorised: bool = False
@@ -78,14 +86,20 @@ class Backend:
             return self.requires
         return None
 
-    def solver(self) -> Callable[..., Any]:
-        """Its single-case solve, imported now."""
-        return self._load(self.solve, "")
+    def solver(self) -> Callable[[Case], Solution]:
+        """Its single-case solve, imported now; a preset runs as its linkage."""
+        return functools.partial(solve_any, self._load(self.solve, ""), self.name)
 
-    def sweeper(self, linkage: bool) -> Callable[..., Any] | None:
-        """Its sweep of a four-bar or slider-crank (of a linkage), or None if it has none."""
-        target = self.linkage_sweep if linkage else self.sweep
-        return None if target is None else self._load(target, " sweep")
+    def sweeper(self) -> Callable[..., Any] | None:
+        """Its sweep (None if it has none), imported now: over a linkage's first driver, or
+        a preset's θ12 (rad) run as its linkage's driver (:mod:`.presets`); vectorised:
+        ``(Case, grid)``, a simulator's ``(Case, grid, backend)``."""
+        if self.sweep is None:
+            return None
+        sweep = self._load(self.sweep, " sweep")
+        solve = self._load(self.solve, "")
+        return functools.partial(vector_sweep_any if self.vectorised else sweep_any, sweep, solve,
+                                 self.name)
 
     def _load(self, target: str, what: str) -> Callable[..., Any]:
         missing = self.missing_requirement()
@@ -96,3 +110,37 @@ class Backend:
             return resolve(target)
         except BackendUnavailable as error:
             raise BackendUnavailable(f"backend {self.name!r}{what}: {error}") from None
+
+
+def solve_any(solve: Callable[[Case], Solution], name: str, case: Case) -> Solution:
+    """A backend's ``solve`` (of linkages) on any case: a preset as its linkage."""
+    if case.is_preset:
+        from mechcheck.analytic.presets import solve_preset
+
+        return solve_preset(case, solve, name)
+    return solve(case)
+
+
+def vector_sweep_any(sweep: Callable[..., Any], solve: Callable[[Case], Solution], name: str,
+                     case: Case, grid: np.ndarray) -> Any:
+    """A vectorised backend's ``sweep`` (of linkages) on any case: a preset's θ12 grid run
+    as its linkage's (:func:`~mechcheck.analytic.presets.preset_results`)."""
+    if case.is_preset:
+        from mechcheck.analytic.presets import preset_results
+
+        return preset_results(case, grid, name, sweep, solve)
+    return sweep(case, grid)
+
+
+def sweep_any(sweep: Callable[..., list[Solution]], solve: Callable[[Case], Solution], name: str,
+              case: Case, grid: np.ndarray, backend: str) -> list[Solution]:
+    """A simulator's ``sweep`` (of linkages) on any case: a preset's θ12 grid run as its
+    linkage's (:func:`~mechcheck.analytic.presets.sweep_preset`)."""
+    if case.is_preset:
+        from mechcheck.analytic.presets import sweep_preset
+
+        # A simulator drives a moving or Coulomb-friction preset pose by pose (each is a run
+        # of its own from the pose); held statics run as the linkage's sweep.
+        return sweep_preset(case, grid, backend, sweep, solve,
+                            one_by_one=not case.motion.is_static or case.has_coulomb_friction)
+    return sweep(case, grid, backend)

@@ -13,6 +13,7 @@ a2 e2 + a3 e3 − a4 e4 − a1 e1 = 0 and projecting on e3 and e4.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mechcheck.analytic.case import FourBarGeometry
 from mechcheck.analytic.pose import Array, LinkState, Placement, Pose, perp, stacked
@@ -21,17 +22,30 @@ from mechcheck.analytic.pose import Array, LinkState, Placement, Pose, perp, sta
 def rocker_angle(g: FourBarGeometry, cos12: Array, sin12: Array, branch: str) -> Array:
     """φ14 (from the ground line) by the seed's closed form, from cos φ12 and sin φ12; NaN
     where it cannot assemble."""
-    c = g.a1**2 + g.a2**2 + g.a4**2 - g.a3**2 - 2.0 * g.a1 * g.a2 * cos12
     a = -2.0 * g.a1 * g.a4 + 2.0 * g.a2 * g.a4 * cos12
     b = 2.0 * g.a2 * g.a4 * sin12
     f = np.arctan2(b, a)
-    with np.errstate(divide="ignore", invalid="ignore"):  # a2 = a1 at φ12 = 0: no pose
-        ratio = c / np.hypot(a, b)
+    ratio = _cos_ratio(g, cos12, sin12)
     # Rounding can push an exactly-toggling pose to |ratio| = 1 + 1e-16; clip
     # only that, so a truly unassemblable pose still gives NaN.
     ratio = np.where(np.abs(ratio) <= 1.0 + 1e-12, np.clip(ratio, -1.0, 1.0), np.nan)
     sign = -1.0 if branch == "open" else 1.0
     return f + sign * np.arccos(ratio)
+
+
+def _cos_ratio(g: FourBarGeometry, cos12: Array, sin12: Array) -> Array:
+    """cos(φ14 − atan2(b, a)) of the rocker's closed form: a pose assembles where it is
+    within [−1, 1] (to rounding)."""
+    c = g.a1**2 + g.a2**2 + g.a4**2 - g.a3**2 - 2.0 * g.a1 * g.a2 * cos12
+    a = -2.0 * g.a1 * g.a4 + 2.0 * g.a2 * g.a4 * cos12
+    b = 2.0 * g.a2 * g.a4 * sin12
+    with np.errstate(divide="ignore", invalid="ignore"):  # a2 = a1 at φ12 = 0: no pose
+        return c / np.hypot(a, b)
+
+
+def assembles(g: FourBarGeometry, cos12: Array, sin12: Array) -> NDArray[np.bool_]:
+    """Where :func:`rocker_angle` has a pose (either branch)."""
+    return np.abs(_cos_ratio(g, cos12, sin12)) <= 1.0 + 1e-12
 
 
 def positions(g: FourBarGeometry, theta12: Array, *, branch: str,

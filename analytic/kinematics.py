@@ -7,14 +7,25 @@ over θ12: the closed forms of :mod:`mechcheck.analytic.fourbar_kinematics` and
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
 from mechcheck.analytic.case import Case, FourBarGeometry, preset_geometry
 from mechcheck.analytic.pose import Array, LinkState, Placement, Pose, cross, perp, unit
 
-__all__ = ["Array", "LinkState", "Placement", "Pose", "as_angles", "cross", "perp", "placement_of",
-           "pose_of", "unit"]
+__all__ = [
+    "Array",
+    "LinkState",
+    "Placement",
+    "Pose",
+    "as_angles",
+    "assembles",
+    "cross",
+    "perp",
+    "placement_of",
+    "pose_of",
+    "unit",
+]
 
 
 def as_angles(theta12: ArrayLike) -> Array:
@@ -48,3 +59,13 @@ def placement_of(case: Case, theta12: Array) -> Placement:
     g = preset_geometry(case)
     module = fourbar_kinematics if isinstance(g, FourBarGeometry) else slidercrank_kinematics
     return module.positions(g, theta12, branch=case.branch, ground_angle=case.ground_angle)
+
+
+def assembles(case: Case, theta12: ArrayLike) -> NDArray[np.bool_]:
+    """Where the closed form places ``case`` at each θ12 (rad): a few operations per pose,
+    without placing it."""
+    angles = as_angles(theta12) - case.ground_angle
+    g = preset_geometry(case)
+    if isinstance(g, FourBarGeometry):
+        return fourbar_kinematics.assembles(g, np.cos(angles), np.sin(angles))
+    return slidercrank_kinematics.assembles(g, np.sin(angles))

@@ -1,22 +1,38 @@
 """The four-bar and the slider-crank as linkages (LINKAGES.md, "The four-bar and
-slider-crank as linkages"): the same mechanism, drawn at the case's pose.
+slider-crank as linkages"): the same mechanism, drawn at the case's pose, solved by the one
+engine and read under the preset's names.
 
 Links ``ground``, ``crank``, ``coupler``, ``rocker`` / ``slider``; joints ``A0``
 (ground, crank), ``A`` (crank, coupler), ``B`` (coupler, rocker or slider) and ``B0``
 (ground, rocker) or ``slide`` (ground, slider, prismatic at B along the slide axis). The
 crank's joint A0 is driven with the case's ω and α from the drawn pose (with
 ``drive_link = 4``, the rocker's joint B0 with the rocker's ω and α at that instant), so the
-generic engine solves exactly the case's problem. Legacy quantity names map one to one
-(:func:`names_of`).
+engine solves exactly the case's problem. The contract's names (CONVENTIONS.md: ``F12`` …
+``F14``, ``T12`` or ``T14``, ``M14``, ``theta13``, ``theta14``, ``s14``) map one to one
+(:class:`Renaming`).
+
+Every backend, analytic or simulated, runs a preset through :func:`solve_preset` and
+:func:`sweep_preset` (:class:`~mechcheck.analytic.contract.Backend` does it for them): it
+sees only linkages. What the preset keeps of its own is its position analysis in closed
+form, which draws the linkage, says where it does not assemble, and keeps a sweep on the
+branch the file names.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, TypeVar
 
+import numpy as np
+
+from mechcheck.analytic.assembly import change_point_message, unassembled_verdict
 from mechcheck.analytic.case import Case, FourBarGeometry, Vec2
 from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
-from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.kinematics import assembles, pose_of
 from mechcheck.analytic.linkage import (
     Driver,
     Joint,
@@ -26,6 +42,12 @@ from mechcheck.analytic.linkage import (
     LinkMass,
     PointLoad,
 )
+from mechcheck.analytic.linkage_backends import analytic_results, pose_verdicts
+from mechcheck.analytic.linkage_forces import LinkageResults
+from mechcheck.analytic.solution import Solution
+
+#: A value or a column of values (:meth:`Renaming.columns`).
+T = TypeVar("T", float, np.ndarray)
 
 LINK_NAMES = {2: "crank", 3: "coupler"}
 
@@ -111,3 +133,270 @@ def _friction_of(case: Case) -> JointFriction | None:
     joint_mu = {"slide": f.slide_coefficient()} if case.mechanism == "slider_crank" else {}
     return JointFriction(mu=f.mu, pin_radius=dict(f.pin_radius), joint_mu=joint_mu,
                          viscous=dict(f.viscous))
+
+
+def as_linkage(case: Case) -> Case:
+    """The preset ``case`` as a linkage case drawn at its pose; the last few are kept
+    (:func:`kept_linkage`), as every backend of a sweep translates the same stretches again
+    and building a Linkage checks it whole (0.5 ms for a four-bar)."""
+    try:
+        return kept_linkage(case)
+    except TypeError:  # should a Case ever hold an unhashable value: translated each time
+        return translated(case)
+
+
+def translated(case: Case) -> Case:
+    """:func:`as_linkage`, built anew."""
+    return Case(name=case.name, geometry=linkage_of(case), theta12=0.0,
+                tolerance=case.tolerance, source=case.source)
+
+
+#: :func:`translated`, kept for the same Case (immutable, and so is its translation).
+kept_linkage = functools.lru_cache(maxsize=16)(translated)
+
+
+@dataclass(frozen=True)
+class Renaming:
+    """How a linkage solution of the preset ``case`` reads under the preset's names: the
+    quantity names, and the pose the linkage is drawn at (θ13, θ14 or s14), which the
+    linkage's rotations φ and slide displacement q move."""
+
+    names: dict[str, str]
+    coupler: str
+    rocker: str
+    drawn: dict[str, float]
+
+    @classmethod
+    def of(cls, case: Case) -> Renaming:
+        pose = pose_of(case)
+        drawn = {"theta13": float(pose.links[3].angle[0])}
+        if isinstance(case.geometry, FourBarGeometry):
+            drawn["theta14"] = float(pose.links[4].angle[0])
+        else:
+            drawn["s14"] = float(np.dot(pose.joints["B"][0], (math.cos(case.ground_angle),
+                                                              math.sin(case.ground_angle))))
+        return cls(names_of(case), f"phi_{link_name(case, 3)}", f"phi_{link_name(case, 4)}",
+                   drawn)
+
+    def values(self, values: Mapping[str, float]) -> dict[str, float]:
+        return {q: float(v) for q, v in self.columns(values).items()}
+
+    def columns(self, values: Mapping[str, T]) -> dict[str, T]:
+        """:meth:`values` of floats or of arrays (a column per quantity, a row per pose)."""
+        out = {legacy: values[name] for legacy, name in self.names.items() if name in values}
+        moved = {"theta13": self.coupler, "theta14": self.rocker, "s14": "q_slide"}
+        for quantity, drawn in self.drawn.items():
+            if moved[quantity] in values:
+                at = drawn + values[moved[quantity]]
+                # wrap_angle: np.remainder is Python's %, bit for bit.
+                out[quantity] = at if quantity == "s14" else (at + math.pi) % math.tau - math.pi
+        return out
+
+    def solution(self, solution: Solution, name: str) -> Solution:
+        """``solution`` under the preset's names, as case ``name``."""
+        return dataclasses.replace(solution, case=name, values=self.values(solution.values))
+
+    def solutions(self, solutions: list[Solution], name: str) -> list[Solution]:
+        """:meth:`solution` of each; of a sweep's (all ``ok``, the same quantities) at once:
+        the quantities renamed as columns, the Solutions made as a batch
+        (:meth:`Solution.batch`)."""
+        given = tuple(solutions[0].values) if solutions else ()
+        if not solutions or any(s.status != "ok" or tuple(s.values) != given
+                                for s in solutions):
+            return [self.solution(s, name) for s in solutions]
+        table = np.array([tuple(s.values.values()) for s in solutions])
+        columns = self.columns(dict(zip(given, table.T, strict=True)))
+        return Solution.batch(name, solutions[0].backend, tuple(columns),
+                              np.column_stack(list(columns.values())).tolist(),
+                              (dict(s.diagnostics) for s in solutions), solutions[0].units)
+
+
+def preset_values(case: Case, values: Mapping[str, float]) -> dict[str, float]:
+    """A linkage solution's values under the preset's names (:class:`Renaming`), for the
+    linkage drawn at ``case``'s pose."""
+    return Renaming.of(case).values(values)
+
+
+def assembly_verdict(case: Case, theta12: float, backend: str) -> Solution | None:
+    """``backend``'s Solution at a θ12 (rad) where the preset's closed form has no position
+    (:func:`~mechcheck.analytic.assembly.unassembled_verdict`), None where it has one."""
+    if assembles(case, theta12)[0]:
+        return None
+    status, message = unassembled_verdict(case, theta12)
+    return Solution(case.name, backend, {}, status=status, message=message,
+                    diagnostics={"theta12": theta12})
+
+
+def solve_preset(case: Case, solve: Callable[[Case], Solution], backend: str) -> Solution:
+    """``solve`` (a backend's, on linkages) on the preset ``case``: its linkage drawn at the
+    case's pose, read under the preset's names; the preset's verdict where it has no
+    position."""
+    verdict = assembly_verdict(case, case.theta12, backend)
+    if verdict is not None:
+        return verdict
+    linkage = as_linkage(case)
+    solution = Renaming.of(case).solution(solve(linkage), case.name)
+    if linkage.linkage.drawn_at_change_point:   # the preset's words for the linkage's verdict
+        return dataclasses.replace(solution, message=change_point_message(case, case.theta12))
+    return solution
+
+
+def driver_offsets(case: Case, theta12: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The linkage driver's coordinate (rad from the drawn pose) at each θ12 of a preset
+    sweep: θ12 itself for a drive at A0, the rocker's θ14 for a drive at B0."""
+    grid = np.asarray(theta12, dtype=float)
+    if case.drive_link == 2:
+        return grid - case.theta12
+    rocker = pose_of(case, grid).links[4].angle - pose_of(case).links[4].angle[0]
+    return np.arctan2(np.sin(rocker), np.cos(rocker))
+
+
+def branch_side(case: Case, values: Mapping[str, np.ndarray]) -> np.ndarray:
+    """Which of its two branches the preset's linkage is on at each pose, from its own points
+    (``values``: x_ and y_ of A, B, B0): a four-bar's B lies on one side of the line A→B0 or
+    on its mirror image (open or crossed), a slider's B ahead of A along the slide or behind
+    it (right or left). Zero where the branches meet."""
+    ax, ay, bx, by = values["x_A"], values["y_A"], values["x_B"], values["y_B"]
+    if isinstance(case.geometry, FourBarGeometry):
+        return (values["x_B0"] - ax) * (by - ay) - (values["y_B0"] - ay) * (bx - ax)
+    return (bx - ax) * math.cos(case.ground_angle) + (by - ay) * math.sin(case.ground_angle)
+
+
+def follows_branch(case: Case, results: LinkageResults) -> int:
+    """How many poses of a stretch (``results``: its linkage's analysis; the first pose is the
+    drawn one, on the preset's branch) stay on that branch and assemble.
+
+    The closed form keeps its branch by definition (``open``/``crossed``, ``right``/``left``),
+    also through a change point, where the two branches meet; continuation goes straight on
+    and ends on the other one, as it does after poses that do not assemble."""
+    side = branch_side(case, results.values)
+    off = ~results.pose.assembled | (side * side[0] < 0.0)
+    return int(np.argmax(off)) if off.any() else side.size
+
+
+@dataclass(frozen=True)
+class Stretch:
+    """A stretch of a preset sweep: the ``linkage`` drawn at its first pose, the driver's
+    values (``offsets``) and the linkage's analysis there (``results``, by the method that
+    split the sweep), and how its Solutions read under the preset's names, as case
+    ``name``."""
+
+    linkage: Case
+    offsets: np.ndarray
+    results: LinkageResults
+    renaming: Renaming
+    name: str
+
+    def rename(self, solutions: list[Solution]) -> list[Solution]:
+        """The linkage's Solutions under the preset's names (:meth:`Renaming.solutions`)."""
+        return self.renaming.solutions(solutions, self.name)
+
+
+def moves_pose_by_pose(case: Case) -> bool:
+    """The preset's linkage changes from pose to pose beyond its driver's value: driven on
+    the rocker with a motion or Coulomb friction, the rocker's rates (and the sense friction
+    opposes) are the crank's times a ratio that varies along the turn."""
+    return case.drive_link == 4 and (not case.motion.is_static or case.has_coulomb_friction)
+
+
+def stretches(case: Case, theta12: np.ndarray, backend: str, *, one_by_one: bool,
+              results_of: Callable[[Case, np.ndarray], LinkageResults],
+              solve: Callable[[Case], Solution]) -> list[Stretch | Solution]:
+    """A preset sweep over ``theta12`` (rad), as the linkage engine sees it, in order.
+
+    Poses where the preset has no position get its verdict (:func:`assembly_verdict`). The
+    rest run as the linkage's driver sweeps (``results_of``: its analysis at driver values),
+    each drawn at its first pose and as long as the linkage stays on the preset's branch
+    (:func:`follows_branch`); a pose drawn on a change point, and every pose with
+    ``one_by_one`` (or :func:`moves_pose_by_pose`), is drawn and solved on its own
+    (``solve``)."""
+    out: list[Stretch | Solution] = []
+    alone = one_by_one or moves_pose_by_pose(case)
+    inside = assembles(case, theta12)
+    i = 0
+    while i < theta12.size:
+        first = dataclasses.replace(case, theta12=float(theta12[i]))
+        linkage = as_linkage(first) if inside[i] and not alone else None
+        if linkage is None or linkage.linkage.drawn_at_change_point:
+            out.append(solve_preset(first, solve, backend))
+            i += 1
+            continue
+        offsets = driver_offsets(first, theta12[i:])
+        results = results_of(linkage, offsets)
+        n = max(1, follows_branch(first, results))
+        if n < offsets.size:
+            results = stretch_results(linkage, offsets[:n], results, results_of)
+        out.append(Stretch(linkage, offsets[:n], results, Renaming.of(first), case.name))
+        i += n
+    return out
+
+
+def stretch_results(linkage: Case, offsets: np.ndarray, longer: LinkageResults,
+                    results_of: Callable[[Case, np.ndarray], LinkageResults] = analytic_results
+                    ) -> LinkageResults:
+    """The analysis of a stretch's ``offsets``, as its own sweep would make it, given that of
+    a longer sweep starting with them (``longer``).
+
+    With an Assur plan each pose is placed in closed form and its branch carried from the
+    poses before it, so the first poses' results are the same, bit for bit, whatever
+    follows (``tests/test_solve_sweep.py``): they are cut from ``longer``. The Newton path's
+    rounding at a pose depends on the poses iterated with it: analysed anew."""
+    if linkage.linkage.assur_plan is not None:
+        return longer.head(offsets.size)
+    return results_of(linkage, offsets)
+
+
+def sweep_preset(case: Case, theta12: np.ndarray, backend: str,
+                 sweep: Callable[[Case, np.ndarray, str], list[Solution]],
+                 solve: Callable[[Case], Solution], *, one_by_one: bool) -> list[Solution]:
+    """A simulator's preset sweep over ``theta12`` (rad): each stretch its linkage sweep
+    (``sweep``: case, driver values, backend), each pose read under the preset's names."""
+    out: list[Solution] = []
+    for item in stretches(case, theta12, backend, one_by_one=one_by_one,
+                          results_of=analytic_results, solve=solve):
+        if isinstance(item, Solution):
+            out.append(item)
+        else:
+            out += item.rename(sweep(item.linkage, item.offsets, backend))
+    return out
+
+
+@dataclass(frozen=True)
+class PresetResults:
+    """A vectorised backend's preset sweep: each quantity's column under the preset's names,
+    each pose's verdict (``"ok"`` where it has forces), message and condition number."""
+
+    values: dict[str, np.ndarray]
+    statuses: np.ndarray
+    messages: np.ndarray
+    condition: np.ndarray
+
+
+def preset_results(case: Case, theta12: np.ndarray, backend: str,
+                   results_of: Callable[[Case, np.ndarray], LinkageResults],
+                   solve: Callable[[Case], Solution]) -> PresetResults:
+    """A vectorised backend's preset sweep over ``theta12`` (rad): :func:`stretches`, each
+    stretch's columns renamed and its verdicts decided as the linkage's."""
+    columns: list[dict[str, Any]] = []
+    statuses, messages, condition = [], [], []
+    for item in stretches(case, theta12, backend, one_by_one=False, results_of=results_of,
+                          solve=solve):
+        if isinstance(item, Solution):
+            columns.append({q: np.array([v]) for q, v in item.values.items()})
+            statuses.append(np.array([item.status], dtype=object))
+            messages.append(np.array([item.message], dtype=object))
+            condition.append(np.array([float(item.diagnostics.get("condition_number", np.nan))]))
+            continue
+        status, message = pose_verdicts(item.linkage, item.results)
+        columns.append(item.renaming.columns(item.results.values))
+        statuses.append(status)
+        messages.append(message)
+        condition.append(np.asarray(item.results.condition, dtype=float))
+    names = dict.fromkeys(q for c in columns for q in c)
+    sizes = [s.size for s in statuses]
+    values = {q: np.concatenate([c.get(q, np.full(n, np.nan)) for c, n in zip(columns, sizes,
+                                                                               strict=True)])
+              for q in names}
+    return PresetResults(values, np.concatenate(statuses) if statuses else np.array([], object),
+                         np.concatenate(messages) if messages else np.array([], object),
+                         np.concatenate(condition) if condition else np.array([]))

@@ -9,6 +9,7 @@ sin φ13 = (e − a2 sin φ12)/a3; ``right`` takes cos φ13 ≥ 0 (larger s14),
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mechcheck.analytic.case import SliderCrankGeometry
 from mechcheck.analytic.pose import Array, LinkState, Placement, Pose, stacked
@@ -18,9 +19,14 @@ def rod_angle(g: SliderCrankGeometry, sin12: Array, branch: str) -> tuple[Array,
     """(cos φ13, sin φ13) of the rod (from the slide axis), from sin φ12; NaN where the
     pose cannot assemble."""
     s = (g.offset - g.a2 * sin12) / g.a3
-    s = np.where(np.abs(s) <= 1.0 + 1e-12, np.clip(s, -1.0, 1.0), np.nan)
+    s = np.where(assembles(g, sin12), np.clip(s, -1.0, 1.0), np.nan)
     c = np.sqrt(1.0 - s**2) * (1.0 if branch == "right" else -1.0)
     return c, s
+
+
+def assembles(g: SliderCrankGeometry, sin12: Array) -> NDArray[np.bool_]:
+    """Where :func:`rod_angle` has a pose (either branch): |sin φ13| ≤ 1, to rounding."""
+    return np.abs((g.offset - g.a2 * sin12) / g.a3) <= 1.0 + 1e-12
 
 
 def positions(g: SliderCrankGeometry, theta12: Array, *, branch: str,

@@ -47,9 +47,9 @@ import mujoco
 import numpy as np
 
 from mechcheck.analytic.forces import solve
+from mechcheck.analytic.presets import as_linkage
 from mechcheck.casefile import builtin_case_files, load_cases
 from mechcheck.sim_models.mujoco.backend import settle, sweep
-from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sweep import gated_poses
 from mechcheck.tables import comparison_rows
 
@@ -68,7 +68,7 @@ NEAR_TOGGLE_REPEATS = 3
 #: (row label, backend). Both keep their models for the next sweep of the same linkage
 #: (:func:`mechcheck.sim_models.mujoco.linkage.sweep_rig`,
 #: :func:`mechcheck.sim_models.mujoco.batch_settle.kept_models`, and the presets'
-#: translation, :func:`mechcheck.sim_models.presets.kept_linkage`) and the settled
+#: translation, :func:`mechcheck.analytic.presets.kept_linkage`) and the settled
 #: sweep's model copies for models of the same sizes
 #: (:func:`mechcheck.sim_models.mujoco.batch_settle.model_copies`): timed with them kept
 #: from the warm-up run, and with them all built anew in every repeat (a sweep run once in
@@ -122,9 +122,9 @@ def stop_rules(label):
 
 def forget_rigs(label):
     """Before a repeat of the run ``label``: the kept models forgotten if it builds them."""
+    from mechcheck.analytic.presets import kept_linkage
     from mechcheck.sim_models.mujoco.batch_settle import COPIES, kept_models
     from mechcheck.sim_models.mujoco.linkage import sweep_rig
-    from mechcheck.sim_models.presets import kept_linkage
 
     if label in (COLD, COLD_SETTLED):  # as in a fresh process
         sweep_rig.cache_clear()

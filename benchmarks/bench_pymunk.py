@@ -40,9 +40,9 @@ from pymunk._chipmunk_cffi import lib
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
-from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sim_models.pymunk import backend as backends, compiled
 from mechcheck.sim_models.pymunk.backend import sweep
 from mechcheck.sim_models.pymunk.linkage import hold_without_correction

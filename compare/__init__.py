@@ -4,6 +4,7 @@ The public Python API is these few names (README, "Python API"):
 
 - :func:`load_cases`: the validated Cases of case files (none: the built-in suite);
 - :func:`solve`: one Case through one backend, a :class:`Solution`;
+- :func:`solve_poses`: one Case at many values of its driver in one vectorised call, a table;
 - :func:`check`: Cases through backends, compared with ``analytic`` under the
   tolerance policy: a :class:`RunResult` with ``exit_status`` and ``comparison``;
 - :func:`available_backends`: the backends this installation can run;
@@ -31,10 +32,14 @@ from mechcheck.analytic.values import CaseError
 from mechcheck.verdicts import DEFAULT_FAIL_ON
 
 if TYPE_CHECKING:
+    import pandas as pd
+    from numpy.typing import ArrayLike
+
     from mechcheck.analytic.case import Case
     from mechcheck.run import RunResult
 
-__all__ = ["Case", "CaseError", "RunResult", "Solution", "available_backends", "check", "load_cases", "solve"]
+__all__ = ["Case", "CaseError", "RunResult", "Solution", "available_backends", "check", "load_cases",
+           "solve", "solve_poses"]
 
 
 def load_cases(*paths: str | Path) -> list[Case]:
@@ -55,6 +60,43 @@ def solve(case: Case, backend: str = "analytic") -> Solution:
     from mechcheck.run import solve_gated
 
     return solve_gated(backend, case)
+
+
+def solve_poses(case: Case, driver_values: ArrayLike, backend: str = "analytic") -> pd.DataFrame:
+    """``case`` at many poses in one vectorised call: a table, one row per pose.
+
+    ``driver_values`` (SI) are the values of the case's driver: for a linkage, its first
+    driver's rotation (rad) or travel (m) from the drawn pose, the others at their own
+    values; for a four-bar or slider-crank, θ12 (rad). ``backend`` is one of the vectorised
+    ones (``analytic``, ``superposition``, ``virtual_work``). Columns: ``driver``, ``status``,
+    ``message``, ``condition_number``, then every quantity in SI (radians), a force NaN
+    where the pose has a verdict. Each pose's verdict and numbers are those ``mechcheck
+    sweep`` writes for it, behind the same pose gate.
+    """
+    import numpy as np
+    import pandas as pd
+
+    from mechcheck import backends as registry
+    from mechcheck.sweep import check_driver_grid, vector_poses
+
+    grid = np.asarray(driver_values, dtype=float).ravel()
+    if not registry.get(backend).vectorised:
+        vectorised = [n for n, b in registry.REGISTRY.items() if b.vectorised]
+        raise ValueError(f"solve_poses: backend {backend!r} is not vectorised; use one of "
+                         f"{', '.join(vectorised)} (or `mechcheck sweep` for a simulator)")
+    if not np.isfinite(grid).all():
+        raise ValueError("solve_poses: driver_values must be finite")
+    if not case.is_preset:
+        rotates = case.linkage.drivers and case.linkage.joint(
+            case.linkage.drivers[0].joint).kind.rotates
+        check_driver_grid(case, np.degrees(grid) if rotates else grid * 1000.0, "driver_values")
+    poses = vector_poses(case, backend, grid)
+    if poses is None:
+        raise ValueError(f"solve_poses: backend {backend!r} does not apply to case "
+                         f"{case.name!r} (its method refuses Coulomb friction)")
+    return pd.DataFrame({"driver": grid, "status": poses.statuses.astype(str),
+                         "message": poses.messages.astype(str),
+                         "condition_number": poses.condition, **poses.values})
 
 
 def check(cases: Sequence[Case], backends: Sequence[str] | None = None, *,

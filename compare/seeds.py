@@ -13,7 +13,6 @@ import math
 from dataclasses import dataclass
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.equilibrium import slide_frame
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
 
 
@@ -29,8 +28,8 @@ def derived_value(case: Case, solution: Solution, key: str) -> float | None:
     if key == "theta31" and "theta13" in v:
         return _wrap_deg(math.degrees(v["theta13"]) + 180.0) % 360.0
     if key == "N14" and "F14_x" in v:
-        _, n = slide_frame(case)
-        return abs(v["F14_x"] * n[0] + v["F14_y"] * n[1])
+        # The slide's normal: the slide direction turned +90°.
+        return abs(-v["F14_x"] * math.sin(case.ground_angle) + v["F14_y"] * math.cos(case.ground_angle))
     if len(key) >= 3 and key[0] == "F" and key[1:3].isdigit():
         i, j = key[1], key[2]
         name = f"F{min(i, j)}{max(i, j)}"

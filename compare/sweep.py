@@ -132,12 +132,12 @@ def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray
     names = list(dict.fromkeys([REFERENCE, *backends]))
     for name in names:
         declared = registry.get(name)
-        if declared.sweep is None and declared.linkage_sweep is None:
+        if declared.sweep is None:
             raise BackendUnavailable(f"backend {name!r} has no sweep")
     tasks = []
     for case in cases:
-        grid = theta12_deg if case.mechanism != "linkage" or driver_grid is None else driver_grid
-        if case.mechanism == "linkage":
+        grid = theta12_deg if case.is_preset or driver_grid is None else driver_grid
+        if not case.is_preset:
             check_driver_grid(case, grid, "--theta12" if driver_grid is None else "--driver")
         for name in names:
             size = VECTOR_CHUNK if registry.get(name).vectorised else SIMULATOR_CHUNK
@@ -173,11 +173,11 @@ UNITS = ["N", "N*m", "deg", "m"]
 
 def units_of(case: Case) -> dict[str, str]:
     """The table unit of every quantity the case's backends report."""
-    if case.mechanism == "linkage":
-        from mechcheck.analytic.linkage_backends import quantity_units
+    if case.is_preset:
+        return {q: unit for q, (unit, _) in QUANTITY_UNITS.items()}
+    from mechcheck.analytic.linkage_backends import quantity_units
 
-        return quantity_units(case.linkage)
-    return {q: unit for q, (unit, _) in QUANTITY_UNITS.items()}
+    return quantity_units(case.linkage)
 
 
 def _long_frame(case: Case, backend: str, theta_deg: np.ndarray,
@@ -214,44 +214,67 @@ def _categorical(codes: np.ndarray, categories: list[str]) -> pd.Categorical[Any
     return pd.Categorical.from_codes(codes, dtype=pd.CategoricalDtype(categories))
 
 
-def driver_grid_si(case: Case, grid: np.ndarray) -> np.ndarray:
-    """A linkage's sweep grid (deg of a revolute first driver, mm of a prismatic one) in the
-    engine's units (rad, m)."""
+def grid_si(case: Case, grid: np.ndarray) -> np.ndarray:
+    """A sweep's grid in the engine's units: a preset's θ12 (deg) in rad; a linkage's (deg of
+    a revolute first driver, mm of a prismatic one) in rad or m."""
+    if case.is_preset:
+        return np.radians(grid)
     kind = case.linkage.joint(case.linkage.drivers[0].joint).kind
     return np.radians(grid) if kind.rotates else grid / 1000.0
 
 
-def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
-    theta_deg = np.asarray(task.theta12_deg)
-    linkage = task.case.mechanism == "linkage"
-    solver = registry.get(task.backend).sweeper(linkage)
+@dataclass(frozen=True)
+class Poses:
+    """A vectorised backend's answer at many poses, decided as ``run`` decides one: each
+    quantity's column (SI; forces NaN where the pose has a verdict), and per pose the verdict
+    (``"ok"`` where it has forces), its message and the condition number."""
+
+    values: dict[str, np.ndarray]
+    statuses: np.ndarray
+    messages: np.ndarray
+    condition: np.ndarray
+
+
+def vector_poses(case: Case, backend: str, grid: np.ndarray) -> Poses | None:
+    """Vectorised backend ``backend`` over ``grid`` (SI: a linkage's first driver from the
+    drawn pose, or a preset's θ12), behind the reference's pose gate; None where the backend
+    has no sweep or its method refuses the case (Coulomb friction)."""
+    solver = registry.get(backend).sweeper()
     if solver is None:
-        return _not_applicable(task)
-    grid = driver_grid_si(task.case, theta_deg) if linkage else np.radians(theta_deg)
+        return None
     try:
-        results = solver(task.case, grid)
+        results = solver(case, grid)
     except ValueError:  # the method refuses this case (Coulomb friction)
-        return _not_applicable(task)
-    statuses, messages = pose_verdicts(task.case, results)
+        return None
+    statuses, messages = pose_verdicts(case, results)
     values = dict(results.values)
-    if task.backend != REFERENCE:
+    if backend != REFERENCE:
         # Behind the pose gate, as `run` runs it: at the reference's pose verdict the
         # backend is not run, gives no number and repeats the reference's reason.
-        verdicts, reasons, _ = reference_verdicts(task.case, grid)
+        verdicts, reasons, _ = reference_verdicts(case, grid)
         gated = np.isin(verdicts, POSE_VERDICTS)
         statuses = np.where(gated, np.array(verdicts, dtype=object), statuses)
         messages = np.where(gated, np.array([gated_message(r, REFERENCE) for r in reasons],
                                             dtype=object), messages)
         values = {q: np.where(gated, np.nan, v) for q, v in values.items()}
-    statuses, messages = _non_finite_errors(task.backend, statuses, messages, values)
+    statuses, messages = _non_finite_errors(backend, statuses, messages, values)
     # A pose with a verdict keeps its pose (as `run`'s Solution does), no force.
-    units = units_of(task.case)
+    units = units_of(case)
     values = {q: v if kind_of_unit(units[q]) == "pose" else np.where(statuses == "ok", v, np.nan)
               for q, v in values.items()}
+    return Poses(values, statuses, messages, np.asarray(results.condition, dtype=float))
+
+
+def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
+    theta_deg = np.asarray(task.theta12_deg)
+    poses = vector_poses(task.case, task.backend, grid_si(task.case, theta_deg))
+    if poses is None:
+        return _not_applicable(task)
     status = pd.DataFrame({"case": task.case.name, "backend": task.backend, "theta12": theta_deg,
-                           "status": statuses.astype(str), "condition_number": results.condition,
-                           "message": messages.astype(str)})
-    return _long_frame(task.case, task.backend, theta_deg, values), status
+                           "status": poses.statuses.astype(str),
+                           "condition_number": poses.condition,
+                           "message": poses.messages.astype(str)})
+    return _long_frame(task.case, task.backend, theta_deg, poses.values), status
 
 
 def _non_finite_errors(backend: str, statuses: np.ndarray, messages: np.ndarray,
@@ -296,7 +319,7 @@ def gated_poses(case: Case, grid: np.ndarray) -> tuple[list[str], np.ndarray]:
 
 def reference_verdicts(case: Case, grid: np.ndarray) -> tuple[list[str], list[str], np.ndarray]:
     """The reference's verdict, message and condition number at each pose of the grid."""
-    reference = registry.get(REFERENCE).sweeper(case.mechanism == "linkage")
+    reference = registry.get(REFERENCE).sweeper()
     assert reference is not None
     results = reference(case, grid)
     statuses, messages = pose_verdicts(case, results)
@@ -307,22 +330,20 @@ def reference_verdicts(case: Case, grid: np.ndarray) -> tuple[list[str], list[st
 def pose_verdicts(case: Case, results: Any) -> tuple[np.ndarray, np.ndarray]:
     """Each pose's verdict (``"ok"`` where it has forces) and message in vectorised results,
     decided as ``run`` decides them for one pose."""
-    if case.mechanism == "linkage":
-        from mechcheck.analytic.linkage_backends import pose_verdicts as linkage_verdicts
+    from mechcheck.analytic.linkage_backends import pose_verdicts as linkage_verdicts
+    from mechcheck.analytic.presets import PresetResults
 
-        return linkage_verdicts(case, results)
-    from mechcheck.analytic.forces import pose_verdicts as preset_verdicts
-
-    return preset_verdicts(case, results)
+    if isinstance(results, PresetResults):
+        return results.statuses, results.messages
+    return linkage_verdicts(case, results)
 
 
 def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     theta_deg = np.asarray(task.theta12_deg)
-    linkage = task.case.mechanism == "linkage"
-    sweep_fn = registry.get(task.backend).sweeper(linkage)
+    sweep_fn = registry.get(task.backend).sweeper()
     if sweep_fn is None:
         return _not_applicable(task)
-    grid = driver_grid_si(task.case, theta_deg) if linkage else np.radians(theta_deg)
+    grid = grid_si(task.case, theta_deg)
     verdicts, reasons, condition = reference_verdicts(task.case, grid)
     passing = np.flatnonzero([v not in POSE_VERDICTS for v in verdicts])
     statuses = [v if v in POSE_VERDICTS else "ok" for v in verdicts]

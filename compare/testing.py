@@ -10,7 +10,7 @@ Examples
 
 from __future__ import annotations
 
-from mechcheck.analytic import forces
+from mechcheck import backends
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
 from mechcheck.tables import comparison_rows
@@ -25,7 +25,7 @@ def assert_solution_close(case: Case, solution: Solution, reference: Solution | 
     message names the case, the backend, each quantity, both values with their
     unit, the relative error, the tolerance and the reason for it.
     """
-    reference = forces.solve(case) if reference is None else reference
+    reference = backends.load(backends.REFERENCE)(case) if reference is None else reference
     where = f"{case.name} [{solution.backend}]"
     if solution.status != "ok":
         raise AssertionError(f"{where}: verdict {solution.status}: {solution.message}")

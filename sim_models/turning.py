@@ -17,7 +17,7 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mechcheck.analytic.case import Case
+from mechcheck.analytic.case import Case, FourBarGeometry, Load
 from mechcheck.analytic.kinematics import pose_of
 
 Array = NDArray[np.float64]
@@ -393,3 +393,12 @@ def amplification_result(simulator: str, case: Case, load: float,
                          np.array([r[2] for r in rows], dtype=bool), kept,
                          np.array([r[3] for r in rows], dtype=int), time.perf_counter() - start)
 
+
+
+def output_load(case: Case, load: float) -> Load:
+    """The output load of the holding runs: a pure couple ``load`` on the rocker, or a force
+    ``load`` on the slider along the slide direction u through B (no moment)."""
+    if isinstance(case.geometry, FourBarGeometry):
+        return Load(4, at=(0.0, 0.0), force=(0.0, 0.0), torque=load)
+    g = case.ground_angle
+    return Load(4, at=(0.0, 0.0), force=(load * math.cos(g), load * math.sin(g)))

@@ -50,18 +50,21 @@ BACKENDS = (
 
 
 def solve(case):
-    from mechcheck.analytic import forces
-    return replace(forces.solve(case), backend="fakesim", diagnostics={"method": "fake"})
+    from mechcheck.analytic import linkage_backends
+    return replace(linkage_backends.solve(case), backend="fakesim", diagnostics={"method": "fake"})
 
 
 def solve_off(case):
     answer = solve(case)
-    values = dict(answer.values, F12_x=answer.values["F12_x"] * 1.01 + 1.0)
+    values = dict(answer.values, F_A0_x=answer.values["F_A0_x"] * 1.01 + 1.0)
     return replace(answer, backend="fakesim_off", values=values)
 
 
-def sweep(case, theta12, backend):
-    return [solve(case.with_(theta12=float(t))) for t in theta12]
+def sweep(case, values, backend):
+    from mechcheck.analytic.linkage_backends import analytic_results, solution_from
+    results = analytic_results(case, values)
+    return [replace(solution_from(case, "fakesim", results, method="fake", elapsed=0.0, index=i),
+                    diagnostics={"method": "fake"}) for i in range(len(values))]
 '''
 
 
@@ -130,9 +133,8 @@ def test_every_declared_backend_meets_the_contract() -> None:
         if backend.missing_requirement() is not None:
             continue
         assert callable(backend.solver())
-        for linkage in (False, True):
-            sweeper = backend.sweeper(linkage)
-            assert sweeper is None or callable(sweeper)
+        sweeper = backend.sweeper()
+        assert sweeper is None or callable(sweeper)
         assert backend.family in ("reference", "analytic", "exact_solve", "settled")
     assert [n for n, b in registry.REGISTRY.items() if b.family == "reference"] == [registry.REFERENCE]
 

@@ -303,7 +303,7 @@ def test_the_friction_loop_gain_of_a_slide_is_mu_tan_phi(theta12: float, mu: flo
     the slide axis (by hand, from the rod's angle). The analytic engine's spectral radius
     of K⁻¹·∂φ/∂x gives the same, above and below 1."""
     from mechcheck.analytic.linkage_backends import analytic_results
-    from mechcheck.sim_models.presets import as_linkage
+    from mechcheck.analytic.presets import as_linkage
 
     case = Case(name="slide-loop", geometry=SliderCrankGeometry(0.75, 0.6875, offset=0.0),
                 theta12=theta12, ground_angle=-1.5, branch="right",

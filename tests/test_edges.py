@@ -288,8 +288,10 @@ FAKE = {"value": math.nan}
 
 
 def non_finite_backend(case: Case) -> Solution:
-    """A broken backend: claims ``ok`` with a non-finite drive torque."""
-    return Solution(case.name, "broken", {"T12": FAKE["value"], "theta13": 0.5})
+    """A broken backend: claims ``ok`` with a non-finite drive torque (a four-bar's crank
+    joint is ``A0``: its effort reads as T12)."""
+    return Solution(case.name, "broken", {"Q_A0": FAKE["value"], "phi_coupler": 0.5},
+                    units={"Q_A0": "N*m", "phi_coupler": "deg"})
 
 
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])

@@ -25,10 +25,10 @@ import mechcheck
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_backends import analytic_results
-from mechcheck.analytic.presets import linkage_of
+from mechcheck.analytic.presets import as_linkage, linkage_of
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
-from mechcheck.sim_models.mujoco.backend import settle, solve_at_pose, sweep
+from mechcheck.sim_models.mujoco import backend as _mujoco
 from mechcheck.sim_models.mujoco.batch_settle import (
     CHUNK,
     REFINE_CHUNK,
@@ -52,11 +52,17 @@ from mechcheck.sim_models.mujoco.settle import (
     remaining_change,
     secant_slope,
 )
-from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin
+from .harness import solver, sweeper
+
+#: The backend's functions as the harness calls them (a preset as its linkage).
+settle = solver(_mujoco.settle, "mujoco")
+solve_at_pose = solver(_mujoco.solve_at_pose, "mujoco_solve")
+sweep = sweeper(_mujoco.sweep, {"mujoco": _mujoco.settle, "mujoco_solve": _mujoco.solve_at_pose},
+                "mujoco")
 
 
 def fourbar_e1() -> Case:
@@ -442,8 +448,8 @@ def test_settled_statics_reach_condition_number_ten_thousand() -> None:
 
 def test_sweep_next_to_the_change_point_settles_as_its_poses_alone() -> None:
     """A batched sweep of seed E1 towards its change point, δ from 0.2° to 0.0164°
-    (condition numbers 590–7200, all within the static target's range): every pose settles
-    within the static target, as each does alone. The poses between every 8th start from
+    (condition numbers 2.2e3–2.7e4; past 1e4 a pose is judged as near-singular): every pose
+    settles within its target, as each does alone. The poses between every 8th start from
     their settled neighbours' forces, and from condition number ~4200 on such a start ran
     its first pass out of steps (``not_settled``); such a pose is now settled again from
     nothing carried."""
@@ -451,12 +457,13 @@ def test_sweep_next_to_the_change_point_settles_as_its_poses_alone() -> None:
     theta = math.pi - np.radians(np.geomspace(0.2, 0.0164, 15))
     for t, sim in zip(theta, sweep(case, theta), strict=True):
         at = case.with_(theta12=float(t))
-        assert mechcheck.solve(at, "analytic").diagnostics["condition_number"] < 1e4
+        assert mechcheck.solve(at, "analytic").diagnostics["condition_number"] < 3e4
         assert sim.status == "ok", f"θ12 = {np.degrees(t):.4f}°: {sim.message}"
         assert_solution_close(at, sim, complete=True)
 
 
-#: Seed E1 at θ12 = 180° − δ, δ from the near-toggle study (condition numbers 59, 145, 357, 880).
+#: Seed E1 at θ12 = 180° − δ, δ from the near-toggle study (condition numbers 222, 546, 1345,
+#: 3310).
 NEAR_TOGGLE_DELTAS = np.geomspace(30.0, 1e-4, 15)[3:7]
 
 

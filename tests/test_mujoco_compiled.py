@@ -12,14 +12,18 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
+from mechcheck.analytic.presets import as_linkage, kept_linkage, translated
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.mujoco import batch_settle, exact_compiled
-from mechcheck.sim_models.mujoco.backend import sweep
-from mechcheck.sim_models.presets import as_linkage, kept_linkage, translated
+from mechcheck.sim_models.mujoco import backend as _mujoco, batch_settle, exact_compiled
 from mechcheck.sweep import gated_poses
 
 from .builtin import builtin, builtin_cases
+from .harness import sweeper
 from .test_pymunk_linkage import at_rest
+
+#: The backend's functions as the harness calls them (a preset as its linkage).
+sweep = sweeper(_mujoco.sweep, {"mujoco": _mujoco.settle, "mujoco_solve": _mujoco.solve_at_pose},
+                "mujoco")
 
 pytest.importorskip("numba")
 

@@ -27,7 +27,7 @@ from mechcheck.casefile import linkage_case
 from mechcheck.linkage_file import LinkageCaseSpec
 from mechcheck.sim_models.convergence import left_assembly
 from mechcheck.sim_models.linkage_motion import REST_SPEED
-from mechcheck.sim_models.mujoco.backend import settle, solve_at_pose
+from mechcheck.sim_models.mujoco import backend as _mujoco
 from mechcheck.sim_models.mujoco.linkage import sweep_linkage
 from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
 from mechcheck.sim_models.mujoco.linkage_free import UNSTABLE, settle_free
@@ -37,6 +37,7 @@ from mechcheck.sim_models.mujoco.settle import SETTLE_RTOL
 from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin_cases, sliding_collar
+from .harness import solver
 from .strategies import (
     MAX_CONDITION,
     carries_a_force,
@@ -45,6 +46,10 @@ from .strategies import (
     linkage_tables,
 )
 from .test_driven_friction import coulomb_motion_unresolved
+
+#: The backend's functions as the harness calls them (a preset as its linkage).
+settle = solver(_mujoco.settle, "mujoco")
+solve_at_pose = solver(_mujoco.solve_at_pose, "mujoco_solve")
 
 GOLDEN = Path(__file__).parent / "golden" / "mujoco"
 

@@ -16,9 +16,16 @@ import numpy as np
 from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Motion, SliderCrankGeometry
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
-from mechcheck.sim_models.mujoco.backend import settle, sweep
+from mechcheck.sim_models.mujoco import backend as _mujoco
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
+
+from .harness import solver, sweeper
+
+#: The backend's functions as the harness calls them (a preset as its linkage).
+settle = solver(_mujoco.settle, "mujoco")
+sweep = sweeper(_mujoco.sweep, {"mujoco": _mujoco.settle, "mujoco_solve": _mujoco.solve_at_pose},
+                "mujoco")
 
 #: The seed four-bar's links, metres (a1..a4 = 140, 80, 100, 120 mm).
 SEED_FOURBAR = FourBarGeometry(0.140, 0.080, 0.100, 0.120)

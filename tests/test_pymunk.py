@@ -19,16 +19,23 @@ from mechcheck.analytic.case import Case, Friction, Load, Mass, Motion, SliderCr
 from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
 from mechcheck.sim_models.convergence import LEAD_AGREEMENT_RTOL, TIMESTEP_AGREEMENT_RTOL
 from mechcheck.sim_models.linkage_motion import driven_motion
-from mechcheck.sim_models.presets import as_linkage
-from mechcheck.sim_models.pymunk.backend import settle, solve_at_pose, sweep
+from mechcheck.sim_models.pymunk import backend as _pymunk
 from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin
+from .harness import solver, sweeper
+
+#: The backend's functions as the harness calls them (a preset as its linkage).
+settle = solver(_pymunk.settle, "pymunk")
+solve_at_pose = solver(_pymunk.solve_at_pose, "pymunk_solve")
+sweep = sweeper(_pymunk.sweep, {"pymunk": _pymunk.settle, "pymunk_solve": _pymunk.solve_at_pose},
+                "pymunk")
 
 MASSES = (Mass(2, 1.0, (0.04, 0.0), 1e-3), Mass(3, 2.0, (0.05, 0.01), 2e-3),
           Mass(4, 1.5, (0.06, 0.0), 2e-3))

@@ -15,14 +15,14 @@ import pytest
 from hypothesis import given
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.compiled import kernel
-from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sim_models.pymunk import backend as pm, compiled, forces, linkage as pl
-from mechcheck.sim_models.pymunk.backend import sweep as backend_sweep
 from mechcheck.sweep import gated_poses
 
 from .builtin import builtin, builtin_cases
+from .harness import sweeper
 from .strategies import linkage_tables
 from .test_linkage_identities import SETTINGS
 from .test_pymunk_linkage import at_rest, loaded_case
@@ -44,6 +44,8 @@ def held(name: str) -> Case:
 
 #: The held model's two runs: settling, and the constraint solve at the analytic pose.
 BACKENDS = {"pymunk": (pl.settle, "pymunk"), "pymunk_solve": (pl.solve_at_pose, "pymunk_solve")}
+#: The backend's sweep as the harness calls it (a preset as its linkage).
+backend_sweep = sweeper(pm.sweep, {"pymunk": pm.settle, "pymunk_solve": pm.solve_at_pose}, "pymunk")
 
 
 @pytest.fixture

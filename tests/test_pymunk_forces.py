@@ -7,8 +7,8 @@ import pytest
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.values import GROUND
-from mechcheck.sim_models.presets import as_linkage
 from mechcheck.sim_models.pymunk import forces
 from mechcheck.sim_models.pymunk.linkage import reactions
 from mechcheck.sim_models.pymunk.linkage_model import LinkageModel, apply_loads, build_linkage_model

@@ -27,6 +27,12 @@ from mechcheck.casefile import builtin_case_files, load_cases
 SIMULATORS = tuple(backends.names_of_family("settled"))
 
 
+def reference(case: Case) -> Solution:
+    """The analytic reference's Solution of ``case`` (the one engine; a preset as its
+    linkage)."""
+    return backends.load(backends.REFERENCE)(case)
+
+
 @dataclass(frozen=True)
 class StudyResult:
     """One study: what was asked, the data, a figure, and the conclusion computed from the data."""

@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pandas as pd
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case, Friction
 from mechcheck.studies.common import (
     SIMULATORS,
@@ -18,6 +17,7 @@ from mechcheck.studies.common import (
     groups,
     plt,
     png,
+    reference,
     simulate,
     torque,
 )
@@ -47,8 +47,8 @@ def run(quick: bool = False) -> StudyResult:
         exact_mu = math.sin(math.atan(mu))
         small, exact = (with_pin_coefficient(base, float(mu), m) for m in (float(mu), exact_mu))
         rows.append({"source": "analytic", "mu": mu, "radius_ratio": exact_mu / mu,
-                     "T_small_angle": torque(forces.solve(small), small),
-                     "T_exact": torque(forces.solve(exact), exact)})
+                     "T_small_angle": torque(reference(small), small),
+                     "T_exact": torque(reference(exact), exact)})
         for sim in SIMULATORS:
             rows.append({"source": sim, "mu": mu, "radius_ratio": exact_mu / mu,
                          "T_small_angle": torque(simulate(sim, small), small),

@@ -7,7 +7,6 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from mechcheck.analytic import forces
 from mechcheck.studies.common import (
     SIMULATORS,
     StudyResult,
@@ -16,6 +15,7 @@ from mechcheck.studies.common import (
     groups,
     loglog_by_source,
     realistic_e1,
+    reference,
     simulate,
     torque,
 )
@@ -34,10 +34,10 @@ def run(quick: bool = False) -> StudyResult:
                       for ld in base.loads)
         heavy = base.with_(loads=loads)
         massless = heavy.with_(masses=(), gravity=(0.0, 0.0))
-        t0 = torque(forces.solve(massless), massless)
+        t0 = torque(reference(massless), massless)
         load = float(np.hypot(*loads[1].force))
         rows.append({"source": "analytic (with weights)", "load_N": load, "T_massless": t0,
-                     "T_weighted": torque(forces.solve(heavy), heavy)})
+                     "T_weighted": torque(reference(heavy), heavy)})
         for sim in SIMULATORS:
             s = simulate(sim, heavy)
             rows.append({"source": sim, "load_N": load, "T_massless": t0,

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import Motion
 from mechcheck.studies.common import (
     SIMULATORS,
@@ -15,6 +14,7 @@ from mechcheck.studies.common import (
     loglog_by_source,
     reached,
     realistic_e1,
+    reference,
     simulate,
     torque,
 )
@@ -26,13 +26,13 @@ def run(quick: bool = False) -> StudyResult:
     """Seed E1 with steel links at its seed pose, turning steadily at ω; the static analysis
     (weights, no inertia) against the dynamic torque measured by driving each simulator."""
     static_case = realistic_e1()
-    t_static = torque(forces.solve(static_case), static_case)
+    t_static = torque(reference(static_case), static_case)
     omegas = np.geomspace(0.5, 200.0, 6 if quick else 14)
     rows = []
     for w in omegas:
         moving = static_case.with_(motion=Motion(float(w), 0.0))
         rows.append({"source": "analytic (D'Alembert)", "omega": w,
-                     "T_dynamic": torque(forces.solve(moving), moving)})
+                     "T_dynamic": torque(reference(moving), moving)})
         for sim in SIMULATORS:
             s = simulate(sim, moving)
             rows.append({"source": sim, "omega": w, "T_dynamic": torque(s, moving),

@@ -16,10 +16,9 @@ from typing import cast
 import numpy as np
 import pandas as pd
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case, Motion
 from mechcheck.analytic.solution import Solution
-from mechcheck.studies.common import StudyResult, builtin, plt, png, realistic_e1
+from mechcheck.studies.common import StudyResult, builtin, plt, png, realistic_e1, reference
 from mechcheck.tables import comparison_rows
 
 #: MuJoCo's own defaults: solref = (0.02, 1), solimp[0] = 0.9.
@@ -38,7 +37,7 @@ DRIVEN_LEAD = 0.05
 
 def worst_error(case: Case, values: dict[str, float]) -> float:
     """Largest relative error over forces and torques (the comparison's measure)."""
-    ref = forces.solve(case)
+    ref = reference(case)
     sim = Solution(case.name, "study", {q: v for q, v in values.items() if q in ref.values})
     rows = comparison_rows(case, ref, sim)
     return max((cast(float, r["rel_err"]) for r in rows
@@ -62,7 +61,7 @@ def mujoco_rows(case: Case, quick: bool) -> list[dict[str, object]]:
 
 
 def pymunk_rows(case: Case, driven_case: Case, quick: bool) -> list[dict[str, object]]:
-    from mechcheck.sim_models.presets import through_linkage
+    from mechcheck.analytic.presets import solve_preset
     from mechcheck.sim_models.pymunk.backend import settle
     from mechcheck.sim_models.pymunk.linkage_dynamics import drive_at_timestep
     from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE
@@ -70,14 +69,16 @@ def pymunk_rows(case: Case, driven_case: Case, quick: bool) -> list[dict[str, ob
     rows: list[dict[str, object]] = []
     for bias, label in ((PYMUNK_DEFAULT_BIAS, "error_bias 0.9⁶⁰ (default)"), (0.0, "error_bias 0")):
         for n in (PYMUNK_ITERATIONS[::2] if quick else PYMUNK_ITERATIONS):
-            sol = settle(case, LINKAGE_SETTLE.with_(iterations=n, error_bias=bias))
+            settings = LINKAGE_SETTLE.with_(iterations=n, error_bias=bias)
+            sol = solve_preset(case, partial(settle, settings=settings), "pymunk")
             rows.append({"simulator": "pymunk", "setting": label, "parameter": "iterations",
                          "value": n, "reading": "settled", "status": sol.status,
                          "steps": sol.diagnostics.get("steps"),
                          "error": worst_error(case, dict(sol.values))
                          if sol.status == "ok" else math.nan})
     for dt in (PYMUNK_DT[::2] if quick else PYMUNK_DT):
-        sol = through_linkage(driven_case, partial(drive_at_timestep, dt=dt, lead_time=DRIVEN_LEAD))
+        sol = solve_preset(driven_case, partial(drive_at_timestep, dt=dt, lead_time=DRIVEN_LEAD),
+                           "pymunk")
         rows.append({"simulator": "pymunk", "setting": "driven (ω = −10, α = 50)",
                      "parameter": "dt", "value": dt, "reading": "driven", "status": sol.status,
                      "error": worst_error(driven_case, dict(sol.values))

@@ -7,7 +7,6 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case, Friction
 from mechcheck.studies.common import (
     SIMULATORS,
@@ -17,6 +16,7 @@ from mechcheck.studies.common import (
     groups,
     loglog_by_source,
     reached,
+    reference,
     simulate,
     torque,
 )
@@ -43,8 +43,8 @@ def run(quick: bool = False) -> StudyResult:
     for mu in mus:
         case = with_friction(base, float(mu))
         parts = single_loads(case)
-        rows.append({"source": "analytic", "mu": mu, "T_all": torque(forces.solve(case), case),
-                     "T_sum": sum(torque(forces.solve(p), p) for p in parts)})
+        rows.append({"source": "analytic", "mu": mu, "T_all": torque(reference(case), case),
+                     "T_sum": sum(torque(reference(p), p) for p in parts)})
         for sim in SIMULATORS:
             rows.append({"source": sim, "mu": mu, "T_all": torque(simulate(sim, case), case),
                          "T_sum": sum(torque(simulate(sim, p), p) for p in parts)})

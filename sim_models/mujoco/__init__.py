@@ -19,8 +19,8 @@ _HERE = "mechcheck.sim_models.mujoco.backend"
 BACKENDS = (
     Backend("mujoco", f"{_HERE}:settle", "settled",
             "MuJoCo, held until settled (statics) or driven (dynamics, friction)",
-            sweep=f"{_HERE}:sweep", linkage_sweep=f"{_HERE}:sweep", requires="mujoco"),
+            sweep=f"{_HERE}:sweep", requires="mujoco"),
     Backend("mujoco_solve", f"{_HERE}:solve_at_pose", "exact_solve",
             "MuJoCo's constraint forces at the exact analytic pose",
-            sweep=f"{_HERE}:sweep", linkage_sweep=f"{_HERE}:sweep", requires="mujoco"),
+            sweep=f"{_HERE}:sweep", requires="mujoco"),
 )

@@ -1,12 +1,11 @@
-"""MuJoCo backends, on any linkage (:mod:`.linkage`); a four-bar or slider-crank runs as its
-linkage (:mod:`mechcheck.sim_models.presets`). Forces are read from MuJoCo's own constraint
-state.
+"""MuJoCo backends, on any linkage (:mod:`.linkage`). Forces are read from MuJoCo's own
+constraint state.
 
 - :func:`settle` — backend ``mujoco``: statics by settling with the drivers held; moving
   and Coulomb-friction cases driven along their motion (:mod:`.linkage_dynamics`).
 - :func:`solve_at_pose` — backend ``mujoco_solve``: exact constraint forces at the analytic
   pose from MuJoCo's constraint Jacobian (:mod:`.solve`).
-- :func:`sweep` — either backend over the first driver (or θ12 of a preset).
+- :func:`sweep` — either backend over the first driver.
 """
 
 from __future__ import annotations
@@ -19,36 +18,24 @@ from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import gated_sweep
 from mechcheck.sim_models.mujoco.linkage import settle_linkage, solve_linkage_at_pose, sweep_linkage
 from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
-from mechcheck.sim_models.presets import sweep_through_linkage, through_linkage
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
 
 
 def settle(case: Case) -> Solution:
     """The ``mujoco`` backend: a linkage held until settled (statics), or driven along its
-    prescribed motion (moving and Coulomb-friction cases); a four-bar or slider-crank as its
-    linkage (:mod:`mechcheck.sim_models.presets`)."""
-    if case.mechanism != "linkage":
-        return through_linkage(case, settle, "mujoco")
+    prescribed motion (moving and Coulomb-friction cases)."""
     return noting_warnings(lambda: settle_linkage(case))
 
 
 def solve_at_pose(case: Case) -> Solution:
     """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose."""
-    if case.mechanism != "linkage":
-        return through_linkage(case, solve_at_pose, "mujoco_solve")
     return noting_warnings(lambda: solve_linkage_at_pose(case))
 
 
 def sweep(case: Case, grid: ArrayLike, backend: str = "mujoco") -> list[Solution]:
     """Either backend over a sweep of a linkage's first driver (rad or m from the drawn
-    pose, :func:`.linkage.sweep_linkage`), or of θ12 (rad) of a four-bar or slider-crank;
-    behind the pose gate (:func:`~mechcheck.sim_models.linkage_motion.gated_sweep`)."""
-    if case.mechanism != "linkage":
-        return sweep_through_linkage(
-            case, np.asarray(grid, dtype=float), backend,
-            lambda stretch: sweep_linkage(stretch.linkage, stretch.offsets, backend, stretch.results,
-                                          stretch=stretch),
-            settle if backend == "mujoco" else solve_at_pose)
+    pose, :func:`.linkage.sweep_linkage`), behind the pose gate
+    (:func:`~mechcheck.sim_models.linkage_motion.gated_sweep`)."""
     return gated_sweep(case, np.asarray(grid, dtype=float), backend,
                        lambda values, results: sweep_linkage(case, values, backend, results))

@@ -27,6 +27,7 @@ import numpy as np
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
+from mechcheck.analytic.presets import Stretch
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
@@ -60,7 +61,6 @@ from mechcheck.sim_models.mujoco.solve import (
     batch_rigid_forces,
     impose_rigid_forces,
 )
-from mechcheck.sim_models.presets import Stretch
 
 FREE_SWEEP_REFUSAL = ("the mujoco backend settles free coordinates case by case, from the "
                       "drawn pose; a sweep of them is not simulated")

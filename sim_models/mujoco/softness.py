@@ -7,11 +7,11 @@ import mujoco
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.presets import as_linkage, preset_values
 from mechcheck.sim_models.mujoco.linkage import driver_values, seed
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import STATIC, Settings
 from mechcheck.sim_models.mujoco.settle import run_until_settled
-from mechcheck.sim_models.presets import as_linkage, preset_values
 
 
 def forces_at_softness(case: Case, timeconst: float | None,
@@ -22,7 +22,7 @@ def forces_at_softness(case: Case, timeconst: float | None,
     four-bar or slider-crank under its own quantity names."""
     settings = Settings(solref_timeconst=timeconst,
                         solimp=(solimp0, max(solimp0, 0.95), *STATIC.solimp[2:]))
-    linkage = case if case.mechanism == "linkage" else as_linkage(case)
+    linkage = as_linkage(case) if case.is_preset else case
     qpos = LinkageRig(linkage, settings).joint_states(analytic_results(linkage).pose)[0][0]
 
     def seeded() -> LinkageRig:
@@ -35,6 +35,6 @@ def forces_at_softness(case: Case, timeconst: float | None,
     rig.apply_loads()  # loads are read by the next forward pass
     mujoco.mj_forward(rig.model, rig.data)
     first, settled = rig.read(), run_until_settled(seeded()).values
-    if case.mechanism == "linkage":
-        return first, settled
-    return preset_values(case, first), preset_values(case, settled)
+    if case.is_preset:
+        return preset_values(case, first), preset_values(case, settled)
+    return first, settled

@@ -30,17 +30,18 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case, Motion
+from mechcheck.analytic.presets import Renaming, as_linkage
 from mechcheck.sim_models.locks import held_at_drawn
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.locks import LinkageServo
 from mechcheck.sim_models.mujoco.model import Settings
-from mechcheck.sim_models.presets import Renaming, as_linkage, output_load
 from mechcheck.sim_models.turning import (
     Amplification,
     Sample,
     TurnResult,
     amplification_result,
     branch_sign,
+    output_load,
     seed_pose,
     turn_result,
 )

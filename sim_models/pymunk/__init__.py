@@ -17,8 +17,8 @@ _HERE = "mechcheck.sim_models.pymunk.backend"
 BACKENDS = (
     Backend("pymunk", f"{_HERE}:settle", "settled",
             "pymunk, held until settled (statics) or driven (dynamics, friction)",
-            sweep=f"{_HERE}:sweep", linkage_sweep=f"{_HERE}:sweep", requires="pymunk"),
+            sweep=f"{_HERE}:sweep", requires="pymunk"),
     Backend("pymunk_solve", f"{_HERE}:solve_at_pose", "exact_solve",
             "pymunk's constraint solver at the fixed analytic pose",
-            sweep=f"{_HERE}:sweep", linkage_sweep=f"{_HERE}:sweep", requires="pymunk"),
+            sweep=f"{_HERE}:sweep", requires="pymunk"),
 )

@@ -1,5 +1,4 @@
-"""The pymunk (Munk2D / Chipmunk 7) backends, on any linkage; a four-bar or slider-crank runs
-as its linkage (:mod:`mechcheck.sim_models.presets`).
+"""The pymunk (Munk2D / Chipmunk 7) backends, on any linkage.
 
 - :func:`settle` — backend ``pymunk``: statics held by simulation until settled
   (:mod:`.linkage`); moving and Coulomb-friction cases driven along their motion
@@ -21,7 +20,6 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import gated_sweep, is_driven
-from mechcheck.sim_models.presets import sweep_through_linkage, through_linkage
 from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, linkage_sweep
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 
@@ -32,10 +30,7 @@ def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
     """The ``pymunk`` backend: a linkage held until settled
     (:func:`mechcheck.sim_models.pymunk.linkage.settle`), or driven along its prescribed motion
     when it moves or has Coulomb friction
-    (:func:`mechcheck.sim_models.pymunk.linkage_dynamics.drive_linkage`); a four-bar or
-    slider-crank as its linkage (:mod:`mechcheck.sim_models.presets`)."""
-    if case.mechanism != "linkage":
-        return through_linkage(case, lambda linkage: settle(linkage, settings), "pymunk")
+    (:func:`mechcheck.sim_models.pymunk.linkage_dynamics.drive_linkage`)."""
     if is_driven(case):
         return linkage_dynamics.drive_linkage(case, analytic_results(case))
     return linkage.settle(case, settings or LINKAGE_SETTLE)
@@ -44,22 +39,13 @@ def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
 def solve_at_pose(case: Case, settings: SolverSettings | None = None) -> Solution:
     """The ``pymunk_solve`` backend: pymunk's constraint solver at the analytic pose
     (:func:`mechcheck.sim_models.pymunk.linkage.solve_at_pose`)."""
-    if case.mechanism != "linkage":
-        return through_linkage(case, lambda linkage: solve_at_pose(linkage, settings),
-                               "pymunk_solve")
     return linkage.solve_at_pose(case, settings or LINKAGE_SOLVE)
 
 
 def sweep(case: Case, grid: ArrayLike, backend: str = "pymunk") -> list[Solution]:
     """``pymunk`` or ``pymunk_solve`` over a sweep of a linkage's first driver (rad or m from
-    the drawn pose, :func:`mechcheck.sim_models.pymunk.linkage_sweep.sweep`), or of θ12
-    (rad) of a four-bar or slider-crank; behind the pose gate
-    (:func:`~mechcheck.sim_models.linkage_motion.gated_sweep`)."""
-    if case.mechanism != "linkage":
-        return sweep_through_linkage(
-            case, np.asarray(grid, dtype=float), backend,
-            lambda s: s.rename(linkage_sweep.sweep(s.linkage, s.offsets, backend, s.results)),
-            settle if backend == "pymunk" else solve_at_pose)
+    the drawn pose, :func:`mechcheck.sim_models.pymunk.linkage_sweep.sweep`), behind the
+    pose gate (:func:`~mechcheck.sim_models.linkage_motion.gated_sweep`)."""
     if backend not in linkage_sweep.BACKENDS:
         raise ValueError(f"backend must be one of {linkage_sweep.BACKENDS}, got {backend!r}")
     return gated_sweep(case, np.asarray(grid, dtype=float), backend,

@@ -26,9 +26,9 @@ from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.presets import Renaming, as_linkage
 from mechcheck.sim_models.locks import held_at_drawn
 from mechcheck.sim_models.mujoco.turning import bare
-from mechcheck.sim_models.presets import Renaming, as_linkage, output_load
 from mechcheck.sim_models.pymunk.forces import torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -44,6 +44,7 @@ from mechcheck.sim_models.turning import (
     TurnResult,
     amplification_result,
     branch_sign,
+    output_load,
     seed_pose,
     turn_result,
 )
