@@ -39,7 +39,7 @@ from mechcheck.analytic.linkage import Joint, LinearSpring, TorsionSpring
 from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.values import GROUND
-from mechcheck.sim_models.mujoco import exact_compiled
+from mechcheck.sim_models.mujoco import _fast
 from mechcheck.sim_models.mujoco.linkage_model import (
     CLOCK,
     LinkageTree,
@@ -373,11 +373,11 @@ class LinkageRig:
 
     def load_points(self, qpos: Array) -> tuple[Array, Array]:
         """(site_xpos, xipos) of MuJoCo's kinematics at each pose of ``qpos`` (N, nq);
-        compiled where it can be (:mod:`.exact_compiled`)."""
+        compiled where it can be."""
         m, d = self.model, self.data
-        loop = exact_compiled.loops()
-        if loop is not None:
-            return exact_compiled.load_points(loop, m, d, qpos)
+        found = _fast.load_points(m, d, qpos)
+        if found is not None:
+            return found
         sites = np.empty((len(qpos), *d.site_xpos.shape))
         centres = np.empty((len(qpos), *d.xipos.shape))
         for i, q in enumerate(qpos):
