@@ -63,7 +63,7 @@ def first_stops(history: Array, readings: Array, speed: Array,
     """:func:`..settle.first_stops`, compiled where numba is installed."""
     compiled = kernel(STOP_KERNEL)
     if compiled is not None:
-        return compiled.first_stops(history, readings, speed, rounding)  # type: ignore[no-any-return]
+        return compiled.first_stops(history, readings, speed, rounding)
     from mechcheck.sim_models.mujoco.settle import first_stops as python
     return python(history, readings, speed, rounding)
 
@@ -228,7 +228,7 @@ def step_passes(stepper: ModuleType, threads: ThreadPoolExecutor,
     # would hand Python's lock back and forth (measured: a tenth of a sweep).
     inputs = [(calls(m, d), pass_data(m, d, driver_eqs), plan)
               for (m, d), plan in zip(lanes, plans, strict=True)]
-    jobs = [threads.submit(stepper.passes, *args) for args in inputs[1:]]
+    jobs = [threads.submit(stepper.passes, mj, v, p) for mj, v, p in inputs[1:]]
     stepper.passes(*inputs[0])
     for job in jobs:
         job.result()
