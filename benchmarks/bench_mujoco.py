@@ -78,18 +78,18 @@ RUNS = (("mujoco", "mujoco"), (COLD_SETTLED := "mujoco, models built", "mujoco")
 
 
 #: A row timing the settled sweep stepped by MuJoCo's rollouts, 16 steps a call, where
-#: numba compiles the passes (:mod:`mechcheck.sim_models.mujoco.step_kernel`): the same
+#: numba compiles the passes (:mod:`mechcheck.sim_models.mujoco._fast.step_kernel`): the same
 #: sweep, the same steps; the difference is the steps past each stop and the Python
 #: between rollouts.
 ROLLOUTS = "rollouts, passes not compiled"
 #: Rows with the per-pose loops in Python where numba compiles them
-#: (:mod:`mechcheck.sim_models.mujoco.exact_compiled`: the settled reads, the exact solve).
+#: (:mod:`mechcheck.sim_models.mujoco._fast`: the settled reads, the exact solve).
 PYTHON_LOOPS = "Python per-pose loops"
 
 
 def compiled_rules() -> bool:
     from mechcheck.sim_models.compiled import kernel
-    from mechcheck.sim_models.mujoco.batch_settle import STOP_KERNEL
+    from mechcheck.sim_models.mujoco._fast import STOP_KERNEL
 
     return kernel(STOP_KERNEL) is not None
 
@@ -107,23 +107,24 @@ def runs():
 def stop_rules(label):
     """Within: the batched settling stepped by rollouts, or the per-pose loops Python's, if
     ``label`` names them."""
-    from mechcheck.sim_models.mujoco import batch_settle, exact_compiled
+    from mechcheck.sim_models.mujoco import _fast
 
-    passes, loops = batch_settle.compiled_passes, exact_compiled.loops
+    passes, loops = _fast.compiled_passes, _fast.loops
     if ROLLOUTS in label:
-        batch_settle.compiled_passes = lambda model: None
+        _fast.compiled_passes = lambda model: None
     if PYTHON_LOOPS in label:
-        exact_compiled.loops = lambda: None
+        _fast.loops = lambda: None
     try:
         yield
     finally:
-        batch_settle.compiled_passes, exact_compiled.loops = passes, loops
+        _fast.compiled_passes, _fast.loops = passes, loops
 
 
 def forget_rigs(label):
     """Before a repeat of the run ``label``: the kept models forgotten if it builds them."""
     from mechcheck.analytic.presets import kept_linkage
-    from mechcheck.sim_models.mujoco.batch_settle import COPIES, kept_models
+    from mechcheck.sim_models.mujoco._fast import COPIES
+    from mechcheck.sim_models.mujoco.batch_settle import kept_models
     from mechcheck.sim_models.mujoco.linkage import sweep_rig
 
     if label in (COLD, COLD_SETTLED):  # as in a fresh process

@@ -28,14 +28,9 @@ from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.presets import as_linkage, linkage_of
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
-from mechcheck.sim_models.mujoco import backend as _mujoco
-from mechcheck.sim_models.mujoco.batch_settle import (
-    CHUNK,
-    REFINE_CHUNK,
-    RULES,
-    first_stops,
-    vectorised_stops,
-)
+from mechcheck.sim_models.mujoco import backend as _mujoco, settle as mj_settle
+from mechcheck.sim_models.mujoco._fast import first_stops
+from mechcheck.sim_models.mujoco.batch_settle import CHUNK, REFINE_CHUNK, RULES
 from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
 from mechcheck.sim_models.mujoco.linkage_model import model_xml
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
@@ -49,7 +44,6 @@ from mechcheck.sim_models.mujoco.settle import (
     Refinement,
     plain_passes_left,
     refinement_left,
-    remaining_change,
     secant_slope,
 )
 from mechcheck.sweep import SweepTask, run_task
@@ -57,6 +51,7 @@ from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin
 from .harness import solver, sweeper
+from .mujoco_twins import StepWatch, remaining_change, vectorised_stops
 
 #: The backend's functions as the harness calls them (a preset as its linkage).
 settle = solver(_mujoco.settle, "mujoco")
@@ -217,9 +212,11 @@ def test_stop_rule_estimates_what_is_still_to_come() -> None:
     assert remaining_change(wobble) == np.inf
 
 
-def watch_until_settled(forces: np.ndarray) -> tuple[int, str]:
-    """(index of the reading at which :class:`DecayWatch` first says settled, or −1; its rule)."""
-    watch = DecayWatch()
+def watch_until_settled(forces: np.ndarray, watch: DecayWatch | StepWatch | None = None
+                        ) -> tuple[int, str]:
+    """(index of the reading at which :class:`DecayWatch` (or ``watch``, a twin) first says
+    settled, or −1; its rule)."""
+    watch = DecayWatch() if watch is None else watch
     for i, f in enumerate(forces):
         if watch.settled(f):
             return i, watch.rule
@@ -227,8 +224,8 @@ def watch_until_settled(forces: np.ndarray) -> tuple[int, str]:
 
 
 def batch_until_settled(forces: np.ndarray, stops: Any = first_stops) -> tuple[int, str]:
-    """The same from the batch settler's rule (:func:`.batch_settle.first_stops`: compiled
-    where numba is installed; ``stops``: another implementation), fed chunk by chunk with
+    """The same from the batch settler's rule (:func:`.settle.first_stops`: compiled where
+    numba is installed; ``stops``: another implementation), fed chunk by chunk with
     the pass's history as the settler feeds it: a refinement pass's first chunk short,
     then whole ones."""
     history = np.full((1, FLOOR_WINDOW - 1, forces.shape[1]), np.nan)
@@ -243,7 +240,9 @@ def batch_until_settled(forces: np.ndarray, stops: Any = first_stops) -> tuple[i
 
 
 STOP_RULES = {"per step": watch_until_settled, "batch": batch_until_settled,
-              "batch, numpy": lambda forces: batch_until_settled(forces, vectorised_stops)}
+              "batch, Python": lambda forces: batch_until_settled(forces, mj_settle.first_stops),
+              "twin, per step": lambda forces: watch_until_settled(forces, StepWatch()),
+              "twin, numpy": lambda forces: batch_until_settled(forces, vectorised_stops)}
 
 
 def random_passes(rng: np.random.Generator, kind: int) -> tuple[np.ndarray, ...]:
@@ -267,18 +266,20 @@ def random_passes(rng: np.random.Generator, kind: int) -> tuple[np.ndarray, ...]
     return x[:, :FLOOR_WINDOW - 1], x[:, FLOOR_WINDOW - 1:], speed
 
 
-def test_the_compiled_stop_rules_are_the_vectorised_ones() -> None:
-    """:mod:`.stop_kernel` (numba) gives :func:`.batch_settle.vectorised_stops`'s first stop
+def test_the_stop_rules_are_the_vectorised_twins() -> None:
+    """The stop rules (:func:`.settle.first_stops`), run as Python and compiled
+    (:mod:`._fast.stop_kernel`, where numba is installed), give the numpy twin's first stop
     and rule exactly, on 2 000 random waves in which every rule fires."""
-    stop_kernel = pytest.importorskip("mechcheck.sim_models.mujoco.stop_kernel")
+    stop_kernel = pytest.importorskip("mechcheck.sim_models.mujoco._fast.stop_kernel")
     rng = np.random.default_rng(13)
     fired = np.zeros(len(RULES), dtype=int)
     for trial in range(2000):
         history, readings, speed = random_passes(rng, trial % 4)
         first, rule = vectorised_stops(history, readings, speed)
-        compiled = stop_kernel.first_stops(history, readings, speed)
-        np.testing.assert_array_equal(compiled[0], first, err_msg=f"trial {trial}")
-        np.testing.assert_array_equal(compiled[1], rule, err_msg=f"trial {trial}")
+        for stops in (stop_kernel.first_stops, mj_settle.first_stops):
+            found = stops(history, readings, speed)
+            np.testing.assert_array_equal(found[0], first, err_msg=f"trial {trial}")
+            np.testing.assert_array_equal(found[1], rule, err_msg=f"trial {trial}")
         np.add.at(fired, rule[first >= 0], 1)
     assert fired.min() > 20, fired
 
@@ -322,14 +323,15 @@ def test_stop_rule_does_not_take_a_slow_swing_for_the_floor(half_period: int,
        st.floats(0.0, 3e-8), st.integers(0, 2**32 - 1))
 def test_batch_stop_rule_is_the_per_step_rule(amplitude: float, decay: float, half_period: int,
                                               phase: float, floor: float, seed: int) -> None:
-    """The batch settler's vectorised rule fires at the same reading, by the same rule, as
-    :class:`DecayWatch` reading one step at a time: damped swings of any rate and period on
-    a rounding floor of any size (seed E1's forces)."""
+    """The batch settler's rule fires at the same reading, by the same rule, as
+    :class:`DecayWatch` reading one step at a time and as its plain-Python twin: damped
+    swings of any rate and period on a rounding floor of any size (seed E1's forces)."""
     t = np.arange(3000)
     noise = np.random.default_rng(seed).uniform(-floor, floor, t.size)
     swing = amplitude * decay**t * np.cos(np.pi * t / half_period + phase) + noise
     forces = E1_FORCES * (1.0 + swing[:, None])
-    assert batch_until_settled(forces) == watch_until_settled(forces)
+    expected = watch_until_settled(forces, StepWatch())
+    assert batch_until_settled(forces) == watch_until_settled(forces) == expected
 
 
 def test_refinement_counts_the_passes_still_to_come() -> None:

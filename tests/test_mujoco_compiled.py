@@ -1,4 +1,4 @@
-"""MuJoCo's compiled per-pose loops (:mod:`mechcheck.sim_models.mujoco.exact_kernel`:
+"""MuJoCo's compiled per-pose loops (:mod:`mechcheck.sim_models.mujoco._fast.exact_kernel`:
 ``mujoco_solve``'s batch and the settled sweep's reads) against the Python loops: the same
 MuJoCo functions on the same MjData, so the same numbers to the last bit; the Python loops
 wherever the compiled ones cannot run; and models kept from one sweep to the next give the
@@ -14,7 +14,7 @@ import pytest
 
 from mechcheck.analytic.presets import as_linkage, kept_linkage, translated
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.mujoco import backend as _mujoco, batch_settle, exact_compiled
+from mechcheck.sim_models.mujoco import _fast, backend as _mujoco, batch_settle
 from mechcheck.sweep import gated_poses
 
 from .builtin import builtin, builtin_cases
@@ -46,7 +46,7 @@ def grid(name: str) -> np.ndarray:
 def counted(monkeypatch: pytest.MonkeyPatch) -> list[str]:
     """Records each compiled loop that runs."""
     ran: list[str] = []
-    loop = exact_compiled.loops()
+    loop = _fast.loops()
     assert loop is not None, "numba is installed: the loops compile"
     for name in ("load_points", "equations", "post", "reads"):
         original = getattr(loop, name)
@@ -75,7 +75,7 @@ def test_the_compiled_loops_give_the_python_loops_numbers(name: str,
     fast = sweep(case, values, "mujoco_solve")
     assert {"load_points", "equations", "post"} <= set(ran)
     with monkeypatch.context() as m:
-        m.setattr(exact_compiled, "loops", lambda: None)
+        m.setattr(_fast, "loops", lambda: None)
         count = len(ran)
         slow = sweep(case, values, "mujoco_solve")
         assert len(ran) == count
@@ -90,9 +90,9 @@ def test_an_arena_laid_out_elsewhere_falls_back_to_python(monkeypatch: pytest.Mo
     expected = sweep(case, values, "mujoco_solve")
 
     def moved(*args: object) -> None:
-        raise exact_compiled.ArenaMoved("test")
+        raise _fast.ArenaMoved("test")
 
-    monkeypatch.setattr(exact_compiled, "check_arena", moved)
+    monkeypatch.setattr(_fast, "check_arena", moved)
     assert identical(sweep(case, values, "mujoco_solve"), expected)
 
 
@@ -130,7 +130,7 @@ def test_settled_reads_compiled_are_the_python_reads(name: str,
     fast = settled_sweep(name)
     assert ran.count("reads") >= 2  # one per round of passes (the first is in Python)
     with monkeypatch.context() as m:
-        m.setattr(exact_compiled, "loops", lambda: None)
+        m.setattr(_fast, "loops", lambda: None)
         slow = settled_sweep(name)
     assert sum(s.status == "ok" for s in fast) >= 30
     assert_same_settling(fast, slow)
@@ -155,17 +155,17 @@ def test_copies_refreshed_in_place_give_the_numbers_of_new_copies(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """A settled sweep after another of a linkage of the same sizes (seed E1 drawn at
     another pose: another Case, another rig) steps the copies that sweep left, refreshed in
-    place (:func:`~mechcheck.sim_models.mujoco.batch_settle.model_copies`): the same
+    place (:func:`~mechcheck.sim_models.mujoco._fast.model_copies`): the same
     numbers as with new copies."""
     e1 = builtin("seed-E1-as-stated")
     theta = grid("seed-E1-as-stated")
-    batch_settle.COPIES.clear()
+    _fast.COPIES.clear()
     sweep(e1, theta, "mujoco")
-    ((_, kept),) = batch_settle.COPIES.values()
+    ((_, kept),) = _fast.COPIES.values()
     before = [id(m) for m in kept]
     in_place = sweep(e1, theta[3:], "mujoco")  # drawn at its own first pose
-    assert [id(m) for m in kept[:len(before)]] == before and len(batch_settle.COPIES) == 1
-    monkeypatch.setattr(exact_compiled, "copy_model", lambda: None)
+    assert [id(m) for m in kept[:len(before)]] == before and len(_fast.COPIES) == 1
+    monkeypatch.setattr(_fast, "copy_model", lambda: None)
     batch_settle.kept_models.cache_clear()
     assert_same_settling(in_place, sweep(e1, theta[3:], "mujoco"))
 
@@ -173,7 +173,7 @@ def test_copies_refreshed_in_place_give_the_numbers_of_new_copies(
 @pytest.mark.parametrize("name", ["seed-E1-as-stated", "watt-ii-demo"])
 def test_compiled_passes_settle_as_the_rollouts_do(name: str,
                                                    monkeypatch: pytest.MonkeyPatch) -> None:
-    """The settled sweep's passes stepped in numba (:mod:`.step_kernel`) against MuJoCo's
+    """The settled sweep's passes stepped in numba (:mod:`._fast.step_kernel`) against MuJoCo's
     rollouts, 16 steps a call: every pose stops at the same step of the same pass with the
     same rule and reads the same numbers, to the last bit. The kernel zeroes the warm start
     where each rollout would begin: with the rollouts cut otherwise (a trial that stepped
@@ -181,19 +181,19 @@ def test_compiled_passes_settle_as_the_rollouts_do(name: str,
     stopping by another rule."""
     calls: list[int] = []
     model = batch_settle.sensing_rig(as_linkage(builtin("seed-E1-as-stated"))).model
-    assert batch_settle.compiled_passes(model) is not None, "numba: the passes compile"
-    original = batch_settle.BatchSettler.share_arguments
+    assert _fast.compiled_passes(model) is not None, "numba: the passes compile"
+    original = _fast.step_passes
 
-    def counting(self: batch_settle.BatchSettler, *args: object) -> object:
+    def counting(*args: object) -> None:
         calls.append(1)
-        return original(self, *args)  # type: ignore[arg-type]
+        original(*args)  # type: ignore[arg-type]
 
     with monkeypatch.context() as m:
-        m.setattr(batch_settle.BatchSettler, "share_arguments", counting)
+        m.setattr(_fast, "step_passes", counting)
         compiled = settled_sweep(name)
     assert len(calls) >= 4
     with monkeypatch.context() as m:
-        m.setattr(batch_settle, "compiled_passes", lambda model: None)
+        m.setattr(_fast, "compiled_passes", lambda model: None)
         batch_settle.kept_models.cache_clear()
         rolled = settled_sweep(name)
     assert sum(s.status == "ok" for s in compiled) >= 30
@@ -213,7 +213,7 @@ def test_compiled_passes_run_out_of_budget_as_the_rollouts_do(
     compiled = sweep(e1, theta, "mujoco")
     assert [s.status for s in compiled] == ["not_settled", "not_settled", "ok"]
     with monkeypatch.context() as m:
-        m.setattr(batch_settle, "compiled_passes", lambda model: None)
+        m.setattr(_fast, "compiled_passes", lambda model: None)
         batch_settle.kept_models.cache_clear()
         rolled = sweep(e1, theta, "mujoco")
     assert [s.diagnostics.get("passes") for s in compiled] == \

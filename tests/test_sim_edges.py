@@ -19,7 +19,8 @@ from mechcheck.casefile import parse_cases
 from mechcheck.sim_models import linkage_motion
 from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
 from mechcheck.sim_models.mujoco import backend as mj
-from mechcheck.sim_models.mujoco.batch_settle import RULES, first_stops, vectorised_stops
+from mechcheck.sim_models.mujoco._fast import first_stops
+from mechcheck.sim_models.mujoco.batch_settle import RULES
 from mechcheck.sim_models.mujoco.linkage import sweep_linkage
 from mechcheck.sim_models.mujoco.settle import FLOOR_WINDOW, WOBBLE_RTOL, DecayWatch
 from mechcheck.sim_models.pymunk import backend as pm, linkage_dynamics as pld
@@ -29,6 +30,7 @@ from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin
 from .chains import four_bar_chain, toml_of
+from .mujoco_twins import StepWatch, vectorised_stops
 
 FORCES = ("F_", "Q_")
 
@@ -84,10 +86,11 @@ def alternation(amplitude: float, readings: int = 40, width: int = 3) -> np.ndar
 
 def stops_of(forces: np.ndarray, rounding: float) -> dict[str, tuple[int, str]]:
     """The first reading at which each implementation of the stop rule says settled, and the
-    rule: the single pose's, and the batch's in numpy and (where installed) compiled."""
+    rule: the single pose's, the batch's (compiled where installed), and their twins, one
+    step at a time and in numpy."""
     out = {}
-    watch = DecayWatch(rounding)
-    out["single"] = next(((i, watch.rule) for i, f in enumerate(forces) if watch.settled(f)),
+    for name, watch in (("single", DecayWatch(rounding)), ("twin", StepWatch(rounding))):
+        out[name] = next(((i, watch.rule) for i, f in enumerate(forces) if watch.settled(f)),
                          (-1, ""))
     history = np.full((1, FLOOR_WINDOW - 1, forces.shape[1]), np.nan)
     speed = np.zeros((1, forces.shape[0]))

@@ -12,8 +12,8 @@ only looks at what it recorded:
   measured at the joint; torques divided by the size, as the single-pose rule divides the
   drivers'), recorded by the rollout at every step. With the loads fixed they change
   exactly when the equality forces :func:`.settle.run_until_settled` watches change, by
-  the same modes; :func:`first_stops` applies :class:`.settle.DecayWatch`'s three rules
-  and the velocity bound to them, step by step, vectorised over the poses and steps.
+  the same modes; :func:`.settle.first_stops` applies the three stop rules
+  and the velocity bound to them, reading by reading.
 - **The loads** of a rollout are its controls: the xfrc_applied and qfrc_applied of the
   pose it starts the chunk from (loads, carried forces), held for the chunk. The single-
   pose loop re-applies them at every step's pose; a settling pose moves by the soft
@@ -27,7 +27,7 @@ A driver's value is the model's (an equality's ``eq_data``), so each pose in fli
 a model of its own: ``POOL`` copies of the rig's model take turns.
 
 **Compiled passes.** Where numba is installed, the same passes are stepped by
-:mod:`.step_kernel` instead (:meth:`BatchSettler.settle_compiled`): MuJoCo's step called
+:mod:`._fast.step_kernel` instead (:meth:`BatchSettler.settle_compiled`): MuJoCo's step called
 through its C pointer, the rollouts' resets where each rollout would begin, the same stop
 rules read step by step, and each pass stepped to its stop and no further, with Python's
 lock released, one thread per core, each with one model copy whose drivers it sets pose
@@ -41,36 +41,30 @@ from __future__ import annotations
 
 import bisect
 import contextlib
-import copy
 import functools
 import os
 import threading
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
-from types import ModuleType
 
 import mujoco
 import numpy as np
 from mujoco import rollout
-from numpy.lib.stride_tricks import sliding_window_view
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
-from mechcheck.sim_models.compiled import kernel
-from mechcheck.sim_models.mujoco import exact_compiled
+from mechcheck.sim_models.mujoco import _fast
+from mechcheck.sim_models.mujoco._fast.plans import PassPlan
 from mechcheck.sim_models.mujoco.linkage_model import body_name, spanning_tree
-from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.settle import (
     FLOOR_WINDOW,
     MAX_PASSES,
-    QUIET_RTOL,
-    SETTLE_RTOL,
+    RULES,
     STOP_WINDOW,
-    VELOCITY_TOL,
-    WOBBLE_RTOL,
     Refinement,
     Settled,
 )
@@ -89,7 +83,7 @@ CHUNK = 16
 #: passes are 4 steps), and a CHUNK would step 11 more for nothing.
 REFINE_CHUNK = STOP_WINDOW + 1
 #: Poses in flight at once, each with its own copy of the model (178 µs a new copy, 14 µs
-#: refreshed in place: :func:`model_copies`). Fewer, larger waves spend less Python per
+#: refreshed in place: :func:`._fast.model_copies`). Fewer, larger waves spend less Python per
 #: pose (measured, seed E1's 360-pose sweep, models kept: 32, 64 and 128 took 0.223–0.229,
 #: 0.211–0.219 and 0.206–0.210 ms/pose); 64 keeps a new copy set near 11 ms.
 POOL = 64
@@ -100,26 +94,13 @@ STRIDE = 8
 THREADS = os.cpu_count() or 1
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 CONTROLS = mujoco.mjtState.mjSTATE_XFRC_APPLIED | mujoco.mjtState.mjSTATE_QFRC_APPLIED
-#: The compiled stop rules (:func:`first_stops`).
-STOP_KERNEL = "mechcheck.sim_models.mujoco.stop_kernel"
-#: The passes stepped in numba (:mod:`.step_kernel`).
-STEP_KERNEL = "mechcheck.sim_models.mujoco.step_kernel"
-
-
-def compiled_passes(model: mujoco.MjModel) -> ModuleType | None:
-    """The compiled passes (:mod:`.step_kernel`) where numba is installed and MuJoCo's
-    library is at a known place, for a model that is all the kernel sets up (no actuators
-    or mocap bodies: the rollout would reset those); else None, and the rollouts run."""
-    if model.nu or model.nmocap or exact_compiled.library() is None:
-        return None
-    return kernel(STEP_KERNEL)
 
 
 def copies_needed(model: mujoco.MjModel, poses: int) -> int:
     """Model copies a batch of ``poses`` steps with: one per pose in flight for the
     rollouts (:data:`POOL` at most), one per thread for the compiled passes (each sets its
     pose's drivers before stepping it)."""
-    return min(THREADS if compiled_passes(model) is not None else POOL, poses)
+    return min(THREADS if _fast.compiled_passes(model) is not None else POOL, poses)
 
 
 def add_reaction_sensors(spec: mujoco.MjSpec, linkage: Linkage) -> None:
@@ -179,7 +160,7 @@ def sensing_rig(case: Case) -> LinkageRig:
 
 @dataclass
 class Models:
-    """What a batch settles with, besides its model copies (:func:`model_copies`): a sensing
+    """What a batch settles with, besides its model copies (:func:`._fast.model_copies`): a sensing
     rig (:func:`sensing_rig`), one MjData per rollout thread, and the lock one sweep at a
     time holds while it uses them."""
 
@@ -203,39 +184,6 @@ def kept_models(case: Case) -> Models:
     return built_models(case)
 
 
-#: Copies of models, by their sizes (:func:`sizes`), and the lock a sweep holds while it
-#: steps them (:func:`model_copies`).
-COPIES: dict[tuple[int, ...], tuple[threading.Lock, list[mujoco.MjModel]]] = {}
-COPIES_LOCK = threading.Lock()
-
-
-def sizes(model: mujoco.MjModel) -> tuple[int, ...]:
-    """Every size of ``model`` (its integer fields n…, the buffer's included): two models
-    with the same sizes have the same layout, so one can be copied into the other."""
-    return tuple(getattr(model, name) for name in dir(model)
-                 if name.startswith("n") and isinstance(getattr(model, name), int))
-
-
-@contextlib.contextmanager
-def model_copies(model: mujoco.MjModel, n: int) -> Iterator[list[mujoco.MjModel]]:
-    """``n`` copies of ``model`` for a batch's poses in flight (each its own drivers'
-    targets), held while within. Models of the same sizes are copied into the ones the last
-    such batch used, in place (``mj_copyModel``: 14 µs against 180 µs for a new copy through
-    the Python binding, a tenth of a seed E1 sweep); where MuJoCo's library is not at a
-    known place, new copies are made."""
-    copy_into = exact_compiled.copy_model()
-    if copy_into is None:
-        yield [copy.copy(model) for _ in range(n)]
-        return
-    with COPIES_LOCK:
-        lock, kept = COPIES.setdefault(sizes(model), (threading.Lock(), []))
-    with lock:
-        kept += [copy.copy(model) for _ in range(n - len(kept))]
-        for dest in kept[:n]:
-            copy_into(dest._address, model._address)
-        yield kept[:n]
-
-
 class BatchSettler:
     """Settles the poses ``qpos`` (N, nq) with ``models`` and the copies ``pool`` of the
     rig's model (both held by the caller: their locks)."""
@@ -244,13 +192,13 @@ class BatchSettler:
         rig = self.rig = models.rig
         self.qpos = qpos
         m, d = rig.model, rig.data
-        self.pool = pool  # copies of the rig's model (:func:`model_copies`)
+        self.pool = pool  # copies of the rig's model (:func:`._fast.model_copies`)
         self.eq_data = [model.eq_data for model in pool]  # views: the drivers' targets
         # Kept data carry nothing over: the rollout sets each trajectory's whole state
         # (``tests/test_mujoco_compiled.py``: kept and new models, the same numbers).
         self.datas = models.datas
         self.runner: rollout.Rollout | None = None  # during :meth:`settle`
-        self.stepper = compiled_passes(m)
+        self.stepper = _fast.compiled_passes(m)
         #: Threads stepping the compiled passes, each with its own model copy and data.
         self.lanes = min(THREADS, len(pool), len(self.datas))
         self.threads: ThreadPoolExecutor | None = None  # during :meth:`settle`
@@ -317,7 +265,7 @@ class BatchSettler:
         snapshot = rig.snapshot(len(poses))
         rig.reset_carried()  # added to the equality forces below, for all at once
         targets = np.array([p.targets for p in poses]).reshape(len(poses), -1)
-        if not compiled_reads(rig, states, targets, xfrc, drives, snapshot):
+        if not _fast.reads(rig, states, targets, xfrc, drives, snapshot):
             for k in range(len(poses)):
                 mujoco.mj_setState(m, d, states[k], STATE)
                 rig.set_targets(targets[k])
@@ -447,8 +395,8 @@ class BatchSettler:
         return out, forces
 
     def step_passes(self, poses: list[Pose], first_chunk: int) -> tuple[Array, Array, Array]:
-        """Each pose's pass stepped to its end (:func:`.step_kernel.passes`), the poses
-        dealt in turn to one thread per model copy (this one among them): where each
+        """Each pose's pass stepped to its end (:func:`._fast.step_kernel.passes`), the
+        poses dealt in turn to one thread per model copy (this one among them): where each
         pass's last reading is, the rule that fired there (−1: none), the state it was
         read at."""
         n = len(poses)
@@ -461,36 +409,18 @@ class BatchSettler:
         rules = np.empty(n, dtype=np.int64)
         states = np.empty_like(starts)
         shares = [np.arange(k, n, self.lanes) for k in range(min(self.lanes, n))]
-        # Every argument made here first: a thread that ran Python while this one does
-        # would hand Python's lock back and forth (measured: a tenth of a sweep).
-        calls = [self.share_arguments(k, targets[rows], starts[rows], controls[rows],
-                                      first_chunk, left[rows], early[rows])
-                 for k, rows in enumerate(shares)]
+        plans = [PassPlan(targets[rows], starts[rows], controls[rows], first_chunk, CHUNK,
+                          left[rows], early[rows], self.columns, self.column_scale,
+                          self.rig.weight, self.rig.rounding, np.empty(len(rows), dtype=np.int64),
+                          np.empty(len(rows), dtype=np.int64), np.empty_like(starts[rows]))
+                 for rows in shares]
         assert self.stepper is not None and self.threads is not None, "within settle()"
-        jobs = [self.threads.submit(self.stepper.passes, *inputs, *outputs)
-                for inputs, outputs in calls[1:]]
-        self.stepper.passes(*calls[0][0], *calls[0][1])
-        for job in jobs:
-            job.result()
-        for rows, (_, outputs) in zip(shares, calls, strict=True):
-            ended_at[rows], rules[rows], states[rows] = outputs
+        _fast.step_passes(self.stepper, self.threads,
+                          list(zip(self.pool, self.datas, strict=False))[:len(shares)],
+                          self.rig.driver_eqs, plans)
+        for rows, plan in zip(shares, plans, strict=True):
+            ended_at[rows], rules[rows], states[rows] = plan.ended_at, plan.rules, plan.ended_state
         return ended_at, rules, states
-
-    def share_arguments(self, k: int, targets: Array, starts: Array, controls: Array,
-                        first_chunk: int, left: Array, early: Array
-                        ) -> tuple[tuple[object, ...], tuple[Array, Array, Array]]:
-        """:func:`.step_kernel.passes`'s arguments for one thread's poses, with model copy
-        and data ``k``: its inputs, and its outputs (the last three)."""
-        m, d = self.pool[k], self.datas[k]
-        f = exact_compiled.functions()
-        n = len(starts)
-        return (f["mj_step"], f["mj_setState"], f["mj_getState"], m._address, d._address,
-                int(STATE), int(CONTROLS), m.eq_data,
-                np.asarray(self.rig.driver_eqs, dtype=np.int64), d.eq_active, m.eq_active0,
-                d.warning.number, d.qacc_warmstart, d.sensordata, d.qvel, targets, starts,
-                controls, first_chunk, CHUNK, left, early,
-                self.columns, self.column_scale, self.rig.weight, self.rig.rounding), (
-                np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty_like(starts))
 
     def run_chunk(self, wave: list[Pose], nstep: int) -> list[Settled | None]:
         """One rollout of ``nstep`` steps for the poses of ``wave``; for each, its final
@@ -519,7 +449,7 @@ class BatchSettler:
         early = np.array([p.earliest - p.pass_steps for p in wave])
         at = np.arange(nstep)[None, :]
         speed[(at >= left[:, None]) | (at < early[:, None])] = np.inf
-        first, rule = first_stops(np.array([p.history for p in wave]), readings, speed,
+        first, rule = _fast.first_stops(np.array([p.history for p in wave]), readings, speed,
                                   self.rig.rounding)
         out_of_budget = (left <= nstep) | ~np.isfinite(readings).all(axis=(1, 2))
         ended: list[tuple[int, int, str]] = []  # (pose in wave, step in chunk, rule or "")
@@ -580,9 +510,6 @@ def state_slice(m: mujoco.MjModel, part: mujoco.mjtState) -> slice:
     return slice(before, before + mujoco.mj_stateSize(m, part))
 
 
-RULES = ("decay", "quiet", "floor")
-
-
 def complete(results: list[Settled | None]) -> list[Settled]:
     """Every pose's result (each pose is settled by exactly one of the runs)."""
     out = [r for r in results if r is not None]
@@ -600,93 +527,3 @@ def interpolated(i: int, coarse: list[int], forces: dict[int, Array],
         w = (first[i] - first[lo]) / (first[hi] - first[lo])
         return forces[lo] + w * (forces[hi] - forces[lo])
     return forces.get(lo, forces.get(hi))
-
-
-def first_stops(history: Array, readings: Array, speed: Array,
-                rounding: float = 0.0) -> tuple[Array, Array]:
-    """:func:`vectorised_stops`, compiled where numba is installed (:mod:`.stop_kernel`: the
-    same answers, without numpy's overhead on arrays this small)."""
-    compiled = kernel(STOP_KERNEL)
-    if compiled is not None:
-        return compiled.first_stops(history, readings, speed, rounding)
-    return vectorised_stops(history, readings, speed, rounding)
-
-
-def vectorised_stops(history: Array, readings: Array, speed: Array,
-                     rounding: float = 0.0) -> tuple[Array, Array]:
-    """For each pose of a wave, the first of its ``readings`` (P, T, m) at which
-    :class:`.settle.DecayWatch` would say settled with the joints slower than
-    :data:`.settle.VELOCITY_TOL` (``speed`` (P, T) at each reading): its index (−1 if
-    none) and the rule that fired (an index into :data:`RULES`).
-
-    ``history`` (P, FLOOR_WINDOW − 1, m) holds each pose's earlier readings of the pass,
-    NaN where the pass has fewer: a window reaching back past the pass's first reading
-    holds a NaN, and no rule fires on it, as no rule fires before its window is known.
-    ``rounding``: the model's rounding floor (N, :func:`.settle.rounding_floor`), the floor
-    rule's allowance where it is more than :data:`.settle.WOBBLE_RTOL` of a reading.
-    """
-    back = history.shape[1]
-    # Each reading's change from the last (largest over the forces) and size, from the
-    # first reading the chunk's windows reach back to on.
-    recent = np.concatenate([history[:, back - STOP_WINDOW:], readings], axis=1)
-    size = np.maximum(np.abs(recent).max(axis=2), FORCE_FLOOR_N)
-    step = np.abs(np.diff(recent, axis=1)).max(axis=2)
-    # The windows of changes ending at each reading of the chunk.
-    windows = sliding_window_view(step / size[:, 1:], STOP_WINDOW, axis=1)
-    largest = windows.max(axis=2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        steps = windows[:, :, 1:] / windows[:, :, :-1]
-        ratio = np.where(windows[:, :, :-1] > 0, steps, np.inf).max(axis=2)
-        left = np.where(ratio < 1.0, largest * ratio / (1.0 - ratio), np.inf)
-    decay = (largest == 0.0) | (left <= SETTLE_RTOL)
-    quiet = largest <= QUIET_RTOL
-    here = size[:, STOP_WINDOW:]  # the size at each reading of the chunk
-    with np.errstate(invalid="ignore"):
-        wobble = np.maximum(WOBBLE_RTOL, rounding / here)  # :func:`.settle.wobble_allowed`
-    # The floor's spread only where the rest of its rule holds and no single step in its
-    # window is larger than the spread allowed (a spread is at least every step within
-    # it): a window of 32 readings at every reading costs more than the rollout.
-    floor = np.zeros_like(decay)
-    candidate = (largest <= wobble) & ~decay & ~quiet & (speed <= VELOCITY_TOL)
-    if candidate.any():
-        x = np.concatenate([history, readings], axis=1)
-        jumps = np.abs(np.diff(x, axis=1)).max(axis=2)
-        widest = sliding_window_view(jumps, FLOOR_WINDOW - 1, axis=1)[:, -readings.shape[1]:]
-        candidate &= widest.max(axis=2) <= wobble * here
-        p, t = np.nonzero(candidate)
-        rows = (back + t + 1 - FLOOR_WINDOW)[:, None] + np.arange(FLOOR_WINDOW)
-        window = x[p[:, None], rows]  # (candidates, FLOOR_WINDOW, m)
-        spread = (window.max(axis=1) - window.min(axis=1)).max(axis=1)
-        floor[p, t] = spread / here[p, t] <= wobble[p, t]
-    rule = np.where(decay, 0, np.where(quiet, 1, np.where(floor, 2, -1)))
-    fired = (rule >= 0) & (speed <= VELOCITY_TOL)
-    first = np.where(fired.any(axis=1), fired.argmax(axis=1), -1)
-    return first, rule[np.arange(len(first)), first]
-
-
-def compiled_reads(rig: LinkageRig, states: Array, targets: Array, xfrc: Array,
-                   drives: Array, snapshot: Snapshot) -> bool:
-    """:meth:`BatchSettler.read`'s loop compiled (:func:`.exact_kernel.reads`), if it can
-    be: the same calls on the same data, so the same numbers. Not before the rig's data
-    has had a forward pass (its constraint arrays are not laid out yet), nor if a pass laid
-    them out elsewhere (then False, and the caller's loop runs again from the start)."""
-    loop = exact_compiled.loops()
-    m, d = rig.model, rig.data
-    if loop is None or d.efc_force.size != rig.nefc:
-        return False
-    views = exact_compiled.constraint_views(d, rig.nefc, m.nv)
-    f = exact_compiled.functions()
-    n = len(states)
-    loop.reads(f["mj_setState"], f["mj_forward"], f["mj_rnePostConstraint"], m._address,
-               d._address, np.ascontiguousarray(states), int(STATE), m.eq_data,
-               np.asarray(rig.driver_eqs, dtype=np.int64), targets, xfrc, d.xfrc_applied,
-               d.qfrc_applied, np.asarray(rig.drive_dofs, dtype=np.int64),
-               np.ascontiguousarray(drives).reshape(n, -1), rig.carried, views[2], views[1],
-               snapshot.efc_force, snapshot.efc_pos,
-               tuple(getattr(snapshot, field).reshape(n, -1) for field, _ in rig.captured),
-               tuple(source.reshape(-1) for _, source in rig.captured))
-    try:
-        exact_compiled.check_arena(d, views, rig.nefc, m.nv)
-    except exact_compiled.ArenaMoved:
-        return False
-    return True

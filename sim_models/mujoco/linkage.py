@@ -32,13 +32,12 @@ from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
-from mechcheck.sim_models.mujoco import exact_compiled
+from mechcheck.sim_models.mujoco import _fast
 from mechcheck.sim_models.mujoco.batch_settle import (
     BatchSettler,
     built_models,
     copies_needed,
     kept_models,
-    model_copies,
 )
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
@@ -280,43 +279,27 @@ def post_constraint(rig: LinkageRig, state: tuple[np.ndarray, ...], loads: np.nd
         getattr(snapshot, field)[:] = given
     copies = [(getattr(snapshot, field), source) for field, source in rig.derived
               if field not in known]
-    nefc, tendons, rolling = rig.nefc, bool(m.ntendon), bool(qvel.any())
     forces = known["efc_force"]
+    if _fast.post(m, d, rig.nefc, state, loads, forces, copies):
+        return snapshot
     # qacc is written at each pose where a forward pass overwrites it or the poses accelerate.
+    tendons, rolling = bool(m.ntendon), bool(qvel.any())
     steady = not (tendons or qacc.any())
-    d_qpos, d_qvel, d_qacc, d_xfrc = d.qpos, d.qvel, d.qacc, d.xfrc_applied
-    loop = exact_compiled.loops()
-    if loop is not None and len(qpos) and copies:
-        try:
-            views = first_pass(rig, qpos[0], qvel[0] if rolling else d_qvel, m.eq_data[:, 0],
-                               loads[0])
-            f = exact_compiled.functions()
-            loop.post(f["mj_forward"], f["mj_kinematics"], f["mj_comPos"], f["mj_comVel"],
-                      f["mj_rnePostConstraint"], m._address, d._address, qpos, qvel,
-                      np.ascontiguousarray(known["qacc"]), loads, forces, d_qpos, d_qvel,
-                      d_qacc, d_xfrc, views[2],
-                      tuple(t.reshape(len(qpos), -1) for t, _ in copies),
-                      tuple(source.reshape(-1) for _, source in copies), rolling, tendons,
-                      steady)
-            exact_compiled.check_arena(d, views, nefc, m.nv)
-            return snapshot
-        except exact_compiled.ArenaMoved:
-            pass
-    d_qacc[:] = 0.0
+    d.qacc[:] = 0.0
     for i in range(len(qpos)):
-        d_qpos[:] = qpos[i]
+        d.qpos[:] = qpos[i]
         if rolling:  # else qvel is 0 since the data was reset (:func:`exact_sweep`)
-            d_qvel[:] = qvel[i]
-        d_xfrc[:] = loads[i]
+            d.qvel[:] = qvel[i]
+        d.xfrc_applied[:] = loads[i]
         if tendons:
             mujoco.mj_forward(m, d)
         else:  # what the RNE reads
             mujoco.mj_kinematics(m, d)
             mujoco.mj_comPos(m, d)
             mujoco.mj_comVel(m, d)
-        d.efc_force[:nefc] = forces[i]
+        d.efc_force[:rig.nefc] = forces[i]
         if not steady:
-            d_qacc[:] = qacc[i]
+            d.qacc[:] = qacc[i]
         mujoco.mj_rnePostConstraint(m, d)
         for target, source in copies:
             target[i] = source
@@ -339,36 +322,24 @@ def constraint_equations(rig: LinkageRig, state: tuple[np.ndarray, ...], targets
     inertial = np.zeros((n, m.nv))
     efc_pos = np.empty((n, nefc))
     moving, rolling = bool(qacc.any()), bool(qvel.any())
-    d_qpos, d_qvel, d_xfrc, d_smooth = d.qpos, d.qvel, d.xfrc_applied, d.qfrc_smooth
-    d_qvel[:] = 0.0
+    d.qvel[:] = 0.0
     # The drivers' targets (:meth:`.linkage_rig.LinkageRig.set_targets`) as whole columns of
     # eq_data, one per pose: one copy each instead of a scatter.
     held = m.eq_data[:, 0]
     columns = np.repeat(held[None], n, axis=0)
     columns[:, rig.driver_eqs] = targets
-    loop = exact_compiled.loops()
-    if loop is not None and n:
-        try:
-            views = first_pass(rig, qpos[0], qvel[0], columns[0], loads[0])
-            loop.equations(exact_compiled.functions()["mj_forward"],
-                           exact_compiled.functions()["mj_mulM"], m._address, d._address,
-                           qpos, qvel, qacc, columns, loads, d_qpos, d_qvel, held, d_xfrc,
-                           views[0], views[1], d_smooth, jac, efc_pos, smooth, inertial,
-                           rolling, moving)
-            exact_compiled.check_arena(d, views, nefc, m.nv)
-            return finish_equations(rig, jac, inertial, smooth, qacc, efc_pos)
-        except exact_compiled.ArenaMoved:
-            pass
+    if _fast.equations(m, d, nefc, state, columns, loads, (jac, efc_pos, smooth, inertial)):
+        return finish_equations(rig, jac, inertial, smooth, qacc, efc_pos)
     for i in range(n):
-        d_qpos[:] = qpos[i]
+        d.qpos[:] = qpos[i]
         if rolling:
-            d_qvel[:] = qvel[i]
+            d.qvel[:] = qvel[i]
         held[:] = columns[i]
-        d_xfrc[:] = loads[i]
+        d.xfrc_applied[:] = loads[i]
         mujoco.mj_forward(m, d)
         jac[i] = d.efc_J[:size]
         efc_pos[i] = d.efc_pos[:nefc]
-        smooth[i] = d_smooth
+        smooth[i] = d.qfrc_smooth
         if moving:
             mujoco.mj_mulM(m, d, inertial[i], qacc[i])
     return finish_equations(rig, jac, inertial, smooth, qacc, efc_pos)
@@ -381,16 +352,6 @@ def finish_equations(rig: LinkageRig, jac: np.ndarray, inertial: np.ndarray,
     m = rig.model
     rhs = inertial - m.dof_armature * qacc - smooth
     return jac.reshape(len(jac), rig.nefc, m.nv), rhs, efc_pos
-
-
-def first_pass(rig: LinkageRig, qpos: np.ndarray, qvel: np.ndarray, held: np.ndarray,
-               loads: np.ndarray) -> tuple[np.ndarray, ...]:
-    """A forward pass at one pose, so that MjData's constraint arrays are laid out; views
-    of them (:func:`.exact_compiled.constraint_views`)."""
-    m, d = rig.model, rig.data
-    d.qpos[:], d.qvel[:], m.eq_data[:, 0], d.xfrc_applied[:] = qpos, qvel, held, loads
-    mujoco.mj_forward(m, d)
-    return exact_compiled.constraint_views(d, rig.nefc, m.nv)
 
 
 def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
@@ -452,7 +413,7 @@ def settled_sweep(case: Case, first: np.ndarray, results: LinkageResults,
     except TypeError:  # should a Case ever hold an unhashable value: built for this sweep
         models = built_models(case)
     rig = models.rig
-    with models.lock, model_copies(rig.model, copies_needed(rig.model, len(first))) as pool:
+    with models.lock, _fast.model_copies(rig.model, copies_needed(rig.model, len(first))) as pool:
         qpos = rig.joint_states(results.pose)[0]
         settled = BatchSettler(models, pool, qpos).settle(results.pose.drivers,
                                                           first if continuation else None)

@@ -29,10 +29,8 @@ passes, measuring that fraction themselves, carry their forces extrapolated
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
@@ -43,6 +41,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
 from mechcheck.sim_models.convergence import disagreement, force_size
 from mechcheck.sim_models.diagnostics import RunDiagnostics
+from mechcheck.sim_models.mujoco import _fast
 
 #: Settled when the forces' remaining change, estimated from their observed
 #: geometric decay, is below this fraction of the largest force (torques divided
@@ -262,67 +261,170 @@ def run_until_settled(rig: SettlingRig, max_steps: int | None = None,
                    rule=watch.rule if settled else "")
 
 
+#: The stop rules by their index in :func:`first_stops`'s answers.
+RULES = ("decay", "quiet", "floor")
+
+
 class DecayWatch:
-    """The stop rule on a sequence of force vectors: settled when the change
-    still to come of a decay is below :data:`SETTLE_RTOL`, when the last changes
-    are all below :data:`QUIET_RTOL`, or when the forces sit on their rounding
-    floor, spread over :data:`FLOOR_WINDOW` readings by at most
+    """The stop rules (:func:`first_stops`) on a sequence of force vectors read one at a
+    time: settled when the change still to come of a decay is below :data:`SETTLE_RTOL`,
+    when the last changes are all below :data:`QUIET_RTOL`, or when the forces sit on their
+    rounding floor, spread over :data:`FLOOR_WINDOW` readings by at most
     :data:`WOBBLE_RTOL`, or by the model's ``rounding`` floor (N, :func:`rounding_floor`)
     where that is more. ``rule`` names the one that fired."""
 
     def __init__(self, rounding: float = 0.0) -> None:
-        self.readings: deque[list[float]] = deque(maxlen=FLOOR_WINDOW)
-        self.changes: list[float] = []
+        self.history: np.ndarray | None = None  # the readings before, NaN before the first
         self.rule = ""
         self.rounding = rounding
 
     def settled(self, current: np.ndarray) -> bool:
         """Record ``current``; True when the forces have settled."""
-        # Plain floats: a handful of numbers per step, where numpy's call
-        # overhead would dominate the step's cost.
-        values = current.tolist()
-        size = max(max(map(abs, values)), FORCE_FLOOR_N)  # an unloaded case settles too
-        if self.readings:
-            previous = self.readings[-1]
-            self.changes.append(max(abs(a - b) for a, b in zip(values, previous, strict=True))
-                                / size)
-        self.readings.append(values)
-        wobble = wobble_allowed(size, self.rounding)
-        if remaining_change(self.changes) <= SETTLE_RTOL:
-            self.rule = "decay"
-        elif len(self.changes) >= STOP_WINDOW and max(self.changes[-STOP_WINDOW:]) <= QUIET_RTOL:
-            self.rule = "quiet"
-        elif (len(self.readings) == FLOOR_WINDOW
-              and max(self.changes[-STOP_WINDOW:]) <= wobble
-              and floor_spread(self.readings) / size <= wobble):
-            self.rule = "floor"
-        else:
-            return False
-        return True
+        reading = np.asarray(current, dtype=float).reshape(1, 1, -1)
+        if self.history is None:
+            self.history = np.full((1, FLOOR_WINDOW - 1, reading.shape[2]), np.nan)
+        first, rule = _fast.first_stops(self.history, reading, RESTING, self.rounding)
+        self.history = np.concatenate([self.history[:, 1:], reading], axis=1)
+        self.rule = RULES[rule[0]] if first[0] >= 0 else ""
+        return bool(first[0] >= 0)
 
 
-def remaining_change(changes: list[float]) -> float:
-    """Estimated change still to come after the last of ``changes`` (relative
-    per-step changes), from the last :data:`STOP_WINDOW` of them: Δ·r/(1 − r)
-    while they decay geometrically, ∞ when they do not (or before a window is
-    known). Δ is the window's largest change and r its largest step ratio, so
-    neither a dip of one step nor an alternation passes for a decay."""
-    if len(changes) < STOP_WINDOW:
-        return np.inf
-    window = changes[-STOP_WINDOW:]
-    size = max(window)
-    if size == 0.0:
-        return 0.0
-    ratio = max(b / a if a else np.inf for a, b in itertools.pairwise(window))
-    if ratio < 1.0:
-        return size * ratio / (1.0 - ratio)
-    return np.inf
+#: The joints' speed the stop rules are told where the caller checks it itself.
+RESTING = np.zeros((1, 1))
 
 
-def floor_spread(readings: Iterable[Iterable[float]]) -> float:
-    """Largest spread (max − min) of any force component over ``readings``."""
-    stack = np.array(list(readings))
-    return float((stack.max(axis=0) - stack.min(axis=0)).max())
+# The stop rules, written once: run as Python, or compiled as they are
+# (:mod:`._fast.stop_kernel`), reading by reading. A maximum that meets a NaN is NaN, and
+# every comparison with it is false, so a window reaching back past a pass's first
+# reading (NaN) fires no rule.
+def larger(a: float, b: float) -> float:
+    """max(a, b), NaN if either is (numpy's maximum)."""
+    if a != a or b != b:
+        return math.nan
+    return a if a >= b else b
+
+
+def largest_entry(x: np.ndarray) -> float:
+    """The largest |entry| of a reading, NaN if any is NaN."""
+    out = 0.0
+    for v in x:
+        out = larger(out, abs(v))
+    return out
+
+
+def largest_step(new: np.ndarray, old: np.ndarray) -> float:
+    """The largest |change| between two readings, NaN if any is NaN."""
+    out = 0.0
+    for j in range(new.size):
+        out = larger(out, abs(new[j] - old[j]))
+    return out
+
+
+def relative_changes(recent: np.ndarray, size: np.ndarray, change: np.ndarray) -> None:
+    """Each reading's size (its largest force, at least :data:`FORCE_FLOOR_N`) and its
+    change from the one before relative to it, into ``size`` and ``change``."""
+    for i in range(recent.shape[0]):
+        size[i] = larger(largest_entry(recent[i]), FORCE_FLOOR_N)
+    for i in range(recent.shape[0] - 1):
+        change[i] = largest_step(recent[i + 1], recent[i]) / size[i + 1]
+
+
+def window_rule(change: np.ndarray, t: int) -> tuple[int, float]:
+    """Over the window of :data:`STOP_WINDOW` changes from ``change[t]`` on: the decay rule
+    (0: the change Δ·r/(1 − r) still to come below :data:`SETTLE_RTOL`, Δ the largest
+    change and r the largest step ratio, so that neither a dip of one step nor an
+    alternation passes for a decay) or the quiet rule (1: every change below
+    :data:`QUIET_RTOL`), −1 for neither; and Δ."""
+    largest = change[t]
+    for k in range(1, STOP_WINDOW):
+        largest = larger(largest, change[t + k])
+    ratio = -math.inf
+    for k in range(STOP_WINDOW - 1):
+        step = change[t + k + 1] / change[t + k] if change[t + k] > 0 else math.inf
+        ratio = larger(ratio, step)
+    left = largest * ratio / (1.0 - ratio) if ratio < 1.0 else math.inf
+    if largest == 0.0 or left <= SETTLE_RTOL:
+        return 0, largest
+    return (1 if largest <= QUIET_RTOL else -1), largest
+
+
+def step_jumps(whole: np.ndarray, jumps: np.ndarray) -> None:
+    """The largest |change| from each reading of ``whole`` to the next, into ``jumps``."""
+    for i in range(whole.shape[0] - 1):
+        jumps[i] = largest_step(whole[i + 1], whole[i])
+
+
+def widest(jumps: np.ndarray, start: int, count: int) -> float:
+    """The largest of ``count`` jumps from ``start`` on."""
+    out = jumps[start]
+    for i in range(start + 1, start + count):
+        out = larger(out, jumps[i])
+    return out
+
+
+def window_spread(whole: np.ndarray, start: int) -> float:
+    """The largest spread (max − min) of a force over the :data:`FLOOR_WINDOW` readings
+    of ``whole`` from ``start`` on."""
+    spread = 0.0
+    for j in range(whole.shape[1]):
+        low, high = whole[start, j], whole[start, j]
+        for i in range(start + 1, start + FLOOR_WINDOW):
+            low = -larger(-low, -whole[i, j])
+            high = larger(high, whole[i, j])
+        spread = larger(spread, high - low)
+    return spread
+
+
+def first_stops(history: np.ndarray, readings: np.ndarray, speed: np.ndarray,
+                rounding: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """For each pose of a wave, the first of its ``readings`` (P, T, m) at which a stop
+    rule fires with the joints slower than :data:`VELOCITY_TOL` (``speed`` (P, T) at each
+    reading): its index (−1 if none) and the rule that fired (an index into
+    :data:`RULES`; the last reading's where none fires).
+
+    ``history`` (P, FLOOR_WINDOW − 1, m) holds each pose's earlier readings of the pass,
+    NaN where the pass has fewer: a window reaching back past the pass's first reading
+    holds a NaN, and no rule fires on it, as no rule fires before its window is known.
+    ``rounding``: the model's rounding floor (N, :func:`rounding_floor`), the floor rule's
+    allowance where it is more than :data:`WOBBLE_RTOL` of a reading
+    (:func:`wobble_allowed`). The floor's spread is only looked at where the rest of its
+    rule holds and no single step in its window is larger than the spread allowed (a
+    spread is at least every step within it).
+    """
+    poses, back, m = history.shape
+    chunk = readings.shape[1]
+    first = np.full(poses, -1, dtype=np.int64)
+    rules = np.full(poses, -1, dtype=np.int64)
+    whole = np.empty((back + chunk, m))
+    size = np.empty(STOP_WINDOW + chunk)
+    change = np.empty(STOP_WINDOW + chunk - 1)
+    jumps = np.empty(back + chunk - 1)
+    for p in range(poses):
+        whole[:back] = history[p]
+        whole[back:] = readings[p]
+        relative_changes(whole[back - STOP_WINDOW:], size, change)
+        jumps_known = False
+        for t in range(chunk):
+            rule, largest = window_rule(change, t)
+            here = size[STOP_WINDOW + t]
+            wobble = larger(WOBBLE_RTOL, rounding / here)
+            if rule < 0 and largest <= wobble and speed[p, t] <= VELOCITY_TOL:
+                if not jumps_known:
+                    step_jumps(whole, jumps)
+                    jumps_known = True
+                if (widest(jumps, t, back) <= wobble * here
+                        and window_spread(whole, back + t + 1 - FLOOR_WINDOW) / here <= wobble):
+                    rule = 2
+            rules[p] = rule
+            if rule >= 0 and speed[p, t] <= VELOCITY_TOL:
+                first[p] = t
+                break
+    return first, rules
+
+
+#: What :mod:`._fast.stop_kernel` compiles along with :func:`first_stops`.
+STOP_RULE_HELPERS = (larger, largest_entry, largest_step, relative_changes, window_rule,
+                     step_jumps, widest, window_spread)
 
 
 def reseed(rig: SettlingRig, qpos: np.ndarray) -> None:

@@ -1,7 +1,7 @@
 """Seed 001's mechanism theory measured in MuJoCo: turn the crank and see.
 
 Two experiments on the four-bar or slider-crank as its linkage (the linkage builder's model,
-:mod:`mechcheck.sim_models.presets`), both read from MuJoCo's own state (joint coordinates,
+:mod:`mechcheck.analytic.presets`), both read from MuJoCo's own state (joint coordinates,
 actuator and equality forces); the analytic side only seeds the first pose.
 
 - :func:`turn_crank` drives the crank with a **velocity servo of bounded torque** (the

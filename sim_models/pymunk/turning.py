@@ -1,7 +1,7 @@
 """Seed 001's mechanism theory measured in pymunk: turn the crank and see.
 
 The same two experiments as :mod:`mechcheck.sim_models.mujoco.turning`, on the four-bar or
-slider-crank as its linkage (the linkage builder's model, :mod:`mechcheck.sim_models.presets`),
+slider-crank as its linkage (the linkage builder's model, :mod:`mechcheck.analytic.presets`),
 judged by the same run protocol, result types and extreme finder
 (:mod:`mechcheck.sim_models.turning`):
 

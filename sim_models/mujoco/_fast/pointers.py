@@ -1,17 +1,10 @@
-"""``mujoco_solve``'s per-pose loops compiled (:mod:`.exact_kernel`), where numba is installed.
-
-Why: a batched exact sweep makes three MuJoCo passes per pose (kinematics for the load
-points, the forward pass for the constraint equations, the post-constraint read-out),
-about 9 µs of C on seed E1, and the Python around them took as long again. The kernels
-call MuJoCo's own functions through their C function pointers on the same MjData, so
-they give the same numbers, bit for bit (``tests/test_mujoco_linkage.py``).
+"""MuJoCo's C library as the kernels see it: its functions' C pointers, the addresses of
+models and data, the constraint arrays' place in MjData's arena, and models copied in place.
 
 MjData's constraint arrays live in its arena, laid out again by each forward pass; the
-views the kernels write through are taken after a forward pass at the sweep's first pose
+views the kernels write through are taken after a forward pass at a batch's first pose
 and checked to be where the last one left them (:class:`ArenaMoved` otherwise, and the
-Python loop runs). Without numba, without MuJoCo's shared library at a known place, or
-with ``MECHCHECK_PURE_PYTHON=1`` (:mod:`mechcheck.sim_models.compiled`), the Python loops
-run.
+Python loop runs).
 """
 
 from __future__ import annotations
@@ -21,14 +14,12 @@ import sys
 from collections.abc import Callable
 from functools import cache
 from pathlib import Path
-from types import ModuleType
 
 import mujoco
 import numpy as np
 
-from mechcheck.sim_models.compiled import kernel
+from mechcheck.sim_models.mujoco._fast.plans import MjCalls
 
-KERNEL = "mechcheck.sim_models.mujoco.exact_kernel"
 #: ``void f(const mjModel *, mjData *)``, the pointers passed as integers of their size.
 PASS = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t)
 #: ``mj_setState(const mjModel *, mjData *, const mjtNum *state, int spec)``, and
@@ -38,8 +29,6 @@ SET_STATE = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_
 #: ``mj_mulM(const mjModel *, const mjData *, mjtNum *res, const mjtNum *vec)``.
 MUL = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t,
                        ctypes.c_ssize_t)
-
-
 #: ``mjModel *mj_copyModel(mjModel *dest, const mjModel *src)``.
 COPY_MODEL = ctypes.CFUNCTYPE(ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t)
 
@@ -71,6 +60,14 @@ def functions() -> dict[str, Callable[..., None]]:
                   "mj_getState": SET_STATE(("mj_getState", lib))}
 
 
+def calls(model: mujoco.MjModel, data: mujoco.MjData) -> MjCalls:
+    """``model`` and ``data`` with the functions the kernels call on them."""
+    f = functions()
+    return MjCalls(model._address, data._address, f["mj_forward"], f["mj_kinematics"],
+                   f["mj_comPos"], f["mj_comVel"], f["mj_rnePostConstraint"], f["mj_step"],
+                   f["mj_mulM"], f["mj_setState"], f["mj_getState"])
+
+
 @cache
 def copy_model() -> Callable[[int, int], int] | None:
     """MuJoCo's ``mj_copyModel`` (into a model of the same sizes: in place), or None where
@@ -79,20 +76,10 @@ def copy_model() -> Callable[[int, int], int] | None:
     return None if lib is None else COPY_MODEL(("mj_copyModel", lib))
 
 
-def loops() -> ModuleType | None:
-    """The compiled loops, or None (the Python ones run)."""
-    return kernel(KERNEL) if library() is not None else None
-
-
-def load_points(loop: ModuleType, model: mujoco.MjModel, data: mujoco.MjData,
-                qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:meth:`.linkage_rig.LinkageRig.load_points`, compiled."""
-    sites = np.empty((len(qpos), *data.site_xpos.shape))
-    centres = np.empty((len(qpos), *data.xipos.shape))
-    loop.load_points(functions()["mj_kinematics"], model._address, data._address,
-                     np.ascontiguousarray(qpos), data.qpos, data.site_xpos, data.xipos, sites,
-                     centres)
-    return sites, centres
+def copy_into(copier: Callable[[int, int], int], dest: mujoco.MjModel,
+              source: mujoco.MjModel) -> None:
+    """``source`` copied into ``dest`` (of the same sizes) by ``copier`` (:func:`copy_model`)."""
+    copier(dest._address, source._address)
 
 
 def constraint_views(data: mujoco.MjData, nefc: int, nv: int) -> tuple[np.ndarray, ...]:
