@@ -16,6 +16,7 @@ then not simulated.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,6 +24,7 @@ from numpy.typing import ArrayLike
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP, analytic_results, driver_values
 from mechcheck.analytic.linkage_forces import LinkageResults
+from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import CaseError
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
@@ -76,40 +78,77 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
     refused = refusal(case, backend)
     if refused is not None:
         return [refused] * len(values)
-    results = results if results is not None else analytic_results(case, values)
+    return held_sweep(case, values, backend,
+                      results if results is not None else analytic_results(case, values))
+
+
+def held_sweep(case: Case, values: Array, backend: str, results: LinkageResults) -> list[Solution]:
+    """The sweep of a held linkage, pose after pose in one model (:class:`Continuation`);
+    an unstable equilibrium of free coordinates gets its verdict and is not simulated."""
     drivers = driver_values(case, values)
     assert drivers is not None
-    free = has_free_coordinates(case)
-    method = "settle" if backend == "pymunk" else "constraint_solve"
-    model: LinkageModel | None = None
-    previous = None
+    walk = Continuation(case, backend, results, drivers, has_free_coordinates(case))
     verdicts: dict[int, Solution] = {}
     outcomes: list[Outcome] = []
     for k, value in enumerate(values):
         start = time.perf_counter()
-        found = unstable(case, backend, results, k) if free and backend == "pymunk" else None
+        found = unstable(case, backend, results, k) if walk.free and backend == "pymunk" else None
         if found is not None:
             verdicts[k] = found
-            continue
-        q = results.pose.q[k]
-        seed = q if not free or backend == "pymunk_solve" else (
-            previous if previous is not None else free_start(case, drivers[k]))
-        if model is None:
-            model = build_linkage_model(case, LINKAGE_SETTLE if backend == "pymunk" else LINKAGE_SOLVE,
-                                        seed)
-            if backend == "pymunk_solve":
-                hold_without_correction(model)
-        hold_first_driver(model, float(value))
-        place(model, seed)
-        run = settle_run(model) if backend == "pymunk" else solve_run(model, q)
-        outcomes.append(outcome(model, run, start, k))
-        if free and run.settled:
-            previous = coordinates(model)
+        else:
+            outcomes.append(walk.run(k, float(value), start))
+    method = "settle" if backend == "pymunk" else "constraint_solve"
     simulated = dict(zip((o.index for o in outcomes),
-                         solutions(model, backend, method, outcomes, results, values) if model
-                         else [], strict=True))
+                         solutions(walk.model, backend, method, outcomes, results, values)
+                         if walk.model else [], strict=True))
     return [simulated[k] if k in simulated else with_driver(verdicts[k], float(value))
             for k, value in enumerate(values)]
+
+
+@dataclass
+class Continuation:
+    """A held sweep from pose to pose (``drivers``: every driver's value per pose; ``free``:
+    the linkage has free coordinates): one ``model``, built at the first pose simulated,
+    and the pose the last settled run of free coordinates came to rest in, where the next
+    run starts."""
+
+    case: Case
+    backend: str
+    results: LinkageResults
+    drivers: Array
+    free: bool
+    model: LinkageModel | None = None
+    previous: Array | None = None
+
+    def seed(self, k: int) -> Array:
+        """Where pose ``k``'s run starts: the analytic pose when every coordinate is held
+        (and for the constraint solve), else where the last settled run came to rest, the
+        first from the drawn pose."""
+        if not self.free or self.backend == "pymunk_solve":
+            return np.asarray(self.results.pose.q[k])
+        return self.previous if self.previous is not None else free_start(self.case, self.drivers[k])
+
+    def built(self, seed: Array) -> LinkageModel:
+        """The sweep's model, built at ``seed`` the first time."""
+        if self.model is None:
+            solve = self.backend == "pymunk_solve"
+            self.model = build_linkage_model(self.case, LINKAGE_SOLVE if solve else LINKAGE_SETTLE, seed)
+            if solve:
+                hold_without_correction(self.model)
+        return self.model
+
+    def run(self, k: int, value: float, start: float) -> Outcome:
+        """Pose ``k`` at the first driver's ``value``, run from its seed."""
+        seed = self.seed(k)
+        model = self.built(seed)
+        hold_first_driver(model, value)
+        place(model, seed)
+        q = self.results.pose.q[k]
+        run = settle_run(model) if self.backend == "pymunk" else solve_run(model, q)
+        done = outcome(model, run, start, k)
+        if self.free and run.settled:
+            self.previous = coordinates(model)
+        return done
 
 
 def with_driver(sol: Solution, value: float) -> Solution:
