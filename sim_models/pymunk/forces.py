@@ -44,13 +44,6 @@ def accumulated_impulse(constraint: pymunk.Constraint) -> Vec | float:
     return (j[0], j[1]) if len(j) == 2 else j[0]
 
 
-def force_on_b(constraint: pymunk.Constraint, dt: float) -> Vec:
-    """Force vector (N) a pivot or groove applied to its body b during the last step."""
-    j = accumulated_impulse(constraint)
-    assert isinstance(j, tuple)
-    return j[0] / dt, j[1] / dt
-
-
 def torque_on_b(constraint: pymunk.Constraint, dt: float) -> float:
     """Torque (N·m, CCW +) a gear or motor applied to its body b during the last step."""
     j = accumulated_impulse(constraint)

@@ -53,7 +53,7 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     place,
     stage,
 )
-from mechcheck.sim_models.pymunk.readout import Values, turned
+from mechcheck.sim_models.pymunk.readout import turned
 from mechcheck.sim_models.pymunk.settings import (
     LINKAGE_SETTLE,
     LINKAGE_SOLVE,
@@ -62,14 +62,7 @@ from mechcheck.sim_models.pymunk.settings import (
     SolverSettings,
     near_change_point,
 )
-from mechcheck.sim_models.pymunk.settle import (
-    Reading,
-    Run,
-    StopRule,
-    run_until_settled,
-    slow_window,
-    stop_rule,
-)
+from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled, slow_window, stop_rule
 from mechcheck.sim_models.pymunk.slow_mode import SlowMode
 
 #: A held linkage that comes to rest farther than this × its size from the pose it was
@@ -92,12 +85,6 @@ def axis_now(model: LinkageModel, joint: Joint) -> tuple[float, float]:
     """A prismatic joint's sliding direction at the current pose (fixed in links[0])."""
     assert joint.axis is not None
     return turned(joint.axis, model.body(joint.links[0]).angle)
-
-
-def reactions(model: LinkageModel) -> Values:
-    """Every F_, M_, Q_ and S_ quantity of the linkage, from the last step's impulses
-    (:func:`~.linkage_model.compile_readout`)."""
-    return model.readout.values()
 
 
 def pose_table(linkage: Linkage, q: Array) -> dict[str, Array]:
@@ -182,14 +169,16 @@ def settle_run(model: LinkageModel, contraction: float = 0.0) -> Run:
     numba is installed (:mod:`._fast.compiled`: the same steps and readings).
     """
     if slow_window(contraction) == 0 and _fast.available():
-        return compiled_run(model, stop_rule(model.settings, model.scale, rounding_floor(model)))
+        return compiled_run(model, rounding_floor(model))
     return python_settle_run(model, contraction)
 
 
-def compiled_run(model: LinkageModel, rule: StopRule, reposed: bool = False) -> Run:
-    """The compiled loop's run (:func:`._fast.run`): damped and loaded steps, or the
-    constraint solve's (``reposed``) once the bodies are staged and re-posed."""
-    steps, settled, speed, change = _fast.run(model, rule, reposed)
+def compiled_run(model: LinkageModel, floor: float, reposed: bool = False) -> Run:
+    """The compiled loop's run (:func:`._fast.run`) with the force floor ``floor`` (N):
+    damped and loaded steps, or the constraint solve's (``reposed``) once the bodies are
+    staged and re-posed."""
+    steps, settled, speed, change = _fast.run(model, stop_rule(model.settings, model.scale, floor),
+                                              reposed)
     return Run(model.readout.values(), steps, settled, speed, change)
 
 
@@ -308,7 +297,7 @@ def solve_run(model: LinkageModel, q: Array, slow: SlowMode | None = None) -> Ru
     stage(model, q, loaded=True)
     if slow is None and _fast.available():
         model.bulk.repose()
-        run = compiled_run(model, stop_rule(model.settings, model.scale), reposed=True)
+        run = compiled_run(model, FORCE_FLOOR_N, reposed=True)
     else:
         def step() -> Reading:
             reposed_step(model, slow)

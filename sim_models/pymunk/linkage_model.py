@@ -216,6 +216,15 @@ def along(joint: Joint, point: Vec, distance: float) -> Vec:
     return point[0] + distance * joint.axis[0], point[1] + distance * joint.axis[1]
 
 
+def move_lock(model: LinkageModel, joint: Joint, value: float) -> None:
+    """Move a driven joint's lock to ``value`` (rad or m from the drawn pose): a gear's
+    phase, or a held slide's anchor."""
+    if joint.kind.rotates:
+        model.drives[joint.name].phase = value
+    else:
+        model.held[joint.name].anchor_a = along(joint, model.linkage.points[joint.at], value)
+
+
 def make_joints(model: LinkageModel) -> None:
     """Every joint's constraints, and each driver's lock, added to the model's tables."""
     linkage = model.linkage

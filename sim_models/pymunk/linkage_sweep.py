@@ -16,7 +16,6 @@ then not simulated.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -42,24 +41,14 @@ from mechcheck.sim_models.pymunk.linkage import (
 )
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
-    along,
     build_linkage_model,
     coordinates,
+    move_lock,
     place,
 )
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE
 
 BACKENDS = ("pymunk", "pymunk_solve")
-
-
-def hold_first_driver(model: LinkageModel, value: float) -> None:
-    """Move the first driver's lock to ``value`` (rad or m from the drawn pose)."""
-    linkage = model.linkage
-    joint = linkage.joint(linkage.drivers[0].joint)
-    if joint.kind.rotates:
-        model.drives[joint.name].phase = value
-    else:
-        model.held[joint.name].anchor_a = along(joint, linkage.points[joint.at], value)
 
 
 def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
@@ -83,72 +72,47 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
 
 
 def held_sweep(case: Case, values: Array, backend: str, results: LinkageResults) -> list[Solution]:
-    """The sweep of a held linkage, pose after pose in one model (:class:`Continuation`);
-    an unstable equilibrium of free coordinates gets its verdict and is not simulated."""
-    drivers = driver_values(case, values)
+    """The sweep of a held linkage in one model (built at the first pose simulated): every
+    coordinate held, or the constraint solve, from the analytic pose; free coordinates from
+    where the last settled run came to rest (the first from the drawn pose). An unstable
+    equilibrium of free coordinates gets its verdict and is not simulated."""
+    drivers, free, solve = driver_values(case, values), has_free_coordinates(case), backend == BACKENDS[1]
     assert drivers is not None
-    walk = Continuation(case, backend, results, drivers, has_free_coordinates(case))
+    first = case.linkage.joint(case.linkage.drivers[0].joint)
+    model: LinkageModel | None = None
+    previous: Array | None = None
     verdicts: dict[int, Solution] = {}
     outcomes: list[Outcome] = []
     for k, value in enumerate(values):
         start = time.perf_counter()
-        found = unstable(case, backend, results, k) if walk.free and backend == "pymunk" else None
+        found = None if solve or not free else unstable(case, backend, results, k)
         if found is not None:
             verdicts[k] = found
-        else:
-            outcomes.append(walk.run(k, float(value), start))
-    method = "settle" if backend == "pymunk" else "constraint_solve"
+            continue
+        q = results.pose.q[k]
+        seed = q if solve or not free else previous if previous is not None else free_start(case, drivers[k])
+        model = model or sweep_model(case, solve, seed)
+        move_lock(model, first, float(value))
+        place(model, seed)
+        run = solve_run(model, q) if solve else settle_run(model)
+        outcomes.append(outcome(model, run, start, k))
+        if free and run.settled:
+            previous = coordinates(model)
+    method = "constraint_solve" if solve else "settle"
     simulated = dict(zip((o.index for o in outcomes),
-                         solutions(walk.model, backend, method, outcomes, results, values)
-                         if walk.model else [], strict=True))
+                         solutions(model, backend, method, outcomes, results, values) if model else [],
+                         strict=True))
     return [simulated[k] if k in simulated else with_driver(verdicts[k], float(value))
             for k, value in enumerate(values)]
 
 
-@dataclass
-class Continuation:
-    """A held sweep from pose to pose (``drivers``: every driver's value per pose; ``free``:
-    the linkage has free coordinates): one ``model``, built at the first pose simulated,
-    and the pose the last settled run of free coordinates came to rest in, where the next
-    run starts."""
-
-    case: Case
-    backend: str
-    results: LinkageResults
-    drivers: Array
-    free: bool
-    model: LinkageModel | None = None
-    previous: Array | None = None
-
-    def seed(self, k: int) -> Array:
-        """Where pose ``k``'s run starts: the analytic pose when every coordinate is held
-        (and for the constraint solve), else where the last settled run came to rest, the
-        first from the drawn pose."""
-        if not self.free or self.backend == "pymunk_solve":
-            return np.asarray(self.results.pose.q[k])
-        return self.previous if self.previous is not None else free_start(self.case, self.drivers[k])
-
-    def built(self, seed: Array) -> LinkageModel:
-        """The sweep's model, built at ``seed`` the first time."""
-        if self.model is None:
-            solve = self.backend == "pymunk_solve"
-            self.model = build_linkage_model(self.case, LINKAGE_SOLVE if solve else LINKAGE_SETTLE, seed)
-            if solve:
-                hold_without_correction(self.model)
-        return self.model
-
-    def run(self, k: int, value: float, start: float) -> Outcome:
-        """Pose ``k`` at the first driver's ``value``, run from its seed."""
-        seed = self.seed(k)
-        model = self.built(seed)
-        hold_first_driver(model, value)
-        place(model, seed)
-        q = self.results.pose.q[k]
-        run = settle_run(model) if self.backend == "pymunk" else solve_run(model, q)
-        done = outcome(model, run, start, k)
-        if self.free and run.settled:
-            self.previous = coordinates(model)
-        return done
+def sweep_model(case: Case, solve: bool, seed: Array) -> LinkageModel:
+    """The sweep's model at its first seed; the constraint solve's (``solve``) without
+    joint-error correction."""
+    model = build_linkage_model(case, LINKAGE_SOLVE if solve else LINKAGE_SETTLE, seed)
+    if solve:
+        hold_without_correction(model)
+    return model
 
 
 def with_driver(sol: Solution, value: float) -> Solution:

@@ -31,11 +31,8 @@ class Run:
 
 
 class StopRule(NamedTuple):
-    """The stop rule's thresholds in the units a step reads: ``still``, the residual
-    velocity (m/s, ``settle_speed`` × the length); ``calm_change``, the relative force
-    change; ``floor``, the impulses' floor (the force floor × dt); ``patience`` calm steps
-    in a row; ``max_steps``, the budget. The compiled loop takes it as it is
-    (:mod:`._fast.kernel`)."""
+    """The stop rule's thresholds as a step reads them: residual velocity (m/s), relative
+    force change, the impulses' floor (force floor × dt), calm steps in a row, budget."""
 
     still: float
     calm_change: float
@@ -52,8 +49,8 @@ def stop_rule(settings: SolverSettings, length: float, floor: float = FORCE_FLOO
                     s.settle_patience, s.max_steps)
 
 
-# The stop rule's decision, written once: the Python loop runs these functions and the
-# compiled loop compiles them (:mod:`._fast.kernel`).
+# The stop rule's decision, written once: the Python loop runs it, the compiled loop
+# compiles it (:mod:`._fast.kernel`).
 
 def forces_calm(change: float, scale: float, rule: StopRule) -> bool:
     """Whether a step's largest change is within ``calm_change`` of the reading's size."""

@@ -107,8 +107,11 @@ def read(plan: Plan, out: Array) -> None:
 
 
 @njit(cache=True)
-def speed(plan: Plan) -> float:
-    """The largest point speed |v| + |ω|·radius of any body, m/s; NaN if any is."""
+def residual(plan: Plan, reposed: bool) -> float:
+    """The residual velocity the stop rule reads: none in a re-posed step, else the largest
+    point speed |v| + |ω|·radius of any body, m/s; NaN if any is."""
+    if reposed:
+        return 0.0
     bodies, radii = plan.bodies, plan.radii
     fastest = -math.inf
     for b in range(bodies.size):
@@ -170,9 +173,3 @@ def settle(step: Callable[[int, float], None], plan: Plan, stop: StopRule,
         old, new = new, old
     change = largest_change(old, new) / size(old, stop.floor) if stop.max_steps > 1 else math.inf
     return stop.max_steps, False, residual(plan, reposed), change
-
-
-@njit(cache=True)
-def residual(plan: Plan, reposed: bool) -> float:
-    """The residual velocity the stop rule reads: none in a re-posed step."""
-    return 0.0 if reposed else speed(plan)

@@ -1,17 +1,9 @@
-"""Where pymunk keeps what a force reading or a compiled loop needs: offsets into
-Chipmunk's private C structs, checked once per process against public values.
-
-Why the accumulated impulse is read from the structs at all is :mod:`..forces`'s
-docstring. The C structs are private, so the offsets used here are checked
-(:func:`check_layout`) against public, independent values: the base ``cpConstraint``
-fields (max force, error bias, max bias), each joint's public parameters (pivot anchors,
-groove endpoints, gear phase and ratio, motor rate, springs' parameters), the body
-fields against the body's properties and, after a step with load, |jAcc| against the
-public ``impulse`` magnitude. Any mismatch raises :class:`LayoutError`, never a silently
-wrong force.
-
-A :data:`Cell` (a struct seen as doubles, an index) is where one double of a jAcc lives;
-:func:`read` and :func:`write` are the only places that index one from Python.
+"""Offsets into Chipmunk's private C structs (why they are read: :mod:`..forces`), checked
+once per process (:func:`check_layout`) against public, independent values: the base
+``cpConstraint`` fields, each joint's public parameters, the body's properties and, after
+a step with load, |jAcc| against the public ``impulse`` magnitude. Any mismatch raises
+:class:`LayoutError`, never a silently wrong force. A :data:`Cell` is where one double of
+a jAcc lives; :func:`read` and :func:`write` are the only Python that indexes one.
 """
 
 from __future__ import annotations
