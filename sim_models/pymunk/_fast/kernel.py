@@ -1,14 +1,10 @@
 """The loops of :func:`..linkage.settle_run` and :func:`..linkage.solve_run` in numba
-(imported by :mod:`.compiled` only when numba is installed: the ``fast`` extra).
-
-Step for step it does what the Python loop does, in the same floating-point operations
-(:func:`..linkage.damped_and_loaded` or :meth:`.bulk.Bodies.repose`,
-:meth:`..readout.Readout.impulses`, :func:`..settle.run_until_settled` without a slow
-window, whose decision it compiles: :func:`..settle.forces_calm`, ``at_rest``,
-``patient``), on the bodies' and constraints' C structs themselves: their fields are read
-and written at addresses whose offsets :func:`.layout.check_layout` verified against
-pymunk's public API, and Chipmunk's own ``cpSpaceStep`` is called through its function
-pointer. Every kernel takes the model's :class:`.compiled.Plan` whole.
+(imported by :mod:`.compiled` only with numba). Step for step the Python loop's
+floating-point operations (:func:`..linkage.damped_and_loaded` or :meth:`.bulk.Bodies.repose`,
+:meth:`..readout.Readout.impulses`, and :func:`..settle.run_until_settled`'s decision,
+compiled from its own functions), on the C structs at offsets :func:`.layout.check_layout`
+verified; Chipmunk's ``cpSpaceStep`` called through its pointer. Kernels take the
+model's :class:`.compiled.Plan` whole.
 """
 
 from __future__ import annotations
