@@ -63,9 +63,7 @@ def read_double(constraint: pymunk.Constraint, offset: int) -> float:
 
 def read_vect(constraint: pymunk.Constraint, offset: int) -> Vec:
     """The cpVect at byte ``offset`` of the constraint's C struct."""
-    d = _doubles(constraint)
-    k = offset // _DOUBLE
-    return float(d[k]), float(d[k + 1])  # type: ignore[index]
+    return read_double(constraint, offset), read_double(constraint, offset + _DOUBLE)
 
 
 #: Where one double of a constraint's jAcc lives: (its struct as doubles, index).
