@@ -1,4 +1,4 @@
-"""The compiled loops (:mod:`mechcheck.sim_models.pymunk.compiled`, numba: settling, and
+"""The compiled loops (:mod:`mechcheck.sim_models.pymunk._fast.compiled`, numba: settling, and
 the constraint solve's re-posed steps) are the Python loops they replace: the same steps
 and the same forces, bit for bit, on every built-in static case, every moving one held
 still, whole sweeps of seed E1 and the Watt six-bar, and random linkages; and they read
@@ -18,7 +18,8 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.compiled import kernel
-from mechcheck.sim_models.pymunk import backend as pm, compiled, forces, linkage as pl
+from mechcheck.sim_models.pymunk import _fast, backend as pm, linkage as pl
+from mechcheck.sim_models.pymunk._fast import layout
 from mechcheck.sweep import gated_poses
 
 from .builtin import builtin, builtin_cases
@@ -52,14 +53,14 @@ backend_sweep = sweeper(pm.sweep, {"pymunk": pm.settle, "pymunk_solve": pm.solve
 def compiled_runs(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[int]]:
     """Counts the runs the compiled loop made (each appends its steps)."""
     runs: list[int] = []
-    run = compiled.run
+    run = _fast.run
 
     def counted(*args: Any) -> Any:
         out = run(*args)
-        runs.append(out.steps)
+        runs.append(out[0])
         return out
 
-    monkeypatch.setattr(compiled, "run", counted)
+    monkeypatch.setattr(_fast, "run", counted)
     yield runs
 
 
@@ -69,7 +70,7 @@ def both(fn: Callable[[], list[Solution]], monkeypatch: pytest.MonkeyPatch,
     fast = fn()
     assert runs, "the compiled loop never ran"
     with monkeypatch.context() as m:
-        m.setattr(compiled, "available", lambda: False)
+        m.setattr(_fast, "available", lambda: False)
         count = len(runs)
         slow = fn()
         assert len(runs) == count, "the Python loop was asked for and the compiled one ran"
@@ -147,7 +148,7 @@ def test_random_linkages_run_alike(table: dict[str, Any]) -> None:
     for solve in (pm.settle, pm.solve_at_pose):
         fast = solve(case)
         with pytest.MonkeyPatch.context() as m:
-            m.setattr(compiled, "available", lambda: False)
+            m.setattr(_fast, "available", lambda: False)
             slow = solve(case)
         assert_same_runs([fast], [slow])
 
@@ -155,25 +156,25 @@ def test_random_linkages_run_alike(table: dict[str, Any]) -> None:
 def test_the_environment_switches_the_compiled_loop_off(monkeypatch: pytest.MonkeyPatch) -> None:
     kernel.cache_clear()
     monkeypatch.setenv("MECHCHECK_PURE_PYTHON", "1")
-    assert not compiled.available()
+    assert not _fast.available()
     kernel.cache_clear()
     monkeypatch.delenv("MECHCHECK_PURE_PYTHON")
-    assert compiled.available()
+    assert _fast.available()
     kernel.cache_clear()
     # numba's own switch: its kernels would run as Python, where raw memory access fails.
     monkeypatch.setattr(pytest.importorskip("numba").config, "DISABLE_JIT", True)
-    assert not compiled.available()
+    assert not _fast.available()
     kernel.cache_clear()
 
 
-@pytest.mark.parametrize(("fields", "name"), [(forces.BODY_FIELDS, "w"), (forces.BODY_FIELDS, "f"),
-                                              (forces.BODY_FIELDS, "p"),
-                                              (forces.BODY_FIELDS, "transform"),
-                                              (forces.DAMPED_SPRING_FIELDS, "jAcc"),
-                                              (forces.ROTARY_SPRING_FIELDS, "jAcc")])
+@pytest.mark.parametrize(("fields", "name"), [(layout.BODY_FIELDS, "w"), (layout.BODY_FIELDS, "f"),
+                                              (layout.BODY_FIELDS, "p"),
+                                              (layout.BODY_FIELDS, "transform"),
+                                              (layout.DAMPED_SPRING_FIELDS, "jAcc"),
+                                              (layout.ROTARY_SPRING_FIELDS, "jAcc")])
 def test_a_wrong_body_or_spring_offset_fails_the_layout_check(
         fields: dict[str, int], name: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """Off by one field, the check raises instead of letting the loop write elsewhere."""
     monkeypatch.setitem(fields, name, fields[name] + 8)
-    with pytest.raises(forces.LayoutError):
-        forces.check_layout()
+    with pytest.raises(layout.LayoutError):
+        layout.check_layout()

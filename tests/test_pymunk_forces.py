@@ -10,7 +10,7 @@ from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.pymunk import forces
-from mechcheck.sim_models.pymunk.linkage import reactions
+from mechcheck.sim_models.pymunk._fast import layout
 from mechcheck.sim_models.pymunk.linkage_model import LinkageModel, apply_loads, build_linkage_model
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, SolverSettings
 
@@ -39,14 +39,14 @@ def built(case: Case, settings: SolverSettings = LINKAGE_SETTLE) -> LinkageModel
 
 def test_layout_check_passes_on_this_build() -> None:
     """The private offsets agree with pymunk's public fields and impulse magnitudes."""
-    forces.check_layout()
+    layout.check_layout()
 
 
 def test_layout_check_fails_loudly_on_a_wrong_offset(monkeypatch: pytest.MonkeyPatch) -> None:
     """A pivot jAcc offset that is off by one field raises LayoutError instead of reading garbage."""
-    monkeypatch.setitem(forces.PIVOT_FIELDS, "jAcc", forces.PIVOT_FIELDS["jAcc"] - 16)
-    with pytest.raises(forces.LayoutError, match="jAcc"):
-        forces.check_layout()
+    monkeypatch.setitem(layout.PIVOT_FIELDS, "jAcc", layout.PIVOT_FIELDS["jAcc"] - 16)
+    with pytest.raises(layout.LayoutError, match="jAcc"):
+        layout.check_layout()
 
 
 def test_read_magnitudes_equal_public_impulse() -> None:
@@ -73,7 +73,7 @@ def test_read_forces_balance_each_body_momentum(make: object) -> None:
     apply_loads(model)
     loads = {k: (b.force.x, b.force.y) for k, b in model.bodies.items()}
     model.space.step(settings.dt)
-    v = reactions(model)
+    v = model.readout.values()
     on = {link: [0.0, 0.0] for link in model.bodies}
     for joint in model.linkage.joints:  # F_j acts on links[1], its opposite on links[0]
         for link, sign in zip(joint.links, (-1.0, 1.0), strict=True):

@@ -16,12 +16,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pymunk
 import pytest
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.solution import FORCE_FLOOR_N
-from mechcheck.sim_models.pymunk.forces import force_on_b, torque_on_b
+from mechcheck.sim_models.pymunk.forces import accumulated_impulse, torque_on_b
 from mechcheck.sim_models.pymunk.linkage import (
     axis_now,
     free_start,
@@ -67,6 +68,13 @@ def start(case: Case) -> np.ndarray:
 
 def model_of(case: Case, settings: SolverSettings = LINKAGE_SETTLE) -> LinkageModel:
     return build_linkage_model(case, settings, start(case))
+
+
+def force_on_b(constraint: pymunk.Constraint, dt: float) -> tuple[float, float]:
+    """Force vector (N) a pivot or groove applied to its body b during the last step."""
+    j = accumulated_impulse(constraint)
+    assert isinstance(j, tuple)
+    return j[0] / dt, j[1] / dt
 
 
 def plain_reactions(model: LinkageModel) -> Values:

@@ -7,10 +7,7 @@
   fixed analytic pose (statics).
 - :func:`sweep` — either backend over the first driver (:mod:`.linkage_sweep`).
 
-Modules: ``linkage_model`` (linkage → Space), ``forces`` (reading force vectors),
-``loads``, ``readout``, ``bulk`` (the bodies read and written in bulk every step),
-``settle`` (the stop rule), ``linkage_friction``, ``settings``;
-``model`` and ``turning``: the four-bar's own model for the turning experiments.
+The modules, one line each, and the fence around the speed code (``_fast/``): README.md.
 """
 
 import numpy as np

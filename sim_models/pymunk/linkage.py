@@ -45,7 +45,7 @@ from mechcheck.analytic.linkage_kinematics import (
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.linkage_motion import is_driven
-from mechcheck.sim_models.pymunk import compiled
+from mechcheck.sim_models.pymunk import _fast
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
     build_linkage_model,
@@ -53,7 +53,7 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     place,
     stage,
 )
-from mechcheck.sim_models.pymunk.readout import Values, turned
+from mechcheck.sim_models.pymunk.readout import turned
 from mechcheck.sim_models.pymunk.settings import (
     LINKAGE_SETTLE,
     LINKAGE_SOLVE,
@@ -62,7 +62,7 @@ from mechcheck.sim_models.pymunk.settings import (
     SolverSettings,
     near_change_point,
 )
-from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled, slow_window
+from mechcheck.sim_models.pymunk.settle import Reading, Run, run_until_settled, slow_window, stop_rule
 from mechcheck.sim_models.pymunk.slow_mode import SlowMode
 
 #: A held linkage that comes to rest farther than this × its size from the pose it was
@@ -85,12 +85,6 @@ def axis_now(model: LinkageModel, joint: Joint) -> tuple[float, float]:
     """A prismatic joint's sliding direction at the current pose (fixed in links[0])."""
     assert joint.axis is not None
     return turned(joint.axis, model.body(joint.links[0]).angle)
-
-
-def reactions(model: LinkageModel) -> Values:
-    """Every F_, M_, Q_ and S_ quantity of the linkage, from the last step's impulses
-    (:func:`~.linkage_model.compile_readout`)."""
-    return model.readout.values()
 
 
 def pose_table(linkage: Linkage, q: Array) -> dict[str, Array]:
@@ -135,8 +129,8 @@ def rounding_floor(model: LinkageModel) -> float:
 
 
 def damped_and_loaded(model: LinkageModel) -> Callable[[Sequence[float]], list[float]]:
-    """From the bodies' state (:meth:`~.bulk.Bodies.read_flat`), what the next step starts
-    from, body after body (:meth:`~.bulk.Bodies.advance`): the velocities × damping^dt
+    """From the bodies' state (:meth:`~._fast.bulk.Bodies.read_flat`), what the next step starts
+    from, body after body (:meth:`~._fast.bulk.Bodies.advance`): the velocities × damping^dt
     (:func:`~.linkage_model.damp`) and the loads' force and torque at the bodies' angles
     (:func:`~.linkage_model.apply_loads`, :class:`~.loads.LoadTerms`).
 
@@ -160,23 +154,32 @@ def damped_and_loaded(model: LinkageModel) -> Callable[[Sequence[float]], list[f
 
 def residual_velocity(radii: list[float], state: Sequence[float]) -> float:
     """The largest point speed |v| + |ω|·(radius) of any body in a state
-    (:meth:`~.bulk.Bodies.read_flat`), m/s."""
+    (:meth:`~._fast.bulk.Bodies.read_flat`), m/s."""
     return max(map(add, map(hypot, state[3::6], state[4::6]), map(mul, map(abs, state[5::6]), radii)))
 
 
 def settle_run(model: LinkageModel, contraction: float = 0.0) -> Run:
     """Step the damped, loaded model until it is at rest and its forces stop changing.
 
-    The bodies are read and written in bulk (:mod:`.bulk`), and each step reads only what
+    The bodies are read and written in bulk (:mod:`._fast.bulk`), and each step reads only what
     the stop rule needs: the impulses, and the residual velocity when the rule asks.
     ``contraction``: the slowest mode's shrinking per step, measured by the constraint
     solve that primed the run (:class:`~.slow_mode.SlowMode`), which adds a window to the
     stop rule (:func:`~.settle.slow_window`). Without a window the run is compiled where
-    numba is installed (:mod:`.compiled`: the same steps and readings).
+    numba is installed (:mod:`._fast.compiled`: the same steps and readings).
     """
-    if slow_window(contraction) == 0 and compiled.available():
-        return compiled.settle_run(model, rounding_floor(model) * model.settings.dt)
+    if slow_window(contraction) == 0 and _fast.available():
+        return compiled_run(model, rounding_floor(model))
     return python_settle_run(model, contraction)
+
+
+def compiled_run(model: LinkageModel, floor: float, reposed: bool = False) -> Run:
+    """The compiled loop's run (:func:`._fast.run`) with the force floor ``floor`` (N):
+    damped and loaded steps, or the constraint solve's (``reposed``) once the bodies are
+    staged and re-posed."""
+    steps, settled, speed, change = _fast.run(model, stop_rule(model.settings, model.scale, floor),
+                                              reposed)
+    return Run(model.readout.values(), steps, settled, speed, change)
 
 
 def python_settle_run(model: LinkageModel, contraction: float = 0.0) -> Run:
@@ -290,11 +293,11 @@ def solve_run(model: LinkageModel, q: Array, slow: SlowMode | None = None) -> Ru
     """Re-pose at q, with the loads there, and step until the impulses stop changing;
     ``slow``: watch the slow mode and extrapolate it (:class:`~.slow_mode.SlowMode`), its
     measured contraction adding a window to the stop rule. Without it the run is compiled
-    where numba is installed (:func:`.compiled.solve_run`: the same steps and readings)."""
+    where numba is installed (:func:`compiled_run`: the same steps and readings)."""
     stage(model, q, loaded=True)
-    if slow is None and compiled.available():
+    if slow is None and _fast.available():
         model.bulk.repose()
-        run = compiled.solve_run(model, FORCE_FLOOR_N * model.settings.dt)
+        run = compiled_run(model, FORCE_FLOOR_N, reposed=True)
     else:
         def step() -> Reading:
             reposed_step(model, slow)

@@ -65,7 +65,6 @@ from mechcheck.sim_models.pymunk.linkage import (
     loop_violations,
     pose_drifts,
     pose_table,
-    reactions,
 )
 from mechcheck.sim_models.pymunk.linkage_friction import (
     Diverged,
@@ -78,11 +77,11 @@ from mechcheck.sim_models.pymunk.linkage_friction import (
 )
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
-    along,
     build_linkage_model,
     coordinates,
     gyration_radius,
     has_fictitious_inertia,
+    move_lock,
     place,
 )
 from mechcheck.sim_models.pymunk.loads import LoadLike, MassLike, apply_forces
@@ -189,13 +188,8 @@ def install_loads(model: LinkageModel, friction: JointLoads) -> None:
 
 def drive_to(model: LinkageModel, values: Array) -> None:
     """Move every driver's lock to ``values`` (d,): a gear's phase, a held slide's anchor."""
-    linkage = model.linkage
-    for driver, value in zip(linkage.drivers, values, strict=True):
-        joint = linkage.joint(driver.joint)
-        if joint.kind.rotates:
-            model.drives[joint.name].phase = float(value)
-        else:
-            model.held[joint.name].anchor_a = along(joint, linkage.points[joint.at], float(value))
+    for driver, value in zip(model.linkage.drivers, values, strict=True):
+        move_lock(model, model.linkage.joint(driver.joint), float(value))
 
 
 def set_velocities(model: LinkageModel, qdot: Array) -> None:
@@ -251,7 +245,7 @@ class Twins:
         """:meth:`reactions`, and what the extrapolation removed from the base model's
         (:func:`~mechcheck.sim_models.convergence.inertia_correction`)."""
         units = quantity_units(self.base.linkage)
-        read = [with_sliding(m, reactions(m), self.friction) for m in self.models]
+        read = [with_sliding(m, m.readout.values(), self.friction) for m in self.models]
         if len(read) == 1:
             return read[0], 0.0
         limit = massless_limit(read[0], read[1], units)

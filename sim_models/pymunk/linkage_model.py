@@ -40,7 +40,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pymunk
@@ -51,14 +50,11 @@ from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, real_inertial
-from mechcheck.sim_models.pymunk.bulk import Bodies
-from mechcheck.sim_models.pymunk.forces import Cell, impulse_cells
+from mechcheck.sim_models.pymunk import _fast
+from mechcheck.sim_models.pymunk._fast import Bodies, Cell, Plan, impulse_cells
 from mechcheck.sim_models.pymunk.loads import LoadTerms, apply_forces
 from mechcheck.sim_models.pymunk.readout import HeldSlide, Readout
 from mechcheck.sim_models.pymunk.settings import SolverSettings
-
-if TYPE_CHECKING:
-    from mechcheck.sim_models.pymunk.compiled import Plan
 
 Vec = tuple[float, float]
 Spring = pymunk.DampedSpring | pymunk.DampedRotarySpring
@@ -127,10 +123,8 @@ class LinkageModel:
 
     @cached_property
     def plan(self) -> Plan:
-        """Where the compiled settling loop reads and writes (:mod:`.compiled`)."""
-        from mechcheck.sim_models.pymunk.compiled import plan
-
-        return plan(self)
+        """Where the compiled settling loop reads and writes (:mod:`._fast.compiled`)."""
+        return _fast.plan(self)
 
 
 def centroid(linkage: Linkage, link: str) -> Vec:
@@ -220,6 +214,15 @@ def along(joint: Joint, point: Vec, distance: float) -> Vec:
     """The point ``distance`` along a prismatic joint's drawn axis from ``point``."""
     assert joint.axis is not None
     return point[0] + distance * joint.axis[0], point[1] + distance * joint.axis[1]
+
+
+def move_lock(model: LinkageModel, joint: Joint, value: float) -> None:
+    """Move a driven joint's lock to ``value`` (rad or m from the drawn pose): a gear's
+    phase, or a held slide's anchor."""
+    if joint.kind.rotates:
+        model.drives[joint.name].phase = value
+    else:
+        model.held[joint.name].anchor_a = along(joint, model.linkage.points[joint.at], value)
 
 
 def make_joints(model: LinkageModel) -> None:
@@ -353,7 +356,7 @@ def place(model: LinkageModel, q: Array) -> None:
 
 
 def stage(model: LinkageModel, q: Array, loaded: bool = False) -> None:
-    """Ready the bodies' coordinates q (3n,), at rest, for :meth:`~.bulk.Bodies.repose`,
+    """Ready the bodies' coordinates q (3n,), at rest, for :meth:`~._fast.bulk.Bodies.repose`,
     with the loads at that pose (``loaded``) or none."""
     coords, loads = np.asarray(q, dtype=float).tolist(), model.loads
     none = [0.0] * len(model.bodies)

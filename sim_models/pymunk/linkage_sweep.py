@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP, analytic_results, driver_values
 from mechcheck.analytic.linkage_forces import LinkageResults
+from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import CaseError
 from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
@@ -40,24 +41,14 @@ from mechcheck.sim_models.pymunk.linkage import (
 )
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
-    along,
     build_linkage_model,
     coordinates,
+    move_lock,
     place,
 )
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE
 
 BACKENDS = ("pymunk", "pymunk_solve")
-
-
-def hold_first_driver(model: LinkageModel, value: float) -> None:
-    """Move the first driver's lock to ``value`` (rad or m from the drawn pose)."""
-    linkage = model.linkage
-    joint = linkage.joint(linkage.drivers[0].joint)
-    if joint.kind.rotates:
-        model.drives[joint.name].phase = value
-    else:
-        model.held[joint.name].anchor_a = along(joint, linkage.points[joint.at], value)
 
 
 def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
@@ -76,40 +67,52 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
     refused = refusal(case, backend)
     if refused is not None:
         return [refused] * len(values)
-    results = results if results is not None else analytic_results(case, values)
-    drivers = driver_values(case, values)
+    return held_sweep(case, values, backend,
+                      results if results is not None else analytic_results(case, values))
+
+
+def held_sweep(case: Case, values: Array, backend: str, results: LinkageResults) -> list[Solution]:
+    """The sweep of a held linkage in one model (built at the first pose simulated): every
+    coordinate held, or the constraint solve, from the analytic pose; free coordinates from
+    where the last settled run came to rest (the first from the drawn pose). An unstable
+    equilibrium of free coordinates gets its verdict and is not simulated."""
+    drivers, free, solve = driver_values(case, values), has_free_coordinates(case), backend == BACKENDS[1]
     assert drivers is not None
-    free = has_free_coordinates(case)
-    method = "settle" if backend == "pymunk" else "constraint_solve"
+    first = case.linkage.joint(case.linkage.drivers[0].joint)
     model: LinkageModel | None = None
-    previous = None
+    previous: Array | None = None
     verdicts: dict[int, Solution] = {}
     outcomes: list[Outcome] = []
     for k, value in enumerate(values):
         start = time.perf_counter()
-        found = unstable(case, backend, results, k) if free and backend == "pymunk" else None
+        found = None if solve or not free else unstable(case, backend, results, k)
         if found is not None:
             verdicts[k] = found
             continue
         q = results.pose.q[k]
-        seed = q if not free or backend == "pymunk_solve" else (
-            previous if previous is not None else free_start(case, drivers[k]))
-        if model is None:
-            model = build_linkage_model(case, LINKAGE_SETTLE if backend == "pymunk" else LINKAGE_SOLVE,
-                                        seed)
-            if backend == "pymunk_solve":
-                hold_without_correction(model)
-        hold_first_driver(model, float(value))
+        seed = q if solve or not free else previous if previous is not None else free_start(case, drivers[k])
+        model = model or sweep_model(case, solve, seed)
+        move_lock(model, first, float(value))
         place(model, seed)
-        run = settle_run(model) if backend == "pymunk" else solve_run(model, q)
+        run = solve_run(model, q) if solve else settle_run(model)
         outcomes.append(outcome(model, run, start, k))
         if free and run.settled:
             previous = coordinates(model)
+    method = "constraint_solve" if solve else "settle"
     simulated = dict(zip((o.index for o in outcomes),
-                         solutions(model, backend, method, outcomes, results, values) if model
-                         else [], strict=True))
+                         solutions(model, backend, method, outcomes, results, values) if model else [],
+                         strict=True))
     return [simulated[k] if k in simulated else with_driver(verdicts[k], float(value))
             for k, value in enumerate(values)]
+
+
+def sweep_model(case: Case, solve: bool, seed: Array) -> LinkageModel:
+    """The sweep's model at its first seed; the constraint solve's (``solve``) without
+    joint-error correction."""
+    model = build_linkage_model(case, LINKAGE_SOLVE if solve else LINKAGE_SETTLE, seed)
+    if solve:
+        hold_without_correction(model)
+    return model
 
 
 def with_driver(sol: Solution, value: float) -> Solution:

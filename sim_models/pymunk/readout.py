@@ -4,7 +4,7 @@
 A settling run compares the reactions of consecutive steps (:mod:`.settle`), so it reads
 them every step. :class:`Readout` is compiled once per model
 (:func:`.linkage_model.compile_readout`): it keeps a pointer to every accumulated impulse
-(:func:`.forces.impulse_cells`), so the stop rule's reading (:meth:`Readout.impulses`) is
+(:func:`._fast.impulse_cells`), so the stop rule's reading (:meth:`Readout.impulses`) is
 one cffi index per impulse component, and the named table (:meth:`Readout.values`) is made
 only when a run reports.
 """
@@ -17,7 +17,7 @@ from functools import cached_property
 
 import pymunk
 
-from mechcheck.sim_models.pymunk.forces import Cell
+from mechcheck.sim_models.pymunk._fast import Cell, read, write
 
 Values = dict[str, float]
 
@@ -49,9 +49,8 @@ class HeldSlide:
 
     def split(self, dt: float) -> tuple[float, float, float]:
         """(Q, F_x, F_y) of the last step, its impulse / ``dt``."""
-        (a, i), (b, j) = self.cells
-        return along_and_across(a[i] / dt, b[j] / dt,  # type: ignore[index]
-                                turned(self.axis, self.body.angle))
+        x, y = read(self.cells)
+        return along_and_across(x / dt, y / dt, turned(self.axis, self.body.angle))
 
 
 @dataclass(frozen=True)
@@ -83,22 +82,21 @@ class Readout:
 
     def accumulated(self) -> list[float]:
         """The warm-start impulses (:attr:`warm`) now, N·s or N·m·s."""
-        return [d[k] for d, k in self.warm]  # type: ignore[index]
+        return read(self.warm)
 
     def carry(self, impulses: list[float]) -> None:
         """Make ``impulses`` (one per :attr:`warm` cell) the warm start of the next step."""
-        for (d, k), value in zip(self.warm, impulses, strict=True):
-            d[k] = value  # type: ignore[index]
+        write(self.warm, impulses)
 
     def impulses(self) -> list[float]:
         """What the stop rule compares from step to step: every reaction's impulse, a
         couple's divided by ``length`` (N·s, in no particular order; a spring's sign
         flipped, which no comparison of sizes or changes sees)."""
         forces, couples = self._cells
-        out = [d[k] for d, k in forces]  # type: ignore[index]
+        out = read(forces)
         if couples:
             length = self.length
-            out += [d[k] / length for d, k in couples]  # type: ignore[index]
+            out += [x / length for x in read(couples)]
         if self.springs:
             out += [s.impulse / self.length if torsional else s.impulse
                     for _, s, torsional in self.springs]
@@ -109,7 +107,8 @@ class Readout:
     def values(self) -> Values:
         """The last step's reactions by name (N, N·m): impulse / dt, a spring's S the
         negative of its signed impulse on body b."""
-        table = {name: d[k] / self.dt for name, (d, k) in (*self.forces, *self.couples)}  # type: ignore[index]
+        named = (*self.forces, *self.couples)
+        table = {name: x / self.dt for (name, _), x in zip(named, read(c for _, c in named), strict=True)}
         table |= {name: -s.impulse / self.dt for name, s, _ in self.springs}
         for slide in self.held:
             q, fx, fy = slide.split(self.dt)

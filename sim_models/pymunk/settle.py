@@ -12,6 +12,7 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from operator import sub
+from typing import NamedTuple
 
 from mechcheck.analytic.solution import FORCE_FLOOR_N
 from mechcheck.sim_models.pymunk.readout import Values
@@ -27,6 +28,43 @@ class Run:
     settled: bool
     residual_velocity: float
     force_change: float
+
+
+class StopRule(NamedTuple):
+    """The stop rule's thresholds as a step reads them: residual velocity (m/s), relative
+    force change, the impulses' floor (force floor × dt), calm steps in a row, budget."""
+
+    still: float
+    calm_change: float
+    floor: float
+    patience: int
+    max_steps: int
+
+
+def stop_rule(settings: SolverSettings, length: float, floor: float = FORCE_FLOOR_N) -> StopRule:
+    """The :class:`StopRule` of ``settings`` for a model of size ``length``, force floor
+    ``floor`` (N)."""
+    s = settings
+    return StopRule(s.settle_speed * length, s.settle_force_change, floor * s.dt,
+                    s.settle_patience, s.max_steps)
+
+
+# The stop rule's decision, written once: the Python loop runs it, the compiled loop
+# compiles it (:mod:`._fast.kernel`).
+
+def forces_calm(change: float, scale: float, rule: StopRule) -> bool:
+    """Whether a step's largest change is within ``calm_change`` of the reading's size."""
+    return change <= rule.calm_change * scale
+
+
+def at_rest(speed: float, rule: StopRule) -> bool:
+    """Whether the residual velocity is within ``still``."""
+    return speed <= rule.still
+
+
+def patient(calm: int, rule: StopRule) -> bool:
+    """Whether ``calm`` steps in a row are enough to call the run settled."""
+    return calm >= rule.patience
 
 
 def relative_change(new: list[float], old: list[float], floor: float) -> float:
@@ -110,33 +148,32 @@ def run_until_settled(step: Callable[[], Reading], settings: SolverSettings, len
     :func:`slow_window` steps, or be decaying over the last two such windows with no more
     than :data:`SLOW_REMAINING` of them left to come (:func:`settled_over_window`).
     """
-    s = settings
-    impulse_floor, still, calm_change = floor * s.dt, s.settle_speed * length, s.settle_force_change
-    patience, window_change = s.settle_patience, WINDOW_SHARE * 10.0 * calm_change
+    rule = stop_rule(settings, length, floor)
+    window_change = WINDOW_SHARE * 10.0 * rule.calm_change
     readings = Recent()
     previous: list[float] | None = None
     earlier: list[float] | None = None
     calm = 0
     speed: Callable[[], float] = lambda: float("inf")  # noqa: E731 (no step taken yet)
-    for n in range(1, s.max_steps + 1):
+    for n in range(1, rule.max_steps + 1):
         impulses, speed = step()
-        scale = size(impulses, impulse_floor)
-        if previous is not None and largest_change(impulses, previous) <= calm_change * scale \
-                and speed() <= still:
+        scale = size(impulses, rule.floor)
+        if previous is not None and forces_calm(largest_change(impulses, previous), scale, rule) \
+                and at_rest(speed(), rule):
             calm += 1
-            if calm >= patience and (slowest is None or settled_over_window(
+            if patient(calm, rule) and (slowest is None or settled_over_window(
                     impulses, readings, slow_window(slowest()), window_change * scale,
                     SLOW_REMAINING * scale)):
                 return Run(report(), n, True, speed(),
-                           relative_change(impulses, previous, impulse_floor))
+                           relative_change(impulses, previous, rule.floor))
         else:
             calm = 0
         if slowest is not None:
             readings.add(impulses, 2 * slow_window(slowest()))
         earlier, previous = previous, impulses
-    change = relative_change(previous, earlier, impulse_floor) \
+    change = relative_change(previous, earlier, rule.floor) \
         if previous is not None and earlier is not None else float("inf")
-    return Run(report(), s.max_steps, False, speed(), change)
+    return Run(report(), rule.max_steps, False, speed(), change)
 
 
 class Recent(deque[Sequence[float]]):

@@ -1,13 +1,10 @@
-"""The loops of :func:`.linkage.settle_run` and :func:`.linkage.solve_run` in numba
-(imported by :mod:`.compiled` only when numba is installed: the ``fast`` extra).
-
-Step for step it does what the Python loop does, in the same floating-point operations
-(:func:`.linkage.damped_and_loaded` or :meth:`~.bulk.Bodies.repose`,
-:meth:`~.readout.Readout.impulses`, :func:`~.settle.run_until_settled` without a slow
-window), on the bodies' and
-constraints' C structs themselves: their fields are read and written at addresses whose
-offsets :func:`~.forces.check_layout` verified against pymunk's public API, and
-Chipmunk's own ``cpSpaceStep`` is called through its function pointer.
+"""The loops of :func:`..linkage.settle_run` and :func:`..linkage.solve_run` in numba
+(imported by :mod:`.compiled` only with numba). Step for step the Python loop's
+floating-point operations (:func:`..linkage.damped_and_loaded` or :meth:`.bulk.Bodies.repose`,
+:meth:`..readout.Readout.impulses`, and :func:`..settle.run_until_settled`'s decision,
+compiled from its own functions), on the C structs at offsets :func:`.layout.check_layout`
+verified; Chipmunk's ``cpSpaceStep`` called through its pointer. Kernels take the
+model's :class:`.compiled.Plan` whole.
 """
 
 from __future__ import annotations
@@ -21,7 +18,10 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
-from mechcheck.sim_models.pymunk.forces import BODY_FIELDS
+from mechcheck.sim_models.pymunk import settle as rule
+from mechcheck.sim_models.pymunk._fast.compiled import Plan
+from mechcheck.sim_models.pymunk._fast.layout import BODY_FIELDS
+from mechcheck.sim_models.pymunk.settle import StopRule
 
 Array = np.ndarray
 #: Byte offsets of a body's position, velocity, force, angle, angular velocity and torque.
@@ -48,12 +48,17 @@ def _store(typingctx: Any, address: Any, value: Any) -> tuple[Any, Callable[...,
 # The intrinsics as what they do, for the type checker (numba calls the same objects).
 load = cast(Callable[[int], float], _load)
 store = cast(Callable[[int, float], None], _store)
+# The stop rule's decision, compiled from the functions the Python loop runs.
+forces_calm = njit(cache=True)(rule.forces_calm)
+at_rest = njit(cache=True)(rule.at_rest)
+patient = njit(cache=True)(rule.patient)
 
 
 @njit(cache=True)
-def push(bodies: Array, keep: float, forces: Array, turning: Array) -> None:
+def push(plan: Plan) -> None:
     """Velocities × ``keep`` (damping^dt), the loads' force and their torque at the body's
-    angle (:class:`~.loads.LoadTerms`: columns has-torque, R, δ, T), body after body."""
+    angle (:class:`..loads.LoadTerms`: columns has-torque, R, δ, T), body after body."""
+    bodies, keep, forces, turning = plan.bodies, plan.keep, plan.forces, plan.turning
     for b in range(bodies.size):
         base = bodies[b]
         store(base + V, load(base + V) * keep)
@@ -68,10 +73,11 @@ def push(bodies: Array, keep: float, forces: Array, turning: Array) -> None:
 
 
 @njit(cache=True)
-def repose(bodies: Array, saved: Array) -> None:
+def repose(plan: Plan, saved: Array) -> None:
     """Every body back to the pose, rest and loads a re-posed step starts from: its
-    position … transform as :meth:`~.bulk.Bodies.repose` left them (``saved``, a row per
-    body of the doubles from :data:`~.forces.POSE_FIELDS`)."""
+    position … transform as :meth:`.bulk.Bodies.repose` left them (``saved``, a row per
+    body of the doubles from :data:`.layout.POSE_FIELDS`)."""
+    bodies = plan.bodies
     for b in range(bodies.size):
         base = bodies[b] + P
         for k in range(saved.shape[1]):
@@ -79,9 +85,10 @@ def repose(bodies: Array, saved: Array) -> None:
 
 
 @njit(cache=True)
-def read(plain: Array, divisors: Array, held: Array, axes: Array, out: Array) -> None:
+def read(plan: Plan, out: Array) -> None:
     """The stop rule's reading into ``out``: each plain cell ÷ its divisor, then each held
     slide's impulse split along and across its axis turned with its body."""
+    plain, divisors, held, axes = plan.plain, plan.divisors, plan.held, plan.axes
     m = plain.size
     for i in range(m):
         out[i] = load(plain[i]) / divisors[i]
@@ -96,8 +103,12 @@ def read(plain: Array, divisors: Array, held: Array, axes: Array, out: Array) ->
 
 
 @njit(cache=True)
-def speed(bodies: Array, radii: Array) -> float:
-    """The largest point speed |v| + |ω|·radius of any body, m/s; NaN if any is."""
+def residual(plan: Plan, reposed: bool) -> float:
+    """The residual velocity the stop rule reads: none in a re-posed step, else the largest
+    point speed |v| + |ω|·radius of any body, m/s; NaN if any is."""
+    if reposed:
+        return 0.0
+    bodies, radii = plan.bodies, plan.radii
     fastest = -math.inf
     for b in range(bodies.size):
         base = bodies[b]
@@ -129,40 +140,32 @@ def largest_change(new: Array, old: Array) -> float:
 
 
 @njit(cache=True)
-def settle(step: Callable[[int, float], None], space: int, dt: float, bodies: Array, keep: float,
-           forces: Array, turning: Array, radii: Array, saved: Array, plain: Array,
-           divisors: Array, held: Array, axes: Array, still: float, calm_change: float,
-           floor: float, patience: int, max_steps: int) -> tuple[int, bool, float, float]:
+def settle(step: Callable[[int, float], None], plan: Plan, stop: StopRule,
+           saved: Array) -> tuple[int, bool, float, float]:
     """Step until settled or ``max_steps``: (steps, settled, residual velocity, relative
-    force change), as :func:`~.settle.run_until_settled` decides them. Each step starts
+    force change), as :func:`..settle.run_until_settled` decides them. Each step starts
     damped and loaded (:func:`push`), or, given ``saved`` rows, re-posed (:func:`repose`,
     the constraint solve: residual velocity 0)."""
-    new = np.empty(plain.size + 3 * held.shape[0])
+    new = np.empty(plan.plain.size + 3 * plan.held.shape[0])
     old = np.empty_like(new)
     reposed = saved.shape[0] > 0
     calm = 0
-    for n in range(1, max_steps + 1):
+    for n in range(1, stop.max_steps + 1):
         if reposed:
-            repose(bodies, saved)
+            repose(plan, saved)
         else:
-            push(bodies, keep, forces, turning)
-        step(space, dt)
-        read(plain, divisors, held, axes, new)
+            push(plan)
+        step(plan.space, plan.dt)
+        read(plan, new)
         if n > 1:
-            scale = size(new, floor)
+            scale = size(new, stop.floor)
             change = largest_change(new, old)
-            if change <= calm_change * scale and residual(bodies, radii, reposed) <= still:
+            if forces_calm(change, scale, stop) and at_rest(residual(plan, reposed), stop):
                 calm += 1
-                if calm >= patience:
-                    return n, True, residual(bodies, radii, reposed), change / scale
+                if patient(calm, stop):
+                    return n, True, residual(plan, reposed), change / scale
             else:
                 calm = 0
         old, new = new, old
-    change = largest_change(old, new) / size(old, floor) if max_steps > 1 else math.inf
-    return max_steps, False, residual(bodies, radii, reposed), change
-
-
-@njit(cache=True)
-def residual(bodies: Array, radii: Array, reposed: bool) -> float:
-    """The residual velocity the stop rule reads: none in a re-posed step."""
-    return 0.0 if reposed else speed(bodies, radii)
+    change = largest_change(old, new) / size(old, stop.floor) if stop.max_steps > 1 else math.inf
+    return stop.max_steps, False, residual(plan, reposed), change
