@@ -309,20 +309,30 @@ class Linkage:
             if d.joint in seen:
                 raise CaseError(f"joint {d.joint!r} is driven twice", key=f"{key}.joint")
             seen.add(d.joint)
-            # The file's key: a joint that turns is driven by a rotation, one that slides by
-            # a displacement; both bounded, as the pose is reached by continuation.
-            kind = joints[d.joint].kind
-            if kind.rotates:
-                driver_rotation(d.value, f"{key}.{kind.driver_key}")
-            else:
-                driver_displacement(d.value, self.scale, f"{key}.{kind.driver_key}")
-            for name in ("velocity", "acceleration"):
-                finite(getattr(d, name), f"{key}.{name}")
-            if isinstance(d.sense, bool) or d.sense not in (-1, 0, 1):
-                raise CaseError("must be 'increasing' or 'decreasing'", key=f"{key}.sense")
-            if d.sense and d.velocity and (d.velocity > 0) != (d.sense > 0):
-                raise CaseError(f"says {'increasing' if d.sense > 0 else 'decreasing'} but the "
-                                f"velocity {d.velocity:g} moves the other way", key=f"{key}.sense")
+            self._check_driver(d, joints[d.joint], key)
+        self._check_driver_count()
+
+    def _check_driver(self, d: Driver, joint: Joint, key: str) -> None:
+        # The file's key: a joint that turns is driven by a rotation, one that slides by a
+        # displacement; both bounded, as the pose is reached by continuation.
+        kind = joint.kind
+        if kind.rotates:
+            driver_rotation(d.value, f"{key}.{kind.driver_key}")
+        else:
+            driver_displacement(d.value, self.scale, f"{key}.{kind.driver_key}")
+        for name in ("velocity", "acceleration"):
+            finite(getattr(d, name), f"{key}.{name}")
+        if isinstance(d.sense, bool) or d.sense not in (-1, 0, 1):
+            raise CaseError("must be 'increasing' or 'decreasing'", key=f"{key}.sense")
+        if d.sense and d.velocity and (d.velocity > 0) != (d.sense > 0):
+            raise CaseError(f"says {'increasing' if d.sense > 0 else 'decreasing'} but the "
+                            f"velocity {d.velocity:g} moves the other way", key=f"{key}.sense")
+        if self.has_coulomb_friction and d.velocity == 0.0 and d.sense == 0:
+            raise CaseError("with Coulomb friction, a driver at rest needs sense = "
+                            "'increasing' or 'decreasing': friction opposes a motion",
+                            key=f"{key}.sense")
+
+    def _check_driver_count(self) -> None:
         if len(self.drivers) > self.dof:
             raise CaseError(f"{len(self.drivers)} drivers for {self.dof} degree(s) of freedom",
                             key="drivers")
@@ -333,12 +343,6 @@ class Linkage:
         if free and self.has_coulomb_friction:
             raise CaseError(f"{free} free coordinate(s) with Coulomb friction: the equilibrium "
                             "pose would not be unique", key="friction")
-        if self.has_coulomb_friction:
-            for i, d in enumerate(self.drivers):
-                if d.velocity == 0.0 and d.sense == 0:
-                    raise CaseError("with Coulomb friction, a driver at rest needs sense = "
-                                    "'increasing' or 'decreasing': friction opposes a motion",
-                                    key=f"drivers[{i}].sense")
 
     def _check_loads(self) -> None:
         names = {link.name for link in self.links}

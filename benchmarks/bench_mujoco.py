@@ -46,10 +46,11 @@ import time
 import mujoco
 import numpy as np
 
-from mechcheck.analytic.forces import solve
+from mechcheck import backends as registry, solve
+from mechcheck.analytic.case import Case
 from mechcheck.analytic.presets import as_linkage
+from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
-from mechcheck.sim_models.mujoco.backend import settle, sweep
 from mechcheck.sweep import gated_poses
 from mechcheck.tables import comparison_rows
 
@@ -85,6 +86,16 @@ ROLLOUTS = "rollouts, passes not compiled"
 #: Rows with the per-pose loops in Python where numba compiles them
 #: (:mod:`mechcheck.sim_models.mujoco._fast`: the settled reads, the exact solve).
 PYTHON_LOOPS = "Python per-pose loops"
+
+
+#: The backends' functions as the harness calls them (a preset as its linkage).
+settle = registry.get("mujoco").solver()
+
+
+def sweep(case: Case, grid: np.ndarray, backend: str = "mujoco") -> list[Solution]:
+    sweeper = registry.get(backend).sweeper()
+    assert sweeper is not None
+    return sweeper(case, np.asarray(grid, dtype=float), backend)  # type: ignore[no-any-return]
 
 
 def compiled_rules() -> bool:

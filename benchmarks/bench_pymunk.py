@@ -37,14 +37,13 @@ import numpy as np
 import pymunk
 from pymunk._chipmunk_cffi import lib
 
+from mechcheck import backends as registry, solve_poses
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
-from mechcheck.sim_models.pymunk import backend as backends, compiled
-from mechcheck.sim_models.pymunk.backend import sweep
+from mechcheck.sim_models.pymunk import _fast as compiled, backend as backends
 from mechcheck.sim_models.pymunk.linkage import hold_without_correction
 from mechcheck.sim_models.pymunk.linkage_model import build_linkage_model
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE
@@ -57,6 +56,13 @@ Stats = tuple[float, float, float]
 #: The rows of each table: (label, backend, the settling loop stepped from Python).
 ROWS = [("pymunk", "pymunk", False), ("pymunk, Python loop", "pymunk", True),
         ("pymunk_solve", "pymunk_solve", False)]
+
+
+def sweep(case: Case, grid: np.ndarray, backend: str = "pymunk") -> list[Solution]:
+    """The backend's sweep as the harness calls it (a preset as its linkage)."""
+    sweeper = registry.get(backend).sweeper()
+    assert sweeper is not None
+    return sweeper(case, np.asarray(grid, dtype=float), backend)  # type: ignore[no-any-return]
 
 
 def rows() -> list[tuple[str, str, bool]]:
@@ -101,9 +107,11 @@ def harness_sweep(case: Case, theta: np.ndarray, backend: str) -> tuple[list[Sol
 def four_bar_sweep(repeats: int) -> None:
     case = next(c for c in load_cases(*builtin_case_files()) if c.name == "seed-E1-as-stated")
     theta = np.radians(np.arange(360.0))
-    reference = solve_poses(case, theta).values
+    table = solve_poses(case, theta)
     verdicts, _ = gated_poses(case, theta)
-    kept = {k: v[[x == "" for x in verdicts]] for k, v in reference.items()}
+    keep = np.array([x == "" for x in verdicts])
+    kept = {k: table[k].to_numpy()[keep] for k in table.columns
+            if k not in ("driver", "status", "message", "condition_number")}
     linkage = as_linkage(case)
     print(f"Seed E1, as its linkage, 360 poses, the pose gate included; median of {repeats} "
           "(min, max); C floor: the same Space, loaded, stepped as many steps per pose by "

@@ -1,7 +1,7 @@
 """A deliberately simple speed reference for the frictionless preset statics: the four-bar's
 and slider-crank's force analysis written as straight-line numpy on float64 arrays.
 
-It computes what :func:`mechcheck.analytic.forces.solve_poses` returns for a static,
+It computes what :func:`mechcheck.solve_poses` returns for a static,
 frictionless four-bar or slider-crank (CONVENTIONS.md names): the pose angles (theta13,
 theta14 or s14), F12, F23, F34, F14 (and M14 of a slider), the drive torque T12 (T14 for a
 four-bar driven on its rocker) and the condition number, with the forces withheld (NaN) beyond

@@ -158,22 +158,7 @@ def case_view(case: Case, spec: AnySpec | None, solutions: list[Solution],
     the table once, so that the report is built in time linear in the number of cases.
     """
     backends = [s.backend for s in solutions]
-    quantities = ordered({q for s in solutions for q in s.values})
-    hits = {(r["quantity"], r["backend"]): r for r in detail}
-    rows = []
-    for q in quantities:
-        cells = []
-        for s in solutions:
-            hit = hits.get((q, s.backend))
-            cells.append({
-                "value": table_value(q, s.values[q], s.unit(q)) if q in s.values else None,
-                "rel_err": float(hit["rel_err"]) if hit else None,
-                "passed": bool(hit["passed"]) if hit else None,
-                "tolerance": float(hit["tolerance"]) if hit else None,
-                "overridden": bool(hit["overridden"]) if hit else False,
-            })
-        unit = next(s.unit(q) for s in solutions if q in s.values)
-        rows.append({"quantity": q, "unit": unit, "cells": cells})
+    rows = quantity_rows(solutions, detail)
     failed = sum(not r["passed"] for r in detail)
     verdicts = [s for s in solutions if s.status != "ok"]
     return {
@@ -189,6 +174,27 @@ def case_view(case: Case, spec: AnySpec | None, solutions: list[Solution],
         "verdicts": verdicts,
         "diagnostics": [(s.backend, s.status, dict(s.diagnostics)) for s in solutions],
         "overrides": list(case.tolerance),
+    }
+
+
+def quantity_rows(solutions: list[Solution], detail: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One row per quantity: each backend's value in table units, with its comparison."""
+    hits = {(r["quantity"], r["backend"]): r for r in detail}
+    rows = []
+    for q in ordered({q for s in solutions for q in s.values}):
+        cells = [_cell(q, s, hits.get((q, s.backend))) for s in solutions]
+        unit = next(s.unit(q) for s in solutions if q in s.values)
+        rows.append({"quantity": q, "unit": unit, "cells": cells})
+    return rows
+
+
+def _cell(q: str, s: Solution, hit: dict[str, Any] | None) -> dict[str, Any]:
+    return {
+        "value": table_value(q, s.values[q], s.unit(q)) if q in s.values else None,
+        "rel_err": float(hit["rel_err"]) if hit else None,
+        "passed": bool(hit["passed"]) if hit else None,
+        "tolerance": float(hit["tolerance"]) if hit else None,
+        "overridden": bool(hit["overridden"]) if hit else False,
     }
 
 

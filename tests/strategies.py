@@ -7,7 +7,6 @@ from typing import Any
 
 from hypothesis import assume, strategies as st
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import (
     Case,
     CaseError,
@@ -21,6 +20,8 @@ from mechcheck.analytic.case import (
 from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import GROUND
+
+from .closed_form import forces
 
 #: Random poses closer than this to a toggle are left to the singular-pose
 #: tests: their forces are amplified by the condition number and identities

@@ -23,10 +23,10 @@ from mechcheck.analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
-from mechcheck.analytic.forces import solve as analytic_solve
 from mechcheck.analytic.solution import Solution
 
 from . import reference_solver as ref
+from .closed_form.forces import solve as analytic_solve
 
 #: The acceptance criterion. Forces are compared against the largest force
 #: component of the case: every force comes out of one linear solve whose

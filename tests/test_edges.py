@@ -470,7 +470,8 @@ def test_the_api_names_its_units() -> None:
     """Vectorised solvers take ``theta12_rad``; a Solution's values are SI and radians, and
     ``in_table_units`` gives the tables' degrees, wrapped."""
     import mechcheck
-    from mechcheck.analytic import forces
+
+    from .closed_form import forces
 
     case = mechcheck.load_cases()[0]
     results = forces.solve_poses(case, theta12_rad=[case.theta12])

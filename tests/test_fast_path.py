@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case, FourBarGeometry, Load, Mass, SliderCrankGeometry
-from mechcheck.analytic.equilibrium import condition, eliminate, known_vector
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, rule
 
 from .builtin import builtin
+from .closed_form import forces
+from .closed_form.equilibrium import condition, eliminate, known_vector
 from .strategies import cases
 
 #: The policy's tolerance for two analytic routes to the same equations at ordinary poses

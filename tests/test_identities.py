@@ -13,11 +13,11 @@ from dataclasses import replace
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from mechcheck.analytic import forces, superposition, virtual_work
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.kinematics import cross, pose_of
 from mechcheck.analytic.solution import quantity_kind
 
+from .closed_form import forces, superposition, virtual_work
 from .strategies import cases
 
 #: Identities that are exact in exact arithmetic hold to rounding, amplified

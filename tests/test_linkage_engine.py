@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case, FourBarGeometry
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_forces import solve_linkage
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.presets import FOUR_BAR_NAMES, SLIDER_CRANK_NAMES, linkage_of
 
+from .closed_form import forces
 from .strategies import MAX_CONDITION, cases
 
 #: Two methods for the same rigid-body equations: only rounding separates them (the

@@ -13,13 +13,13 @@ import math
 
 import numpy as np
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Motion, SliderCrankGeometry
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
 from mechcheck.sim_models.mujoco import backend as _mujoco
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
+from .closed_form import forces
 from .harness import solver, sweeper
 
 #: The backend's functions as the harness calls them (a preset as its linkage).

@@ -7,8 +7,8 @@ from typer.testing import CliRunner
 
 # pytester's in-process runs forget the modules they imported, and numpy cannot be
 # loaded twice in one process: import here everything the plugin's items will use.
-import mechcheck.analytic.superposition
-import mechcheck.analytic.virtual_work
+import mechcheck.analytic.linkage_backends
+import mechcheck.analytic.presets
 import mechcheck.run
 import mechcheck.testing  # noqa: F401
 from mechcheck import backends as registry

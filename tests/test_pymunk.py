@@ -16,7 +16,6 @@ import pytest
 
 import mechcheck
 from mechcheck.analytic.case import Case, Friction, Load, Mass, Motion, SliderCrankGeometry
-from mechcheck.analytic.forces import solve_poses
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.presets import as_linkage
@@ -29,6 +28,7 @@ from mechcheck.sweep import SweepTask, run_task
 from mechcheck.testing import assert_solution_close
 
 from .builtin import builtin
+from .closed_form.forces import solve_poses
 from .harness import solver, sweeper
 
 #: The backend's functions as the harness calls them (a preset as its linkage).

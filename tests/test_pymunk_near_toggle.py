@@ -15,7 +15,6 @@ from typing import cast
 import numpy as np
 import pytest
 
-from mechcheck.analytic import forces
 from mechcheck.analytic.case import Case
 from mechcheck.sim_models.pymunk import backend as _pymunk
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, SOFT_ITERATIONS
@@ -30,6 +29,7 @@ from mechcheck.tables import comparison_rows
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, rule
 
 from .builtin import builtin
+from .closed_form import forces
 from .harness import solver
 
 #: The backend's functions as the harness calls them (a preset as its linkage).

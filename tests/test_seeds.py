@@ -12,9 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from mechcheck.analytic import forces, superposition, virtual_work
-
 from .builtin import builtin
+from .closed_form import forces, superposition, virtual_work
 
 #: Printed answers are rounded to 2 decimals (N, degrees, N·mm): half a unit.
 HALF_2DP = 0.005

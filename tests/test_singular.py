@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 
-from mechcheck.analytic import forces, superposition, virtual_work
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.equilibrium import SINGULAR_CONDITION, coefficient_matrix, eliminate, known_vector
 from mechcheck.analytic.kinematics import pose_of
 
 from .builtin import builtin
+from .closed_form import forces, superposition, virtual_work
+from .closed_form.equilibrium import SINGULAR_CONDITION, coefficient_matrix, eliminate, known_vector
 from .strategies import cases
 
 #: Two routes to the same linear solve differ by rounding amplified by the

@@ -27,7 +27,6 @@ import numpy as np
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
-from mechcheck.analytic.presets import Stretch
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
@@ -223,14 +222,7 @@ def exact_solution(case: Case, rig: LinkageRig, state: tuple[np.ndarray, ...],
                     units=rig.units or {})
 
 
-def exact_batch(case: Case, results: LinkageResults | None) -> bool:
-    """Whether ``mujoco_solve`` sweeps the poses of ``results`` as one batch (:func:`exact_sweep`):
-    a buildable linkage without Coulomb friction (nothing to iterate)."""
-    return results is not None and unbuildable(case) is None and not coulomb_terms(results.pose)
-
-
-def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults,
-                stretch: Stretch | None = None) -> list[Solution]:
+def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults) -> list[Solution]:
     """The exact solve (:func:`exact_solution`) at every pose of ``results``, without
     Coulomb friction (nothing to iterate), in three passes over the poses so that the
     linear algebra and the read-out run once for all of them: the load points (MuJoCo's
@@ -251,12 +243,10 @@ def exact_sweep(case: Case, rig: LinkageRig, results: LinkageResults,
     known = {"qpos": state[0], "qvel": state[1], "qacc": state[2], "efc_force": forces,
              "efc_pos": efc_pos, "site_xpos": sites}
     columns = rig.values(post_constraint(rig, state, loads, known))
-    if stretch is not None:
-        columns = stretch.renaming.columns(columns)
     share = (time.perf_counter() - start) / max(len(state[0]), 1)
     common = RunDiagnostics("constraint_solve", 0, share, 0.0, 0.0, 0.0).as_dict()
     return Solution.batch(
-        case.name if stretch is None else stretch.name, "mujoco_solve", tuple(columns),
+        case.name, "mujoco_solve", tuple(columns),
         np.column_stack(list(columns.values())).tolist(),
         ({**common, "loop_violation": gap, "equation_residual": r}
          for gap, r in zip(rig.loop_gaps(efc_pos).tolist(), residual.tolist(), strict=True)),
@@ -356,7 +346,7 @@ def finish_equations(rig: LinkageRig, jac: np.ndarray, inertial: np.ndarray,
 
 def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
                   results: LinkageResults | None = None, *,
-                  continuation: bool = True, stretch: Stretch | None = None) -> list[Solution]:
+                  continuation: bool = True) -> list[Solution]:
     """Either backend at every value of the linkage's first driver (rad or m, from the
     drawn pose; the other drivers at the case's values), in order.
 
@@ -368,13 +358,8 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     passes still end only when two passes agree, so the start changes the steps, not the
     equilibrium (``continuation=False``: every pose from nothing carried, as when solved
     alone). The exact solve runs as one batch (:func:`exact_sweep`), pose by pose with
-    Coulomb friction. ``stretch``: the sweep is that stretch of a preset's, and its
-    Solutions are read under the preset's names (:meth:`.presets.Stretch.rename`; the exact
-    solve renames its columns before it makes any Solution).
+    Coulomb friction.
     """
-    if stretch is not None and not (backend == "mujoco_solve" and exact_batch(case, results)):
-        return stretch.rename(sweep_linkage(case, first, backend, results,
-                                            continuation=continuation))
     first = np.asarray(first, dtype=float)
     why = unbuildable(case)
     if backend == "mujoco" and why is None and is_driven(case):
@@ -387,9 +372,9 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
         results = analytic_results(case, np.asarray(first, dtype=float))
     if backend == "mujoco":
         return settled_sweep(case, first, results, continuation)
-    if not coulomb_terms(results.pose):  # as exact_batch: buildable, checked above
+    if not coulomb_terms(results.pose):  # buildable (checked above), nothing to iterate
         with SWEEP_RIG_LOCK:
-            return exact_sweep(case, sweep_rig(case), results, stretch)
+            return exact_sweep(case, sweep_rig(case), results)
     rig = exact_linkage_rig(case)
     states = rig.joint_states(results.pose)
     targets = results.pose.drivers

@@ -17,10 +17,11 @@ from numpy.typing import ArrayLike
 
 from mechcheck.analytic.assembly import unassembled_verdict
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.equilibrium import JOINT_LINKS, SINGULAR_CONDITION, relative_omega
-from mechcheck.analytic.forces import PoseResults, drive_quantity, pose_values
 from mechcheck.analytic.kinematics import Array, Pose, as_angles, pose_of
 from mechcheck.analytic.solution import Solution
+
+from .equilibrium import JOINT_LINKS, SINGULAR_CONDITION, relative_omega
+from .forces import PoseResults, drive_quantity, pose_values
 
 REFUSAL = ("the power (virtual work) method gives the drive torque only for systems without "
            "Coulomb friction: friction power depends on the unknown reactions")
@@ -100,10 +101,8 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
 
 def solve(case: Case) -> Solution:
     """The ``virtual_work`` backend: the drive torque alone, plus the pose."""
-    if case.mechanism == "linkage":  # no closed form: the generic engine
-        from mechcheck.analytic import linkage_backends
-
-        return linkage_backends.virtual_work(case)
+    if not case.is_preset:
+        raise TypeError(f"case {case.name!r} is a linkage: it has no closed form")
     if case.has_coulomb_friction:
         return Solution(case.name, "virtual_work", {}, status="not_applicable", message=REFUSAL)
     start = time.perf_counter()

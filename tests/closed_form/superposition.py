@@ -13,10 +13,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.equilibrium import condition, eliminate, known_vectors
-from mechcheck.analytic.forces import PoseResults, named_values, solution_from
 from mechcheck.analytic.kinematics import as_angles, pose_of
 from mechcheck.analytic.solution import Solution
+
+from .equilibrium import condition, eliminate, known_vectors
+from .forces import PoseResults, named_values, solution_from
 
 REFUSAL = ("superposition applies only to frictionless (linear) systems; this case has "
            "Coulomb friction, whose moments depend on the total reactions, so the sum of "
@@ -44,10 +45,8 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
 
 def solve(case: Case) -> Solution:
     """The ``superposition`` backend for one Case (refuses friction cases)."""
-    if case.mechanism == "linkage":  # no closed form: the generic engine
-        from mechcheck.analytic import linkage_backends
-
-        return linkage_backends.superposition(case)
+    if not case.is_preset:
+        raise TypeError(f"case {case.name!r} is a linkage: it has no closed form")
     if case.has_coulomb_friction:
         return Solution(case.name, "superposition", {}, status="not_applicable", message=REFUSAL)
     start = time.perf_counter()

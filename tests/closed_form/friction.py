@@ -20,7 +20,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.equilibrium import (
+from mechcheck.analytic.kinematics import Pose, cross, pose_of
+
+from .equilibrium import (
     JOINT_LINKS,
     N_UNKNOWNS,
     PIN_COLUMNS,
@@ -29,7 +31,6 @@ from mechcheck.analytic.equilibrium import (
     row,
     slide_frame,
 )
-from mechcheck.analytic.kinematics import Pose, cross, pose_of
 
 #: Newton stops when the update is below this fraction of the solution's size.
 #: Convergence is quadratic, so the error left after that update is of order

@@ -16,7 +16,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic.assembly import unassembled_verdict
 from mechcheck.analytic.case import Case, FourBarGeometry
-from mechcheck.analytic.equilibrium import (
+from mechcheck.analytic.kinematics import Placement, Pose, as_angles, placement_of, pose_of
+from mechcheck.analytic.solution import Solution, Status
+
+from .equilibrium import (
     SINGULAR_CONDITION,
     Array,
     coefficient_matrix,
@@ -28,14 +31,12 @@ from mechcheck.analytic.equilibrium import (
     slide_frame,
     solve_members,
 )
-from mechcheck.analytic.friction import (
+from .friction import (
     coulomb_terms,
     reversing_joints,
     slide_friction_force,
     solve_with_friction,
 )
-from mechcheck.analytic.kinematics import Placement, Pose, as_angles, placement_of, pose_of
-from mechcheck.analytic.solution import Solution, Status
 
 FORCE_QUANTITIES = ("F12_x", "F12_y", "F23_x", "F23_y", "F34_x", "F34_y", "F14_x", "F14_y")
 
@@ -254,10 +255,8 @@ def unassemblable_solution(case: Case, backend: str, theta12: float) -> Solution
 
 def solve(case: Case) -> Solution:
     """The ``analytic`` backend: the full force analysis of one Case."""
-    if case.mechanism == "linkage":  # no closed form: the generic engine
-        from mechcheck.analytic import linkage_backends
-
-        return linkage_backends.solve(case)
+    if not case.is_preset:
+        raise TypeError(f"case {case.name!r} is a linkage: it has no closed form")
     start = time.perf_counter()
     results = solve_poses(case)
     return solution_from(case, "analytic", results, method="member-equilibrium matrix method",
