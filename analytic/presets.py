@@ -364,12 +364,18 @@ def sweep_preset(case: Case, theta12: np.ndarray, backend: str,
 @dataclass(frozen=True)
 class PresetResults:
     """A vectorised backend's preset sweep: each quantity's column under the preset's names,
-    each pose's verdict (``"ok"`` where it has forces), message and condition number."""
+    each pose's verdict (``"ok"`` where it has forces) and message, and its condition number,
+    computed when first asked for (the exact number costs a singular value decomposition per
+    pose; the verdicts need it only near a toggle, and have it there already)."""
 
     values: dict[str, np.ndarray]
     statuses: np.ndarray
     messages: np.ndarray
-    condition: np.ndarray
+    condition_of: Callable[[], np.ndarray]
+
+    @functools.cached_property
+    def condition(self) -> np.ndarray:
+        return self.condition_of()
 
 
 def preset_results(case: Case, theta12: np.ndarray, backend: str,
@@ -378,25 +384,29 @@ def preset_results(case: Case, theta12: np.ndarray, backend: str,
     """A vectorised backend's preset sweep over ``theta12`` (rad): :func:`stretches`, each
     stretch's columns renamed and its verdicts decided as the linkage's."""
     columns: list[dict[str, Any]] = []
-    statuses, messages, condition = [], [], []
+    statuses, messages, conditions = [], [], []
     for item in stretches(case, theta12, backend, one_by_one=False, results_of=results_of,
                           solve=solve):
         if isinstance(item, Solution):
             columns.append({q: np.array([v]) for q, v in item.values.items()})
             statuses.append(np.array([item.status], dtype=object))
             messages.append(np.array([item.message], dtype=object))
-            condition.append(np.array([float(item.diagnostics.get("condition_number", np.nan))]))
+            cond = float(item.diagnostics.get("condition_number", np.nan))
+            conditions.append(functools.partial(np.array, [cond]))
             continue
         status, message = pose_verdicts(item.linkage, item.results)
         columns.append(item.renaming.columns(item.results.values))
         statuses.append(status)
         messages.append(message)
-        condition.append(np.asarray(item.results.condition, dtype=float))
+        conditions.append(functools.partial(getattr, item.results, "condition"))
     names = dict.fromkeys(q for c in columns for q in c)
     sizes = [s.size for s in statuses]
-    values = {q: np.concatenate([c.get(q, np.full(n, np.nan)) for c, n in zip(columns, sizes,
-                                                                               strict=True)])
+    values = {q: _joined([c.get(q, np.full(n, np.nan)) for c, n in zip(columns, sizes, strict=True)],
+                         float)
               for q in names}
-    return PresetResults(values, np.concatenate(statuses) if statuses else np.array([], object),
-                         np.concatenate(messages) if messages else np.array([], object),
-                         np.concatenate(condition) if condition else np.array([]))
+    return PresetResults(values, _joined(statuses, object), _joined(messages, object),
+                         lambda: _joined([np.asarray(c(), dtype=float) for c in conditions], float))
+
+
+def _joined(parts: Sequence[np.ndarray], dtype: type) -> np.ndarray:
+    return np.concatenate(parts) if parts else np.array([], dtype=dtype)
