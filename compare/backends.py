@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from collections.abc import Callable, Mapping
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 from mechcheck.analytic import backends as analytic_backends
@@ -21,9 +22,10 @@ from mechcheck.analytic.contract import Backend, BackendUnavailable, Family
 if TYPE_CHECKING:
     from mechcheck.analytic.case import Case
     from mechcheck.analytic.solution import Solution
+    from mechcheck.sim_models.protocol import Simulator
 
 __all__ = ["REFERENCE", "REGISTRY", "Backend", "BackendUnavailable", "available", "family",
-           "get", "load", "missing_requirement", "names_of_family"]
+           "get", "load", "missing_requirement", "names_of_family", "simulators"]
 
 SolveFunction = Callable[["Case"], "Solution"]
 
@@ -31,15 +33,24 @@ SolveFunction = Callable[["Case"], "Solution"]
 REFERENCE = analytic_backends.REFERENCE
 
 
-def discovered() -> dict[str, Backend]:
-    """The analytic backends, then each simulator package's, by name."""
+def simulator_packages() -> list[ModuleType]:
+    """Each package under ``mechcheck.sim_models``, by name."""
     import mechcheck.sim_models as simulators
 
+    return [importlib.import_module(f"{simulators.__name__}.{module.name}")
+            for module in sorted(pkgutil.iter_modules(simulators.__path__), key=lambda m: m.name)
+            if module.ispkg]
+
+
+def simulators() -> list[Simulator]:
+    """Every simulator package's declaration (``SIMULATOR``), installed or not."""
+    return [p.SIMULATOR for p in simulator_packages() if hasattr(p, "SIMULATOR")]
+
+
+def discovered() -> dict[str, Backend]:
+    """The analytic backends, then each simulator package's, by name."""
     found = {b.name: b for b in analytic_backends.BACKENDS}
-    for module in sorted(pkgutil.iter_modules(simulators.__path__), key=lambda m: m.name):
-        if not module.ispkg:
-            continue
-        package = importlib.import_module(f"{simulators.__name__}.{module.name}")
+    for package in simulator_packages():
         for backend in getattr(package, "BACKENDS", ()):
             if backend.name in found:
                 raise RuntimeError(f"backend {backend.name!r} is declared twice "

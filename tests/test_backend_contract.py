@@ -39,6 +39,7 @@ FAKE_SIMULATOR = '''
 from dataclasses import replace
 
 from mechcheck.analytic.contract import Backend
+from mechcheck.sim_models.protocol import Simulator, StiffnessStudy
 
 BACKENDS = (
     Backend("fakesim", f"{__name__}:solve", "settled", "a fake simulator",
@@ -47,6 +48,17 @@ BACKENDS = (
     Backend("fakesim_absent", f"{__name__}:solve", "settled", "needs a package not installed",
             requires="no_such_package_for_mechcheck"),
 )
+SIMULATOR = Simulator("fakesim", BACKENDS[:1], f"{__name__}:stiffness", requires="json")
+
+
+def stiffness(case, driven, quick, error_of):
+    """The fake's stiffness experiment: its one setting is 1 % off in F_A0_x."""
+    from mechcheck.analytic.presets import solve_preset
+    answer = solve_preset(case, solve_off, "fakesim")
+    row = {"simulator": "fakesim", "setting": "off", "parameter": "none", "value": 1.0,
+           "reading": "settled", "error": error_of(case, answer.values)}
+    return StiffnessStudy([row], lambda ax, data: ax.loglog(data["value"], data["error"]),
+                          lambda data: f"fakesim errs by {data['error'].max():.3f}.")
 
 
 def solve(case):
@@ -169,3 +181,18 @@ def test_a_solution_is_read_only() -> None:
     with pytest.raises(TypeError):
         solution.diagnostics["method"] = "other"  # type: ignore[index]
     assert pickle.loads(pickle.dumps(solution)) == solution
+
+
+def test_a_new_simulator_takes_part_in_the_rigid_joints_study(fake_simulator: Path) -> None:
+    """The rigid-joints study runs every installed simulator's stiffness experiment
+    (``SIMULATOR``), the fake one included, with no edit to the study: its rows, its panel
+    and its sentence. The fake is 1 % + 1 N off in F12_x: its one row has a positive error
+    (where the analytic answer itself would have none)."""
+    from mechcheck.studies import rigid_joints
+
+    assert [s.name for s in registry.simulators()] == ["fakesim", "mujoco", "pymunk"]
+    result = rigid_joints.run(quick=True)
+    fake = result.data[result.data["simulator"] == "fakesim"]
+    assert len(fake) == 1 and set(result.data["simulator"]) == {"fakesim", "mujoco", "pymunk"}
+    assert 0.0 < float(fake["error"].iloc[0]) < 1.0
+    assert "fakesim errs by" in result.conclusion and "MuJoCo" in result.conclusion

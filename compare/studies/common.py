@@ -93,7 +93,7 @@ def fmt_value(value: float | None, unit: str = "", digits: int = 3) -> str:
 
 def by_source(values: dict[str, float | None], unit: str = "", *, beyond: str = "") -> str:
     """The first source's value with the simulators' beside it: "X (mujoco Y, pymunk Z)",
-    or "X (both simulators agree)" when they give the same three digits.
+    or "X (every simulator agrees)" when they give the same three digits.
 
     ``beyond`` describes a level that was not reached within the sweep.
     """
@@ -102,7 +102,7 @@ def by_source(values: dict[str, float | None], unit: str = "", *, beyond: str = 
 
     texts = [one(v) for v in values.values()]
     if len(set(texts)) == 1:
-        return texts[0] + (" (both simulators agree)" if len(texts) == 3 else "")
+        return texts[0] + (" (every simulator agrees)" if len(texts) > 1 else "")
     rest = ", ".join(f"{src} {t}" for src, t in list(zip(values, texts, strict=True))[1:])
     return f"{texts[0]} ({rest})"
 

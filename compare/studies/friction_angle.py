@@ -82,7 +82,7 @@ def run(quick: bool = False) -> StudyResult:
         conclusion,
         "Seed E2 slider-crank at θ12 = 55°, crank clockwise, pin radii 50/250/50 mm, slide "
         "friction μ·|N| unchanged. The exact circle is entered as an effective coefficient "
-        "sin(atan μ) for the pins; analytic and both simulators (driven slowly) with each.")
+        "sin(atan μ) for the pins; analytic and each simulator (driven slowly) with each.")
 
 
 def _radius_level(level: float) -> float:

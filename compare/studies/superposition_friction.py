@@ -69,4 +69,4 @@ def run(quick: bool = False) -> StudyResult:
         data, figure, conclusion,
         "Seed E1 at θ12 = 60°, friction circles at all four pins (r = 10 mm), crank turning "
         "counter-clockwise. Each load alone and both together, by the analytic friction-circle "
-        "solution and by both simulators (driven slowly, friction from their own reactions).")
+        "solution and by each simulator (driven slowly, friction from its own reactions).")

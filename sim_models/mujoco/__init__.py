@@ -13,6 +13,7 @@ Nothing here imports MuJoCo, so that listing the backends stays light: the funct
 from __future__ import annotations
 
 from mechcheck.analytic.contract import Backend
+from mechcheck.sim_models.protocol import Simulator
 
 _HERE = "mechcheck.sim_models.mujoco.backend"
 
@@ -24,3 +25,6 @@ BACKENDS = (
             "MuJoCo's constraint forces at the exact analytic pose",
             sweep=f"{_HERE}:sweep", requires="mujoco"),
 )
+
+SIMULATOR = Simulator("mujoco", BACKENDS, "mechcheck.sim_models.mujoco.softness:stiffness_study",
+                      requires="mujoco")

@@ -11,6 +11,7 @@ Nothing here imports pymunk, so that listing the backends stays light: the funct
 from __future__ import annotations
 
 from mechcheck.analytic.contract import Backend
+from mechcheck.sim_models.protocol import Simulator
 
 _HERE = "mechcheck.sim_models.pymunk.backend"
 
@@ -22,3 +23,6 @@ BACKENDS = (
             "pymunk's constraint solver at the fixed analytic pose",
             sweep=f"{_HERE}:sweep", requires="pymunk"),
 )
+
+SIMULATOR = Simulator("pymunk", BACKENDS, "mechcheck.sim_models.pymunk.stiffness:stiffness_study",
+                      requires="pymunk")
