@@ -24,7 +24,7 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import ClassVar, Literal
 
 from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.values import (
@@ -63,6 +63,14 @@ class FourBarGeometry:
     a3: float
     a4: float
 
+    #: What a four-bar is, for the code that asks (never by comparing names).
+    mechanism: ClassVar[Mechanism] = "four_bar"
+    branches: ClassVar[tuple[str, str]] = ("open", "crossed")
+    pins: ClassVar[tuple[str, ...]] = FOUR_BAR_PINS
+    joints: ClassVar[tuple[str, ...]] = FOUR_BAR_PINS
+    #: Link 4 turns about B0: it can take the drive (``drive_link = 4``) and has θ14.
+    rocker: ClassVar[bool] = True
+
     def __post_init__(self) -> None:
         for key in ("a1", "a2", "a3", "a4"):
             object.__setattr__(self, key, link_length(getattr(self, key), f"geometry.{key}"))
@@ -90,6 +98,13 @@ class SliderCrankGeometry:
     a2: float
     a3: float
     offset: float = 0.0
+
+    mechanism: ClassVar[Mechanism] = "slider_crank"
+    branches: ClassVar[tuple[str, str]] = ("right", "left")
+    pins: ClassVar[tuple[str, ...]] = SLIDER_CRANK_PINS
+    joints: ClassVar[tuple[str, ...]] = (*SLIDER_CRANK_PINS, "slide")
+    #: Link 4 slides: it has s14, no rotation to drive.
+    rocker: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "a2", link_length(self.a2, "geometry.a2"))
@@ -265,7 +280,7 @@ class Case:
         if not isinstance(self.geometry, (FourBarGeometry, SliderCrankGeometry)):
             raise CaseError("must be a FourBarGeometry, SliderCrankGeometry or Linkage",
                             key="geometry")
-        branches = ("open", "crossed") if self.mechanism == "four_bar" else ("right", "left")
+        branches = self.geometry.branches
         if self.branch == "":
             object.__setattr__(self, "branch", branches[0])
         if self.branch not in branches:
@@ -276,7 +291,7 @@ class Case:
         object.__setattr__(self, "gravity", pair(self.gravity, "gravity"))
         if self.drive_link not in (2, 4):
             raise CaseError(f"must be 2 or 4, got {self.drive_link!r}", key="drive_link")
-        if self.drive_link == 4 and self.mechanism == "slider_crank":
+        if self.drive_link == 4 and not self.geometry.rocker:
             raise CaseError("the drive can act on link 4 only for a four_bar (a slider has "
                             "no rotation to drive)", key="drive_link")
         object.__setattr__(self, "loads", tuple(self.loads))
@@ -292,17 +307,18 @@ class Case:
         f = self.friction
         if f is None:
             return
-        joints = FOUR_BAR_PINS if self.mechanism == "four_bar" else SLIDER_CRANK_PINS
+        g = preset_geometry(self)
+        joints = g.pins
         for joint in f.pin_radius:
             if joint not in joints:
                 raise CaseError(f"unknown pin {joint!r} for a {self.mechanism}; pins are "
                                 f"{', '.join(joints)}", key=f"friction.pin_radius.{joint}")
-        viscous_joints = joints + (("slide",) if self.mechanism == "slider_crank" else ())
+        viscous_joints = g.joints
         for joint in f.viscous:
             if joint not in viscous_joints:
                 raise CaseError(f"unknown joint {joint!r} for a {self.mechanism}; joints are "
                                 f"{', '.join(viscous_joints)}", key=f"friction.viscous.{joint}")
-        if f.slide_mu is not None and self.mechanism == "four_bar":
+        if f.slide_mu is not None and g.rocker:
             raise CaseError("a four_bar has no slide", key="friction.slide_mu")
         omega_sense = (self.motion.omega > 0) - (self.motion.omega < 0)
         if f.direction and omega_sense and f.direction != omega_sense:
@@ -315,9 +331,8 @@ class Case:
     # -- derived facts ----------------------------------------------------------------
     @property
     def mechanism(self) -> Mechanism:
-        if isinstance(self.geometry, FourBarGeometry):
-            return "four_bar"
-        return "slider_crank" if isinstance(self.geometry, SliderCrankGeometry) else "linkage"
+        """The case file's ``mechanism``: a label for tables and messages."""
+        return "linkage" if isinstance(self.geometry, Linkage) else self.geometry.mechanism
 
     @property
     def is_preset(self) -> bool:
@@ -344,19 +359,19 @@ class Case:
     @property
     def has_coulomb_friction(self) -> bool:
         """True when any Coulomb term is present (the equations are then nonlinear)."""
-        if self.mechanism == "linkage":
+        if not self.is_preset:
             return self.linkage.has_coulomb_friction
         f = self.friction
         if f is None:
             return False
-        pins = FOUR_BAR_PINS if self.mechanism == "four_bar" else SLIDER_CRANK_PINS
-        if any(f.pin_moment_arm(j) > 0.0 for j in pins):
+        g = preset_geometry(self)
+        if any(f.pin_moment_arm(j) > 0.0 for j in g.pins):
             return True
-        return self.mechanism == "slider_crank" and f.slide_coefficient() > 0.0
+        return not g.rocker and f.slide_coefficient() > 0.0
 
     @property
     def has_viscous_friction(self) -> bool:
-        f = self.linkage.friction if self.mechanism == "linkage" else self.friction
+        f = self.friction if self.is_preset else self.linkage.friction
         return f is not None and any(c > 0.0 for c in f.viscous.values())
 
     @property
@@ -368,7 +383,7 @@ class Case:
         """``static``, ``dynamic`` or ``friction``: keys the tolerance policy."""
         if self.has_friction:
             return "friction"
-        moving = self.linkage.is_moving if self.mechanism == "linkage" else not self.motion.is_static
+        moving = not self.motion.is_static if self.is_preset else self.linkage.is_moving
         return "dynamic" if moving else "static"
 
     def mass_of(self, link: int) -> Mass | None:

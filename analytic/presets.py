@@ -30,7 +30,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from mechcheck.analytic.assembly import change_point_message, unassembled_verdict
-from mechcheck.analytic.case import Case, FourBarGeometry, Vec2
+from mechcheck.analytic.case import Case, FourBarGeometry, Vec2, preset_geometry
 from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
 from mechcheck.analytic.kinematics import assembles, pose_of
 from mechcheck.analytic.linkage import (
@@ -63,7 +63,7 @@ SLIDER_CRANK_NAMES = LEGACY_NAMES | {"F14_x": "F_slide_x", "F14_y": "F_slide_y",
 
 def names_of(case: Case) -> dict[str, str]:
     """Legacy quantity → linkage quantity for ``case`` (its drive torque included)."""
-    names = FOUR_BAR_NAMES if case.mechanism == "four_bar" else SLIDER_CRANK_NAMES
+    names = FOUR_BAR_NAMES if preset_geometry(case).rocker else SLIDER_CRANK_NAMES
     if case.drive_link == 4:
         names = {k: v for k, v in names.items() if k != "T12"} | {"T14": "Q_B0"}
     return names
@@ -71,7 +71,7 @@ def names_of(case: Case) -> dict[str, str]:
 
 def link_name(case: Case, link: int) -> str:
     if link == 4:
-        return "rocker" if case.mechanism == "four_bar" else "slider"
+        return "rocker" if preset_geometry(case).rocker else "slider"
     return LINK_NAMES[link]
 
 
@@ -130,7 +130,7 @@ def _friction_of(case: Case) -> JointFriction | None:
     f = case.friction
     if f is None:
         return None
-    joint_mu = {"slide": f.slide_coefficient()} if case.mechanism == "slider_crank" else {}
+    joint_mu = {} if preset_geometry(case).rocker else {"slide": f.slide_coefficient()}
     return JointFriction(mu=f.mu, pin_radius=dict(f.pin_radius), joint_mu=joint_mu,
                          viscous=dict(f.viscous))
 

@@ -284,7 +284,7 @@ def load_specs(paths: Iterable[str | Path], *,
             if case.name in seen:
                 raise CaseError(f"duplicate case name (also in {seen[case.name]})",
                                 key="name", case=case.name, file=str(path))
-            if sweep and case.mechanism == "linkage" and not case.linkage.drivers:
+            if sweep and not case.is_preset and not case.linkage.drivers:
                 raise CaseError(NOTHING_TO_SWEEP, key="drivers", case=case.name, file=str(path))
             seen[case.name] = str(path)
             out.append((case, spec))

@@ -190,7 +190,7 @@ def sweep_command(
     # SIGTERM (a CI job cancelled, `kill`) unwinds like Ctrl-C: the pool is shut down and
     # its workers terminated on the way out, instead of being orphaned.
     signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
-    poses = max(len(driver_grid) if c.mechanism == "linkage" and driver_grid is not None
+    poses = max(len(driver_grid) if not c.is_preset and driver_grid is not None
                 else len(grid) for c, _ in specs)
     try:
         status = run_sweep_command(specs, tasks, poses, out, workers=workers, dask=dask,

@@ -105,7 +105,7 @@ class SweepPlot:
 
 def _names(case: Case) -> tuple[str, str, list[tuple[str, str]], str]:
     """(drive quantity, its unit, reactions as (label, quantity stem), x-axis label)."""
-    if case.mechanism != "linkage":
+    if case.is_preset:
         return (f"T1{case.drive_link}", "N·m",
                 [(f"|F{j}|", f"F{j}") for j in ("12", "23", "34", "14")], "θ12 [deg]")
     linkage = case.linkage
@@ -143,7 +143,7 @@ def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
         title=f"{case.name}: sweep over {x_label.split(' [')[0]} (dashed red: singular pose)",
         x_label=x_label, drive_label=f"{drive} [{drive_unit}]", drive=drive_curves,
         reactions=reaction_curves, errors=errors, lower=_lower_curve(case, ref),
-        lower_is_condition=case.mechanism == "linkage",
+        lower_is_condition=not case.is_preset,
         singular=np.sort(ref.loc[ref["status"] == "singular", "theta12"].to_numpy(
             dtype=float))[:MAX_SINGULAR_LINES],
         near_singular=thin(near_theta, near_theta)[0])
@@ -159,7 +159,7 @@ def _series(results: pd.DataFrame, backend: str, quantity: str) -> pd.Series:
 def _lower_curve(case: Case, ref_status: pd.DataFrame) -> Curve:
     """The four-bar's and slider-crank's transmission angle (deg); a linkage's condition
     number (how close each pose is to a toggle), which every mechanism has."""
-    if case.mechanism == "linkage":
+    if not case.is_preset:
         return Curve.of("condition", ref_status.set_index("theta12")["condition_number"])
     # Computed, not read: at most MAX_POINTS evenly spread poses show this closed form.
     theta = np.sort(ref_status["theta12"].to_numpy(dtype=float))

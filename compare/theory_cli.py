@@ -96,7 +96,7 @@ def describe(case: Case) -> list[str]:
     from mechcheck.analytic.assembly import assembly_range_text
     from mechcheck.analytic.case import FourBarGeometry, SliderCrankGeometry
 
-    if case.mechanism == "linkage":
+    if not case.is_preset:
         return describe_linkage(case)
     g = case.geometry
     lines = [f"{case.name} ({case.mechanism}, {case.branch} branch)",

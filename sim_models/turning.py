@@ -17,7 +17,7 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mechcheck.analytic.case import Case, FourBarGeometry, Load
+from mechcheck.analytic.case import Case, Load, preset_geometry
 from mechcheck.analytic.kinematics import pose_of
 
 Array = NDArray[np.float64]
@@ -102,7 +102,7 @@ def branch_sign(case: Case, theta13: ArrayLike, output: ArrayLike) -> Array:
     rod is perpendicular to the slide.
     """
     t13 = np.asarray(theta13, dtype=float)
-    if case.mechanism == "four_bar":
+    if preset_geometry(case).rocker:
         return np.sign(np.sin(np.asarray(output, dtype=float) - t13))
     return np.sign(np.cos(t13 - case.ground_angle))
 
@@ -257,7 +257,7 @@ class TurnResult:
     @property
     def theta14(self) -> Array:
         """θ14 (rad, unwrapped): four-bar only."""
-        if self.case.mechanism != "four_bar":
+        if not preset_geometry(self.case).rocker:
             raise ValueError(f"{self.case.name}: a slider-crank has no θ14 (use output = s14)")
         return self.output
 
@@ -364,7 +364,7 @@ class Amplification:
     def transmission_angle(self) -> Array:
         """μ (rad) of the settled poses (the seed's definition, as in
         :mod:`mechcheck.analytic.transmission`), from the simulator's own link angles."""
-        if self.case.mechanism == "four_bar":
+        if preset_geometry(self.case).rocker:
             return np.abs(np.remainder(self.theta13 - self.output + np.pi, 2 * np.pi) - np.pi)
         rod = np.abs(np.remainder(self.theta13 - self.case.ground_angle + np.pi / 2, np.pi)
                      - np.pi / 2)
@@ -398,7 +398,7 @@ def amplification_result(simulator: str, case: Case, load: float,
 def output_load(case: Case, load: float) -> Load:
     """The output load of the holding runs: a pure couple ``load`` on the rocker, or a force
     ``load`` on the slider along the slide direction u through B (no moment)."""
-    if isinstance(case.geometry, FourBarGeometry):
+    if preset_geometry(case).rocker:
         return Load(4, at=(0.0, 0.0), force=(0.0, 0.0), torque=load)
     g = case.ground_angle
     return Load(4, at=(0.0, 0.0), force=(load * math.cos(g), load * math.sin(g)))
