@@ -20,10 +20,6 @@ from mechcheck.analytic.solution import Status
 RANGE_DECIMALS = 4
 
 
-def _deg(rad: float) -> str:
-    return f"{math.degrees(rad):.{RANGE_DECIMALS}f}°"
-
-
 def _deg_range(lo: float, hi: float) -> str:
     """[lo, hi] in degrees, rounded inward."""
     scale = 10.0**RANGE_DECIMALS

@@ -65,7 +65,9 @@ class Batched:
         """Add ``values`` (N,) (or one number for every pose) at (row, col)."""
         self._r.append(row)
         self._c.append(col)
-        self._v.append(np.broadcast_to(np.asarray(values, dtype=float), (self.poses,)))
+        v = np.asarray(values, dtype=float)
+        # Most entries are already a value per pose: broadcasting costs more than the entry.
+        self._v.append(v if v.shape == (self.poses,) else np.broadcast_to(v, (self.poses,)))
 
     @property
     def small(self) -> bool:

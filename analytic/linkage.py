@@ -464,11 +464,6 @@ class Linkage:
         return {name: k for k, name in enumerate(self.moving_links)}
 
     @cached_property
-    def joint_number(self) -> dict[str, int]:
-        """Each joint's place in :attr:`joints`."""
-        return {j.name: k for k, j in enumerate(self.joints)}
-
-    @cached_property
     def carriers(self) -> dict[str, str]:
         """The link each point's position is reported on: the first that carries it."""
         out: dict[str, str] = {}

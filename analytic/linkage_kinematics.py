@@ -149,11 +149,6 @@ def quadratic_terms(linkage: Linkage, q: Array, qdot: Array) -> Array:
     return out
 
 
-def joint_jacobian_at_drawn_pose(linkage: Linkage) -> Array:
-    """∂(joint constraints)/∂q at the drawn pose, (2j, 3n), dense: its rank gives the mobility."""
-    return joint_system_at(linkage, np.zeros(Layout(linkage).size)).dense()[0]
-
-
 def joint_system_at(linkage: Linkage, q: Array) -> Batched:
     """∂(joint constraints)/∂q at coordinates q (3n,), as entries."""
     return constraint_system(linkage, q[None, :], np.zeros((1, 0)), drivers=False)[1]
@@ -276,8 +271,10 @@ def _walked_positions(linkage: Linkage, value: Array) -> tuple[Array, Array]:
     if not closed[0]:   # the drawing itself does not close
         locked[:] = 0.0
         return q, locked
+    drawn = value == 0.0
+    q[drawn] = start[0]     # the drawing, closed: no path to walk
     for side in (1.0, -1.0):
-        rows = np.flatnonzero(side * value >= 0.0)
+        rows = np.flatnonzero((side * value > 0.0) & ~drawn)
         if not rows.size:
             continue
         travel = float(np.abs(value[rows]).max())

@@ -235,8 +235,3 @@ def _draw_lower(ax: Axes, plot: SweepPlot) -> None:
     ax.set_ylabel("transmission angle μ [deg]")
     ax.set_title("Transmission angle (dotted: 40° guideline)")
 
-
-def sweep_figure(case: Case, results: pd.DataFrame, status: pd.DataFrame,
-                 comparison: pd.DataFrame) -> bytes:
-    """PNG bytes of the four-panel figure of one case's sweep."""
-    return draw_sweep(sweep_plot(case, results, status, comparison))
