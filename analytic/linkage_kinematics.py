@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -95,8 +96,9 @@ class LinkagePose:
         """q, q̇, q̈ of a joint: relative rotation (rad) or displacement along the axis (m)."""
         return joint.kind.coordinate(self, joint)
 
-    @property
+    @cached_property
     def assembled(self) -> NDArray[np.bool_]:
+        """Which poses the linkage reaches (asked for by every verdict: computed once)."""
         return np.all(np.isfinite(self.q), axis=1)
 
 
