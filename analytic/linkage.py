@@ -543,7 +543,7 @@ class Linkage:
 
     @cached_property
     def assur_plan(self) -> AssurPlan | None:
-        """The closed-form decomposition into a crank and RRR dyads, if it has one."""
+        """The closed-form decomposition into a crank and RRR and RRP dyads, if it has one."""
         from mechcheck.analytic.linkage_assur import assur_plan
         return assur_plan(self)
 

@@ -6,7 +6,12 @@ time, each group attached only to bodies already placed:
 - a **crank**: a link turned by a driven revolute joint about a placed body;
 - an **RRR dyad**: two links a, b joined by a revolute joint M, a pinned at P1 to a placed
   body and b at P2 to another. M is where the circles of radii |M−P1| and |M−P2| meet,
-  on the side of P1→P2 it was drawn on (the dyad's branch).
+  on the side of P1→P2 it was drawn on (the dyad's branch);
+- an **RRP dyad**: the same, but b joined to its placed body by a prismatic joint (a
+  slider-crank's rod and slider): b turns with that body and carries M along a line fixed
+  in it. M is where the circle of radius |M−P1| about P1 meets that line, on the side of
+  the foot of P1 it was drawn on (the branch). The mirror order (the slide first) is the
+  same dyad, its links named the other way round.
 
 The order of the groups and each dyad's branch are fixed once from the drawn pose
 (:func:`assur_plan`). This is the same pose as the continuation Newton method of
@@ -17,8 +22,9 @@ about 0 where every dyad's discriminant stays positive; that interval is found o
 on a grid of the driver's travel (the continuation's step) and refined by bisection. Link
 angles come from atan2 and are carried continuously (whole turns included) from the grid.
 
-Linkages that do not decompose this way (triads, prismatic dyads, several drivers, free
-coordinates, redundant joints) have no plan and keep the Newton path.
+Linkages that do not decompose this way (triads, dyads with a prismatic middle joint or two
+slides, a driven slide, several drivers, free coordinates, redundant joints) have no plan
+and keep the Newton path.
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic.joint_kinds import REVOLUTE
+from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
 from mechcheck.analytic.values import GROUND, Vec2
 
 if TYPE_CHECKING:
@@ -88,7 +94,25 @@ class Dyad:
         return (math.dist(self.m, self.p1), math.dist(self.m, self.p2))
 
 
-Group = Crank | Dyad
+@dataclass(frozen=True)
+class SlideDyad:
+    """RRP: link a pinned at P1 to body1 and at M to link b, b on a slide (joints[2]) along
+    ``axis`` (drawn) fixed in body2; branch: the sign of (M − P1)·axis as drawn."""
+
+    links: tuple[str, str]
+    joints: tuple[Joint, Joint, Joint]
+    bodies: tuple[str, str]
+    p1: Vec2
+    m: Vec2
+    axis: Vec2
+    branch: float
+
+    @property
+    def length(self) -> float:
+        return math.dist(self.m, self.p1)
+
+
+Group = Crank | Dyad | SlideDyad
 
 
 @dataclass(frozen=True)
@@ -102,6 +126,12 @@ class AssurPlan:
     def paths(self) -> dict[tuple[int, int], Path]:
         """The paths traced so far, by their span of nodes (:func:`path`), oldest first."""
         return {}
+
+    @cached_property
+    def placing(self) -> dict[str, Group]:
+        """The group that places each moving link."""
+        return {link: g for g in self.groups
+                for link in ([g.link] if isinstance(g, Crank) else g.links)}
 
     @property
     def carriers(self) -> dict[str, str]:
@@ -121,6 +151,17 @@ class AssurPlan:
                           if link in self.linkage.joint(d.joint).links)
                 for link in self.linkage.moving_links}
 
+    @cached_property
+    def slides_on(self) -> dict[str, int]:
+        """How many slides (prismatic joints) each moving link has, where it has any."""
+        out: dict[str, int] = {}
+        for joint in self.linkage.joints:
+            if joint.kind is PRISMATIC:
+                for link in joint.links:
+                    if link != GROUND:
+                        out[link] = out.get(link, 0) + 1
+        return out
+
     @property
     def step(self) -> float:
         """The grid of the driver's travel (:data:`GRID_STEP`)."""
@@ -128,14 +169,17 @@ class AssurPlan:
 
 
 def assur_plan(linkage: Linkage) -> AssurPlan | None:
-    """The linkage's crank-and-RRR-dyad decomposition, or None if it has none (see module).
+    """The linkage's decomposition into a crank and RRR and RRP dyads, or None if it has none
+    (see module).
 
     Groups are taken greedily: a crank where the driven joint reaches an unplaced link, else
-    the dyad whose middle joint comes first in the file. Only joints next to what was just
+    the dyad whose (revolute) middle joint comes first in the file, an RRR or an RRP dyad by
+    the kinds of the joints anchoring its links. Only joints next to what was just
     placed can start a new dyad, so each is looked at again only then (a heap of candidates
     in file order): the plan of a chain of n loops costs O(n log n), not O(n²)."""
     if (len(linkage.drivers) != 1 or linkage.dof != 1 or linkage.redundant
-            or any(j.kind is not REVOLUTE for j in linkage.joints)):
+            or any(j.kind not in (REVOLUTE, PRISMATIC) for j in linkage.joints)
+            or linkage.joint(linkage.drivers[0].joint).kind is not REVOLUTE):
         return None
     search = _Search(linkage)
     groups: list[Group] = []
@@ -178,15 +222,21 @@ class _Search:
                 return dyad
         return None
 
-    def _dyad_at(self, middle: Joint) -> Dyad | None:
+    def _dyad_at(self, middle: Joint) -> Dyad | SlideDyad | None:
         a, b = middle.links
         if middle.name in self.used or middle.name in self.driven or a in self.placed \
-                or b in self.placed:
+                or b in self.placed or middle.kind is not REVOLUTE:
             return None
-        ends = [self._anchor(link) for link in (a, b)]
-        if ends[0] is None or ends[1] is None:
+        first, last = self._anchor(a), self._anchor(b)
+        if first is None or last is None:
             return None
-        return _dyad(self.linkage, (a, b), (ends[0], middle, ends[1]), self.placed)
+        if first.kind is REVOLUTE and last.kind is REVOLUTE:
+            return _dyad(self.linkage, (a, b), (first, middle, last), self.placed)
+        if first.kind is REVOLUTE and last.kind is PRISMATIC:
+            return _slide_dyad(self.linkage, (a, b), (first, middle, last))
+        if first.kind is PRISMATIC and last.kind is REVOLUTE:   # the mirror order
+            return _slide_dyad(self.linkage, (b, a), (last, middle, first))
+        return None     # two slides (a P-R-P dyad): not in closed form here
 
     def _anchor(self, link: str) -> Joint | None:
         """The undriven free joint pinning ``link`` to a placed body, if exactly one."""
@@ -225,6 +275,19 @@ def _dyad(linkage: Linkage, links: tuple[str, str], joints: tuple[Joint, Joint, 
     if abs(side) <= 1e-12 * scale * scale or min(math.dist(m, p1), math.dist(m, p2)) == 0.0:
         return None
     return Dyad(links, joints, bodies, p1, m, p2, math.copysign(1.0, side))
+
+
+def _slide_dyad(linkage: Linkage, links: tuple[str, str],
+                joints: tuple[Joint, Joint, Joint]) -> SlideDyad | None:
+    p1, m = linkage.points[joints[0].at], linkage.points[joints[1].at]
+    axis = joints[2].axis
+    assert axis is not None     # every prismatic joint has one (Prismatic.checked)
+    bodies = (_other(joints[0], links[0]), _other(joints[2], links[1]))
+    along = (m[0] - p1[0]) * axis[0] + (m[1] - p1[1]) * axis[1]
+    # Drawn with the rod square to the slide (its toggle: no side), or of zero length.
+    if abs(along) <= 1e-12 * linkage.scale or math.dist(m, p1) == 0.0:
+        return None
+    return SlideDyad(links, joints, bodies, p1, m, axis, math.copysign(1.0, along))
 
 
 def _other(joint: Joint, link: str) -> str:
@@ -268,6 +331,9 @@ def place(plan: AssurPlan, value: Array) -> Placement:
                                       py - (s * p0[0] + c * p0[1]))
                 angles[group.link] = phi
                 continue
+            if isinstance(group, SlideDyad):
+                closed &= _place_slide(group, index, frames, angles, points)
+                continue
             x1, y1 = on_body(frames[group.bodies[0]], group.p1)
             x2, y2 = on_body(frames[group.bodies[1]], group.p2)
             l1, l2 = group.lengths
@@ -285,6 +351,34 @@ def place(plan: AssurPlan, value: Array) -> Placement:
                 frames[link], angles[link] = _turned(group.m, (px, py), (mx, my), length, group.p1
                                                      if link == group.links[0] else group.p2)
     return Placement(frames, angles, points, closed)
+
+
+def _place_slide(group: SlideDyad, index: int, frames: dict[str, Frame],
+                 angles: dict[str, Array], points: dict[int, tuple[Array | float, ...]]
+                 ) -> NDArray[np.bool_]:
+    """Place an RRP dyad (frames, angles, points P1, M, axis u now); whether it closed.
+
+    b turns with body2, so M moves from where body2 would carry it (M2) along u: M = M2 + s·u
+    with |M − P1| = r, s = −d·u ± √(r² − (d × u)²), d = M2 − P1 (the root with s = 0 as
+    drawn is the branch's)."""
+    a, b = group.links
+    body = frames[group.bodies[1]]
+    x1, y1 = on_body(frames[group.bodies[0]], group.p1)
+    c2, s2, t2x, t2y = body
+    ux = c2 * group.axis[0] - s2 * group.axis[1]
+    uy = s2 * group.axis[0] + c2 * group.axis[1]
+    x2, y2 = on_body(body, group.m)
+    dx, dy = x2 - x1, y2 - y1
+    across = dx * uy - dy * ux
+    r = group.length
+    disc = r * r - across * across
+    s = group.branch * np.sqrt(disc) - (dx * ux + dy * uy)
+    mx, my = x2 + s * ux, y2 + s * uy
+    points[index] = (x1, y1, mx, my, ux, uy)
+    frames[a], angles[a] = _turned(group.m, (x1, y1), (mx, my), r, group.p1)
+    frames[b] = (c2, s2, t2x + s * ux, t2y + s * uy)
+    angles[b] = angles[group.bodies[1]]
+    return np.asarray(disc >= 0.0)
 
 
 def _turned(m0: Vec2, pivot: tuple[Array | float, Array | float], m: tuple[Array, Array],
@@ -368,9 +462,12 @@ def _trace(plan: AssurPlan, first: int, last: int) -> Path:
 
 
 def _dyad_links(plan: AssurPlan) -> Iterator[str]:
+    """The links whose angles are atan2's (an RRP dyad's slider turns with its body)."""
     for group in plan.groups:
         if isinstance(group, Dyad):
             yield from group.links
+        elif isinstance(group, SlideDyad):
+            yield group.links[0]
 
 
 def _unwrap_from(raw: Array, zero: int) -> Array:
@@ -439,7 +536,13 @@ def continuous_angle(plan: AssurPlan, route: Path, link: str, value: Array,
     raw = placed.angles[link]
     if link in route.node_angles:
         return route.lift(link, value, raw)
-    group = next(g for g in plan.groups if isinstance(g, Crank) and g.link == link)
+    group = plan.placing[link]
+    if isinstance(group, SlideDyad):     # the slider: its body's angle
+        body = group.bodies[1]
+        if body == GROUND:
+            return np.zeros(value.shape)
+        return continuous_angle(plan, route, body, value, placed)
+    assert isinstance(group, Crank)
     if group.body == GROUND:
         return raw
     return raw - placed.angles[group.body] + continuous_angle(plan, route, group.body, value,

@@ -225,7 +225,7 @@ def positions(linkage: Linkage, values: Array) -> tuple[Array, Array]:
     """q (N, 3n) at each row of driver values (N, d), reached from the drawn pose; rows that
     lock are NaN, with the fraction s of their travel where they locked (else NaN).
 
-    In closed form where the linkage decomposes into a crank and RRR dyads
+    In closed form where the linkage decomposes into a crank and RRR and RRP dyads
     (:mod:`.linkage_assur`), else by continuation (:func:`continuation_positions`).
     """
     plan = linkage.assur_plan

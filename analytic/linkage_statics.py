@@ -8,6 +8,10 @@ that order (a group's links feel only its own joints and those of later groups).
   2×2 system for the middle pin's force, r1 × G = h1, r2 × G = h2 with r = M − P and
   determinant r1 × r2 (zero at the dyad's toggle); the pins' forces follow from the force
   sums;
+- **RRP dyad** (rod a pinned at P1 and M, slider b on a slide along u, normal n): b's
+  force sum along u gives G·u, a's moment about P1 then G·n, through r1·u (zero at the
+  dyad's toggle, the rod square to the slide); the slide's normal force follows from b's
+  force sum along n, its couple from b's moments;
 - **crank**: its pin carries the resultant of what acts on it, the driver its moment.
 
 What a solved group's joints exert on the bodies it hangs from is added to their known
@@ -20,10 +24,10 @@ processed in chunks that keep the temporaries in cache.
 number of the scaled K, without its SVD where a cheap bound decides it (in
 :func:`.linkage_forces.solve_linkage`): the rows of the scaled
 matrix S are unit vectors, so σ_max ≤ ‖S‖_F = √m; and ‖S⁻¹‖_F is bounded block by block
-from the triangular structure, each group's inverse in closed form (the dyad's through its
-2×2). A pose whose bound is below the threshold is not singular; only the others (near a
-toggle) get the exact SVD. The exact condition numbers themselves are computed when asked
-for (:attr:`.linkage_forces.LinkageResults.condition`).
+from the triangular structure, each group's inverse in closed form (the RRR dyad's through
+its 2×2, the RRP dyad's through r1·u). A pose whose bound is below the threshold is not
+singular; only the others (near a toggle) get the exact SVD. The exact condition numbers
+themselves are computed when asked for (:attr:`.linkage_forces.LinkageResults.condition`).
 """
 
 from __future__ import annotations
@@ -33,13 +37,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mechcheck.analytic.linkage import Linkage, TorsionSpring
+from mechcheck.analytic.linkage import Joint, Linkage, TorsionSpring
 from mechcheck.analytic.linkage_assur import (
     AssurPlan,
     Crank,
     Dyad,
     Path,
     Placement,
+    SlideDyad,
     continuous_angle,
     on_body,
     path,
@@ -107,7 +112,7 @@ def quantity_names(linkage: Linkage) -> list[str]:
     names = [f"{axis}_{p}" for p in linkage.points for axis in "xy"]
     names += [f"phi_{link}" for link in linkage.moving_links]
     names += [f"q_{j.name}" for j in linkage.joints]
-    names += [f"F_{j.name}_{axis}" for j in linkage.joints for axis in "xy"]
+    names += [name for j in linkage.joints for name in j.kind.quantities(j)]
     names += [f"Q_{d.joint}" for d in linkage.drivers]
     return names + [f"S_{s.name}" for s in linkage.springs]
 
@@ -146,8 +151,7 @@ class _Chunk:
             q[part, 3 * k + 2] = self.angle[link]
             out[f"phi_{link}"][part] = self.angle[link]
         for joint in linkage.joints:
-            i, j = joint.links
-            out[f"q_{joint.name}"][part] = self._phi(j) - self._phi(i)
+            out[f"q_{joint.name}"][part] = self._coordinate(joint)
         springs = self.spring_forces()
         for name, s in springs.items():
             out[f"S_{name}"][part] = s
@@ -165,6 +169,20 @@ class _Chunk:
 
     def _phi(self, link: str) -> Array | float:
         return 0.0 if link == GROUND else self.angle[link]
+
+    def _coordinate(self, joint: Joint) -> Array | float:
+        """q of a joint: the relative angle, or a slide's travel along its axis (the
+        kind's :meth:`~.JointKind.coordinate`: links[1]'s translation less links[0]'s, both
+        turned alike)."""
+        i, j = joint.links
+        if joint.kind.rotates:
+            return self._phi(j) - self._phi(i)
+        assert joint.axis is not None
+        ci, si, ti_x, ti_y = self.frame(i)
+        _, _, tj_x, tj_y = self.frame(j)
+        ux = ci * joint.axis[0] - si * joint.axis[1]
+        uy = si * joint.axis[0] + ci * joint.axis[1]
+        return (tj_x - ti_x) * ux + (tj_y - ti_y) * uy
 
     # -- known forces ---------------------------------------------------------------------
     def spring_forces(self) -> dict[str, Array]:
@@ -214,6 +232,8 @@ class _Chunk:
             group = self.plan.groups[index]
             if isinstance(group, Crank):
                 self._crank(group, b, out)
+            elif isinstance(group, SlideDyad):
+                self._slide_dyad(index, group, b, out)
             else:
                 self._dyad(index, group, b, out)
         return out
@@ -251,6 +271,33 @@ class _Chunk:
         _add(b, group.bodies[0], -g1x, -g1y, x1, y1)
         _add(b, group.bodies[1], -g2x, -g2y, x2, y2)
 
+    def _slide_dyad(self, index: int, group: SlideDyad, b: dict[str, list[Array | float]],
+                    out: dict[str, Array | float]) -> None:
+        x1, y1, mx, my, ux, uy = self.placed.points[index]
+        a, c = group.links
+        fax, fay, ma = b[a]
+        fbx, fby, mb = b[c]
+        h1 = x1 * fay - y1 * fax - ma
+        r1x, r1y = mx - x1, my - y1
+        along = fbx * ux + fby * uy          # G·u: the slide takes no force along u
+        with np.errstate(divide="ignore", invalid="ignore"):
+            normal = (h1 - along * (r1x * uy - r1y * ux)) / (r1x * ux + r1y * uy)   # G·n
+        gx = along * ux - normal * uy       # the middle pin's force on a (n = u turned +90°)
+        gy = along * uy + normal * ux
+        g1x, g1y = -gx - fax, -gy - fay     # the pin at P1 on a
+        slide = group.joints[2]
+        sx, sy = self.point(slide.links[1], self.linkage.points[slide.at])
+        push = normal + fbx * uy - fby * ux     # the slide's force on b along n
+        couple = mx * gy - my * gx - mb - push * (sx * ux + sy * uy)   # and its couple
+        for joint, fx, fy in ((group.joints[0], g1x, g1y), (group.joints[1], gx, gy)):
+            sense = 1.0 if joint.links[1] == a else -1.0
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = sense * fx, sense * fy
+        sense = 1.0 if slide.links[1] == c else -1.0    # reported: by links[0] on links[1]
+        out[f"F_{slide.name}_x"], out[f"F_{slide.name}_y"] = -sense * push * uy, sense * push * ux
+        out[f"M_{slide.name}"] = sense * couple
+        _add(b, group.bodies[0], -g1x, -g1y, x1, y1)
+        _add(b, group.bodies[1], push * uy, -push * ux, sx, sy, -couple)
+
     # -- the condition bound --------------------------------------------------------------
     def condition_bound(self) -> Array:
         """An upper bound of :func:`.linkage_forces.condition` (see the module); infinite for
@@ -261,7 +308,11 @@ class _Chunk:
         with np.errstate(over="ignore", invalid="ignore"):
             return self._condition_bound()
 
-    def _condition_bound(self) -> Array:
+    def _row_norms(self) -> tuple[dict[str, float], dict[str, Array | float]]:
+        """Squared norms of each link's rows in the scaled matrix (its force rows' mean, its
+        moment row), or bounds of them: a pin adds 1 to each force row, a slide's normal
+        force at most that; a pin adds |point|²/size² to the moment row, a slide at most
+        that for its force and 1 for its couple."""
         linkage = self.linkage
         size = linkage.scale
         joints_on = self.plan.joints_on
@@ -269,9 +320,17 @@ class _Chunk:
         for j in linkage.joints:
             x, y = self.point(j.links[1], linkage.points[j.at])
             radius[j.name] = (x * x + y * y) / size**2
-        force_row = {link: float(len(js)) for link, js in joints_on.items()}   # squared norms
+        force_row = {link: float(len(js)) for link, js in joints_on.items()}
         moment_row = {link: sum(radius[j.name] for j in js) + self.plan.couples[link]
                       for link, js in joints_on.items()}
+        for link, slides in self.plan.slides_on.items():
+            moment_row[link] = moment_row[link] + slides
+        return force_row, moment_row
+
+    def _condition_bound(self) -> Array:
+        linkage = self.linkage
+        size = linkage.scale
+        force_row, moment_row = self._row_norms()
         groups = self.plan.groups
         inverse = [self._group_inverse(g, force_row, moment_row, size) for g in groups]
         links = [{g.link} if isinstance(g, Crank) else set(g.links) for g in groups]
@@ -290,13 +349,15 @@ class _Chunk:
         rows = 3 * len(linkage.moving_links)
         return np.sqrt(rows * total)
 
-    def _group_inverse(self, group: Crank | Dyad, force_row: dict[str, float],
+    def _group_inverse(self, group: Crank | Dyad | SlideDyad, force_row: dict[str, float],
                        moment_row: dict[str, Array | float], size: float) -> Array:
         """A bound of ‖S_gg⁻¹‖_F, the group's diagonal block of the scaled matrix."""
         if isinstance(group, Crank):
             px, py = self.point(group.link, group.point)
             f, m = force_row[group.link], moment_row[group.link]
             return np.sqrt(2.0 * f + (py * py + px * px) * f / size**2 + m)
+        if isinstance(group, SlideDyad):
+            return self._slide_inverse(group, force_row, moment_row, size)
         x1, y1, mx, my, x2, y2 = self.placed.points[self.plan.groups.index(group)]
         a, c = group.links
         l1, l2 = group.lengths
@@ -305,6 +366,31 @@ class _Chunk:
         t = np.sqrt((y1 * y1 + x1 * x1) * force_row[a] + size**2 * moment_row[a]
                     + (y2 * y2 + x2 * x2) * force_row[c] + size**2 * moment_row[c])
         return math.sqrt(3.0) * w * t + math.sqrt(2.0 * (force_row[a] + force_row[c]))
+
+    def _slide_inverse(self, group: SlideDyad, force_row: dict[str, float],
+                       moment_row: dict[str, Array | float], size: float) -> Array:
+        """A bound of an RRP dyad's ‖S_gg⁻¹‖_F: its inverse (the elimination of
+        :meth:`_slide_dyad`) as a sum of rank-one maps, each of Frobenius norm |column|·|row|
+        in the scaled unknowns (the slide's couple ÷ size) and loads (each row times its
+        norm): through G·n (its row |(P1 × Fa, ma, (r1 × u) Fb·u)| / |r1·u|; its column G,
+        the P1 pin, N and the couple's lever (M − S)×n), through G·u = Fb·u, −Fa into the P1
+        pin, Fb·n into N and the couple, and mb into the couple."""
+        x1, y1, mx, my, ux, uy = self.placed.points[self.plan.groups.index(group)]
+        a, c = group.links
+        slide = group.joints[2]
+        sx, sy = self.point(slide.links[1], self.linkage.points[slide.at])
+        r1x, r1y = mx - x1, my - y1
+        turn = r1x * uy - r1y * ux
+        with np.errstate(divide="ignore", invalid="ignore"):
+            row = np.sqrt((x1 * x1 + y1 * y1) * force_row[a] + size**2 * moment_row[a]
+                          + turn * turn * force_row[c]) / np.abs(r1x * ux + r1y * uy)
+        lever = ((mx - sx) * ux + (my - sy) * uy) / size
+        fb = math.sqrt(force_row[c])
+        return (np.sqrt(3.0 + lever * lever) * row
+                + fb * np.sqrt(2.0 + ((mx * uy - my * ux) / size)**2)
+                + math.sqrt(2.0 * force_row[a])
+                + fb * np.sqrt(1.0 + ((sx * ux + sy * uy) / size)**2)
+                + np.sqrt(moment_row[c]))
 
 
 def _add(b: dict[str, list[Array | float]], link: str, fx: Array | float, fy: Array | float,

@@ -6,7 +6,10 @@ Usage:  python benchmarks/bench_linkage.py [--poses 1000000] [--repeats 5]
 1. Statics of the built-in Watt II six-bar over N crank angles (±30° about the drawn pose)
    in one vectorised call (the Assur-group path: closed-form dyads, group-by-group
    elimination), and the seed four-bar's closed form over N angles: poses/s of each and
-   their ratio per repeat. (Issue 11's target: ≥ 10⁶ six-bar poses/s on one core.)
+   their ratio per repeat. (Issue 11's target: ≥ 10⁶ six-bar poses/s on one core.) Then the
+   seed four-bar and the seed slider-crank (E2) as linkage cases through ``analytic_results``
+   over N crank angles (a whole turn): poses/s of each and the slider-crank's rate over
+   the four-bar's (target: within 2×).
 2. The seed four-bar through the generic engine (its preset) against its closed form, one
    pose at a time as a backend runs it: the ratio (target: within 5×).
 3. ``mechcheck run --backend analytic`` on the built-in suite, linkages included
@@ -30,8 +33,9 @@ from collections.abc import Callable
 import numpy as np
 
 from mechcheck import load_cases
+from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.linkage_forces import solve_linkage
-from mechcheck.analytic.presets import linkage_of
+from mechcheck.analytic.presets import as_linkage, linkage_of
 from mechcheck.casefile import builtin_case_files
 
 
@@ -72,6 +76,14 @@ def main() -> None:
     print(f"1. Watt II six-bar statics, {n} poses: {spread(rate_six, fmt='.3g')} poses/s; "
           f"seed four-bar: {spread(rate_four, fmt='.3g')} poses/s; six-bar/four-bar "
           f"rate {spread(ratio, fmt='.2f')}")
+    turn = np.radians(np.linspace(-180.0, 180.0, n))
+    e2 = as_linkage(cases["seed-E2-frictionless"])
+    e1_case = as_linkage(e1)
+    slider = [n / t for t in timed(lambda: analytic_results(e2, turn), repeats)]
+    fourbar = [n / t for t in timed(lambda: analytic_results(e1_case, turn), repeats)]
+    print(f"   through analytic_results, a whole turn: seed four-bar {spread(fourbar, fmt='.3g')} "
+          f"poses/s; seed slider-crank {spread(slider, fmt='.3g')} poses/s; four-bar/slider-crank "
+          f"rate {spread([f / s for f, s in zip(fourbar, slider, strict=True)], fmt='.2f')}")
     one = timed(lambda: solve_linkage(preset), repeats * 20)
     print(f"2. seed four-bar, one pose: {spread(one, 1e3)} ms")
     with tempfile.TemporaryDirectory() as tmp:
