@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import CaseError
@@ -62,7 +62,8 @@ def solve(case: Case, backend: str = "analytic") -> Solution:
     return solve_gated(backend, case)
 
 
-def solve_poses(case: Case, driver_values: ArrayLike, backend: str = "analytic") -> pd.DataFrame:
+def solve_poses(case: Case, driver_values: ArrayLike, backend: str = "analytic", *,
+                condition: bool = True) -> pd.DataFrame:
     """``case`` at many poses in one vectorised call: a table, one row per pose.
 
     ``driver_values`` (SI) are the values of the case's driver: for a linkage, its first
@@ -71,13 +72,15 @@ def solve_poses(case: Case, driver_values: ArrayLike, backend: str = "analytic")
     ones (``analytic``, ``superposition``, ``virtual_work``). Columns: ``driver``, ``status``,
     ``message``, ``condition_number``, then every quantity in SI (radians), a force NaN
     where the pose has a verdict. Each pose's verdict and numbers are those ``mechcheck
-    sweep`` writes for it, behind the same pose gate.
+    sweep`` writes for it, behind the same pose gate. ``condition=False`` leaves out the
+    condition numbers, an SVD per pose that costs about as much as the rest (the verdicts
+    do not need them: near a toggle they are computed anyway).
     """
     import numpy as np
     import pandas as pd
 
     from mechcheck import backends as registry
-    from mechcheck.sweep import check_driver_grid, vector_poses
+    from mechcheck.sweep import check_driver_grid, check_theta12_grid, vector_poses
 
     grid = np.asarray(driver_values, dtype=float).ravel()
     if not registry.get(backend).vectorised:
@@ -86,7 +89,9 @@ def solve_poses(case: Case, driver_values: ArrayLike, backend: str = "analytic")
                          f"{', '.join(vectorised)} (or `mechcheck sweep` for a simulator)")
     if not np.isfinite(grid).all():
         raise ValueError("solve_poses: driver_values must be finite")
-    if not case.is_preset:
+    if case.is_preset:
+        check_theta12_grid(case, grid)
+    else:
         rotates = case.linkage.drivers and case.linkage.joint(
             case.linkage.drivers[0].joint).kind.rotates
         check_driver_grid(case, np.degrees(grid) if rotates else grid * 1000.0, "driver_values")
@@ -94,9 +99,11 @@ def solve_poses(case: Case, driver_values: ArrayLike, backend: str = "analytic")
     if poses is None:
         raise ValueError(f"solve_poses: backend {backend!r} does not apply to case "
                          f"{case.name!r} (its method refuses Coulomb friction)")
-    return pd.DataFrame({"driver": grid, "status": poses.statuses.astype(str),
-                         "message": poses.messages.astype(str),
-                         "condition_number": poses.condition, **poses.values})
+    columns: dict[str, Any] = {"driver": grid, "status": poses.statuses.astype(str),
+                               "message": poses.messages.astype(str)}
+    if condition:
+        columns["condition_number"] = poses.condition
+    return pd.DataFrame(columns | poses.values)
 
 
 def check(cases: Sequence[Case], backends: Sequence[str] | None = None, *,

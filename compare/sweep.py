@@ -168,6 +168,15 @@ def check_driver_grid(case: Case, grid: np.ndarray, option: str) -> None:
                          f"({MAX_DRIVER_TRAVEL:g} × its size) from its drawn pose")
 
 
+def check_theta12_grid(case: Case, theta12: np.ndarray) -> None:
+    """Refuse a preset's θ12 (rad) beyond ±:data:`~mechcheck.analytic.values.MAX_ANGLE_DEG`,
+    as a case file and ``--theta12`` are refused."""
+    reach = math.degrees(float(np.abs(theta12).max())) if theta12.size else 0.0
+    if reach > MAX_ANGLE_DEG:
+        raise ValueError(f"driver_values: case '{case.name}': θ12 = {reach:g}°; angles must "
+                         f"lie within ±{MAX_ANGLE_DEG:g}°")
+
+
 UNITS = ["N", "N*m", "deg", "m"]
 
 
@@ -232,7 +241,13 @@ class Poses:
     values: dict[str, np.ndarray]
     statuses: np.ndarray
     messages: np.ndarray
-    condition: np.ndarray
+    #: The condition numbers, computed when first asked for (an SVD per pose: about as long
+    #: as the statics themselves).
+    condition_of: Callable[[], np.ndarray]
+
+    @functools.cached_property
+    def condition(self) -> np.ndarray:
+        return np.asarray(self.condition_of(), dtype=float)
 
 
 def vector_poses(case: Case, backend: str, grid: np.ndarray) -> Poses | None:
@@ -262,7 +277,7 @@ def vector_poses(case: Case, backend: str, grid: np.ndarray) -> Poses | None:
     units = units_of(case)
     values = {q: v if kind_of_unit(units[q]) == "pose" else np.where(statuses == "ok", v, np.nan)
               for q, v in values.items()}
-    return Poses(values, statuses, messages, np.asarray(results.condition, dtype=float))
+    return Poses(values, statuses, messages, lambda: results.condition)
 
 
 def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
