@@ -1,5 +1,5 @@
 """The ``mechcheck`` command line: ``run``, ``sweep``, ``study``, ``theory``,
-``reports`` and ``backends`` (see README).
+``reports`` and ``backends`` (see docs/cli.md).
 
 ``mechcheck run FILE... [--backend NAME]... [--out DIR]`` writes
 ``results.csv``, ``comparison.csv``, ``diagnostics.csv``, ``report.md`` and
