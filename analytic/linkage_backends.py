@@ -9,7 +9,8 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -92,6 +93,23 @@ def pose_verdicts(case: Case, results: LinkageResults) -> tuple[NDArray[np.objec
         for index in np.flatnonzero((statuses == "ok") & (results.stable == 0.0)):
             messages[index] = unstable_reason(case.linkage, results.pose.drivers[index])
     return statuses, messages
+
+
+@dataclass(frozen=True)
+class DecidedPoses:
+    """Many poses, each decided as ``run`` decides one: each quantity's column, and per pose
+    the verdict (``"ok"`` where it has forces), its message and the condition number,
+    computed when first asked for (an SVD per pose, about as long as the statics; the
+    verdicts need it only near a toggle, and have it there already)."""
+
+    values: dict[str, NDArray[np.float64]]
+    statuses: NDArray[np.object_]
+    messages: NDArray[np.object_]
+    condition_of: Callable[[], NDArray[np.float64]]
+
+    @cached_property
+    def condition(self) -> NDArray[np.float64]:
+        return np.asarray(self.condition_of(), dtype=float)
 
 
 def texts(n: int, text: str) -> NDArray[np.object_]:

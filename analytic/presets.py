@@ -42,7 +42,7 @@ from mechcheck.analytic.linkage import (
     LinkMass,
     PointLoad,
 )
-from mechcheck.analytic.linkage_backends import analytic_results, pose_verdicts
+from mechcheck.analytic.linkage_backends import DecidedPoses, analytic_results, pose_verdicts
 from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.solution import Solution
 
@@ -361,26 +361,9 @@ def sweep_preset(case: Case, theta12: np.ndarray, backend: str,
     return out
 
 
-@dataclass(frozen=True)
-class PresetResults:
-    """A vectorised backend's preset sweep: each quantity's column under the preset's names,
-    each pose's verdict (``"ok"`` where it has forces) and message, and its condition number,
-    computed when first asked for (the exact number costs a singular value decomposition per
-    pose; the verdicts need it only near a toggle, and have it there already)."""
-
-    values: dict[str, np.ndarray]
-    statuses: np.ndarray
-    messages: np.ndarray
-    condition_of: Callable[[], np.ndarray]
-
-    @functools.cached_property
-    def condition(self) -> np.ndarray:
-        return self.condition_of()
-
-
 def preset_results(case: Case, theta12: np.ndarray, backend: str,
                    results_of: Callable[[Case, np.ndarray], LinkageResults],
-                   solve: Callable[[Case], Solution]) -> PresetResults:
+                   solve: Callable[[Case], Solution]) -> DecidedPoses:
     """A vectorised backend's preset sweep over ``theta12`` (rad): :func:`stretches`, each
     stretch's columns renamed and its verdicts decided as the linkage's."""
     columns: list[dict[str, Any]] = []
@@ -404,7 +387,7 @@ def preset_results(case: Case, theta12: np.ndarray, backend: str,
     values = {q: _joined([c.get(q, np.full(n, np.nan)) for c, n in zip(columns, sizes, strict=True)],
                          float)
               for q in names}
-    return PresetResults(values, _joined(statuses, object), _joined(messages, object),
+    return DecidedPoses(values, _joined(statuses, object), _joined(messages, object),
                          lambda: _joined([np.asarray(c(), dtype=float) for c in conditions], float))
 
 

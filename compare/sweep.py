@@ -31,6 +31,11 @@ import pyarrow.parquet as pq
 
 from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage_backends import (
+    DecidedPoses,
+    pose_verdicts as linkage_verdicts,
+    quantity_units,
+)
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution, kind_of_unit, table_values
 from mechcheck.analytic.values import MAX_ANGLE_DEG, MAX_DRIVER_ROTATION_DEG, MAX_DRIVER_TRAVEL
 from mechcheck.backends import REFERENCE, BackendUnavailable
@@ -184,8 +189,6 @@ def units_of(case: Case) -> dict[str, str]:
     """The table unit of every quantity the case's backends report."""
     if case.is_preset:
         return {q: unit for q, (unit, _) in QUANTITY_UNITS.items()}
-    from mechcheck.analytic.linkage_backends import quantity_units
-
     return quantity_units(case.linkage)
 
 
@@ -232,25 +235,7 @@ def grid_si(case: Case, grid: np.ndarray) -> np.ndarray:
     return np.radians(grid) if kind.rotates else grid / 1000.0
 
 
-@dataclass(frozen=True)
-class Poses:
-    """A vectorised backend's answer at many poses, decided as ``run`` decides one: each
-    quantity's column (SI; forces NaN where the pose has a verdict), and per pose the verdict
-    (``"ok"`` where it has forces), its message and the condition number."""
-
-    values: dict[str, np.ndarray]
-    statuses: np.ndarray
-    messages: np.ndarray
-    #: The condition numbers, computed when first asked for (an SVD per pose: about as long
-    #: as the statics themselves).
-    condition_of: Callable[[], np.ndarray]
-
-    @functools.cached_property
-    def condition(self) -> np.ndarray:
-        return np.asarray(self.condition_of(), dtype=float)
-
-
-def vector_poses(case: Case, backend: str, grid: np.ndarray) -> Poses | None:
+def vector_poses(case: Case, backend: str, grid: np.ndarray) -> DecidedPoses | None:
     """Vectorised backend ``backend`` over ``grid`` (SI: a linkage's first driver from the
     drawn pose, or a preset's θ12), behind the reference's pose gate; None where the backend
     has no sweep or its method refuses the case (Coulomb friction)."""
@@ -277,7 +262,7 @@ def vector_poses(case: Case, backend: str, grid: np.ndarray) -> Poses | None:
     units = units_of(case)
     values = {q: v if kind_of_unit(units[q]) == "pose" else np.where(statuses == "ok", v, np.nan)
               for q, v in values.items()}
-    return Poses(values, statuses, messages, lambda: results.condition)
+    return DecidedPoses(values, statuses, messages, lambda: results.condition)
 
 
 def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -345,10 +330,7 @@ def reference_verdicts(case: Case, grid: np.ndarray) -> tuple[list[str], list[st
 def pose_verdicts(case: Case, results: Any) -> tuple[np.ndarray, np.ndarray]:
     """Each pose's verdict (``"ok"`` where it has forces) and message in vectorised results,
     decided as ``run`` decides them for one pose."""
-    from mechcheck.analytic.linkage_backends import pose_verdicts as linkage_verdicts
-    from mechcheck.analytic.presets import PresetResults
-
-    if isinstance(results, PresetResults):
+    if isinstance(results, DecidedPoses):
         return results.statuses, results.messages
     return linkage_verdicts(case, results)
 
