@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics
-from mechcheck.analytic.case import Case, FourBarGeometry, preset_geometry
+from mechcheck.analytic.case import Case, FourBarGeometry, Preset, preset_of
 from mechcheck.analytic.solution import Status
 
 #: Decimal places of the degrees in printed ranges (rounded inward, so that every
@@ -28,10 +28,10 @@ def _deg_range(lo: float, hi: float) -> str:
     return f"[{a:.{RANGE_DECIMALS}f}°, {b:.{RANGE_DECIMALS}f}°]"
 
 
-def assembly_range_text(case: Case) -> str:
+def assembly_range_text(case: Case | Preset) -> str:
     """Human description of the θ12 values (global, degrees) that assemble."""
-    g = preset_geometry(case)
-    gd = case.ground_angle
+    g = preset_of(case).geometry
+    gd = preset_of(case).ground_angle
     why = g.never_assembles()
     if why is not None:
         return f"no θ12 assembles this geometry ({why})"
@@ -62,10 +62,10 @@ def assembly_range_text(case: Case) -> str:
             f"{_deg_range(gd + math.pi - a_hi, gd + math.pi - a_lo)}")
 
 
-def in_assembly_range(case: Case, theta12: float) -> bool:
+def in_assembly_range(case: Case | Preset, theta12: float) -> bool:
     """Whether θ12 (rad) lies in the range that assembles (endpoints included, to rounding)."""
-    g = preset_geometry(case)
-    phi = math.remainder(theta12 - case.ground_angle, math.tau)
+    g = preset_of(case).geometry
+    phi = math.remainder(theta12 - preset_of(case).ground_angle, math.tau)
     slack = 1e-12
     if isinstance(g, FourBarGeometry):
         interval = fourbar_kinematics.assembly_interval(g)
@@ -74,18 +74,18 @@ def in_assembly_range(case: Case, theta12: float) -> bool:
     return sin_range is not None and sin_range[0] - slack <= math.sin(phi) <= sin_range[1] + slack
 
 
-def unassembled_verdict(case: Case, theta12: float) -> tuple[Status, str]:
+def unassembled_verdict(case: Case | Preset, theta12: float) -> tuple[Status, str]:
     """The verdict at a θ12 (rad) where the pose has no unique position: ``no_solution``
     outside the range that assembles, ``singular`` at a change point inside it."""
     at = f"θ12 = {math.degrees(theta12):.6g}°"
     if in_assembly_range(case, theta12):
         return ("singular", change_point_message(case, theta12))
-    return ("no_solution", f"the {case.mechanism} cannot be assembled at {at} "
-                           f"({case.branch} branch): {assembly_range_text(case)}")
+    return ("no_solution", f"the {preset_of(case).mechanism} cannot be assembled at {at} "
+                           f"({preset_of(case).branch} branch): {assembly_range_text(case)}")
 
 
-def change_point_message(case: Case, theta12: float) -> str:
+def change_point_message(case: Case | Preset, theta12: float) -> str:
     """Why a preset has no unique forces at a change point θ12 (rad)."""
-    return (f"θ12 = {math.degrees(theta12):.6g}° is a change point of this {case.mechanism}: "
+    return (f"θ12 = {math.degrees(theta12):.6g}° is a change point of this {preset_of(case).mechanism}: "
             "the links fold onto one line, where the branches meet and the position of the "
             "coupler is not determined; statics is singular there")

@@ -1,8 +1,11 @@
 """The one immutable description of a problem: :class:`Case`.
 
 A Case is built once (from a TOML file by :mod:`mechcheck.casefile`, or in code)
-and flows unchanged through every backend. Everything inside is SI and radians;
-the file format's degrees and millimetres are converted at the border.
+and flows unchanged through every backend. Its mechanism is always a
+:class:`~mechcheck.analytic.linkage.Linkage`; a four-bar or slider-crank is drawn as one
+when it is built (:func:`mechcheck.analytic.presets.preset_case`) and keeps its
+:class:`Preset` beside it. Everything inside is SI and radians; the file format's degrees
+and millimetres are converted at the border.
 
 Every value checks itself when built and raises :class:`CaseError` naming the
 offending key, so an impossible problem never reaches a solver.
@@ -10,21 +13,22 @@ offending key, so an impossible problem never reaches a solver.
 Examples
 --------
 >>> import math
->>> case = Case(
+>>> from mechcheck.analytic.presets import preset_case
+>>> case = preset_case(
 ...     name="demo",
 ...     geometry=FourBarGeometry(a1=0.14, a2=0.08, a3=0.10, a4=0.12),
 ...     theta12=math.radians(60.0),
 ... )
->>> case.mechanism
-'four_bar'
+>>> case.mechanism, [j.name for j in case.linkage.joints]
+('four_bar', ['A0', 'A', 'B', 'B0'])
 """
 
 from __future__ import annotations
 
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
-from typing import ClassVar, Literal
+from dataclasses import dataclass, field, fields, replace
+from typing import TYPE_CHECKING, ClassVar, Literal
 
 from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.values import (
@@ -38,6 +42,9 @@ from mechcheck.analytic.values import (
     pair,
     positive,
 )
+
+if TYPE_CHECKING:
+    from mechcheck.analytic.presets import Renaming
 
 Mechanism = Literal["four_bar", "slider_crank", "linkage"]
 
@@ -125,19 +132,7 @@ class SliderCrankGeometry:
         return max(self.a2, self.a3, abs(self.offset))
 
 
-Geometry = FourBarGeometry | SliderCrankGeometry | Linkage
-
-
 PresetGeometry = FourBarGeometry | SliderCrankGeometry
-
-
-def preset_geometry(case: Case) -> PresetGeometry:
-    """The four-bar's or slider-crank's geometry, for code that has a closed form for them."""
-    g = case.geometry
-    if isinstance(g, (FourBarGeometry, SliderCrankGeometry)):
-        return g
-    raise TypeError(f"case {case.name!r} is a linkage: it has no four-bar or slider-crank "
-                    "geometry")
 
 
 @dataclass(frozen=True)
@@ -228,14 +223,17 @@ class Friction:
 
 
 @dataclass(frozen=True)
-class Case:
-    """One force-analysis problem at one pose, in SI units and radians.
+class Preset:
+    """A four-bar or slider-crank as its case file writes it: link lengths, input angle,
+    branch and loads in the preset's own words (CONVENTIONS.md), SI units and radians.
+
+    A :class:`Case` keeps it beside the linkage it is drawn as, for what only the preset
+    has: sweeps over θ12, the theory commands, the closed-form position analysis that
+    draws the linkage, and the report's echo of the file.
 
     Parameters
     ----------
-    name : unique within a run (letters, digits, ``-`` and ``_``).
-    geometry : :class:`FourBarGeometry` or :class:`SliderCrankGeometry`; it
-        fixes ``mechanism``.
+    geometry : :class:`FourBarGeometry` or :class:`SliderCrankGeometry`.
     theta12 : input angle, rad, global (from +x).
     branch : ``open``/``crossed`` (four-bar) or ``right``/``left`` (slider-crank).
     ground_angle : direction of A0→B0, or of the slide axis, rad.
@@ -244,13 +242,9 @@ class Case:
     loads, masses : tuples of :class:`Load` and :class:`Mass`.
     motion : prescribed ω, α of link 2.
     friction : :class:`Friction` or None.
-    tolerance : per-case tolerance overrides (see :mod:`mechcheck.tolerance`),
-        as ``((selector, rtol, atol), ...)``.
-    source : where the case came from (a file path), for messages only.
     """
 
-    name: str
-    geometry: Geometry
+    geometry: PresetGeometry
     theta12: float
     branch: str = ""
     ground_angle: float = 0.0
@@ -260,26 +254,10 @@ class Case:
     masses: tuple[Mass, ...] = ()
     motion: Motion = Motion()
     friction: Friction | None = None
-    tolerance: tuple[tuple[str, float, float], ...] = ()
-    source: str = ""
 
     def __post_init__(self) -> None:
-        try:
-            self._validate()
-        except CaseError as error:
-            raise error.located(case=self.name, file=self.source) from None
-
-    def _validate(self) -> None:
-        if not isinstance(self.name, str) or not NAME_PATTERN.fullmatch(self.name):
-            raise CaseError(f"must use only letters, digits, '-' and '_', got {self.name!r}",
-                            key="name")
-        if isinstance(self.geometry, Linkage):
-            # A linkage carries its own drivers, loads, masses and friction (LINKAGES.md).
-            object.__setattr__(self, "gravity", pair(self.geometry.gravity, "gravity"))
-            return
         if not isinstance(self.geometry, (FourBarGeometry, SliderCrankGeometry)):
-            raise CaseError("must be a FourBarGeometry, SliderCrankGeometry or Linkage",
-                            key="geometry")
+            raise CaseError("must be a FourBarGeometry or SliderCrankGeometry", key="geometry")
         branches = self.geometry.branches
         if self.branch == "":
             object.__setattr__(self, "branch", branches[0])
@@ -307,19 +285,7 @@ class Case:
         f = self.friction
         if f is None:
             return
-        g = preset_geometry(self)
-        joints = g.pins
-        for joint in f.pin_radius:
-            if joint not in joints:
-                raise CaseError(f"unknown pin {joint!r} for a {self.mechanism}; pins are "
-                                f"{', '.join(joints)}", key=f"friction.pin_radius.{joint}")
-        viscous_joints = g.joints
-        for joint in f.viscous:
-            if joint not in viscous_joints:
-                raise CaseError(f"unknown joint {joint!r} for a {self.mechanism}; joints are "
-                                f"{', '.join(viscous_joints)}", key=f"friction.viscous.{joint}")
-        if f.slide_mu is not None and g.rocker:
-            raise CaseError("a four_bar has no slide", key="friction.slide_mu")
+        self._check_joint_names(f)
         omega_sense = (self.motion.omega > 0) - (self.motion.omega < 0)
         if f.direction and omega_sense and f.direction != omega_sense:
             raise CaseError(f"says {'ccw' if f.direction > 0 else 'cw'} but motion.omega = "
@@ -328,26 +294,20 @@ class Case:
             raise CaseError("is required when motion.omega is 0: friction opposes a motion, "
                             "so its sense must be given ('cw' or 'ccw')", key="friction.direction")
 
-    # -- derived facts ----------------------------------------------------------------
+    def _check_joint_names(self, f: Friction) -> None:
+        g = self.geometry
+        for table, known, what in ((f.pin_radius, g.pins, "pin"), (f.viscous, g.joints, "joint")):
+            for joint in table:
+                if joint not in known:
+                    key = "pin_radius" if what == "pin" else "viscous"
+                    raise CaseError(f"unknown {what} {joint!r} for a {self.mechanism}; {what}s are "
+                                    f"{', '.join(known)}", key=f"friction.{key}.{joint}")
+        if f.slide_mu is not None and g.rocker:
+            raise CaseError("a four_bar has no slide", key="friction.slide_mu")
+
     @property
     def mechanism(self) -> Mechanism:
-        """The case file's ``mechanism``: a label for tables and messages."""
-        return "linkage" if isinstance(self.geometry, Linkage) else self.geometry.mechanism
-
-    @property
-    def is_preset(self) -> bool:
-        """A four-bar or slider-crank: every backend runs it as its linkage
-        (:mod:`mechcheck.analytic.presets`)."""
-        return not isinstance(self.geometry, Linkage)
-
-    @property
-    def linkage(self) -> Linkage:
-        """A linkage case's linkage (for the four-bar or slider-crank as a linkage, see
-        :func:`mechcheck.analytic.presets.linkage_of`)."""
-        if isinstance(self.geometry, Linkage):
-            return self.geometry
-        raise TypeError(f"case {self.name!r} is a {self.mechanism}: its linkage is "
-                        "mechcheck.analytic.presets.linkage_of(case)")
+        return self.geometry.mechanism
 
     @property
     def input_sense(self) -> int:
@@ -359,19 +319,113 @@ class Case:
     @property
     def has_coulomb_friction(self) -> bool:
         """True when any Coulomb term is present (the equations are then nonlinear)."""
-        if not self.is_preset:
-            return self.linkage.has_coulomb_friction
         f = self.friction
         if f is None:
             return False
-        g = preset_geometry(self)
-        if any(f.pin_moment_arm(j) > 0.0 for j in g.pins):
+        if any(f.pin_moment_arm(j) > 0.0 for j in self.geometry.pins):
             return True
-        return not g.rocker and f.slide_coefficient() > 0.0
+        return not self.geometry.rocker and f.slide_coefficient() > 0.0
 
     @property
     def has_viscous_friction(self) -> bool:
-        f = self.friction if self.is_preset else self.linkage.friction
+        return self.friction is not None and any(c > 0.0 for c in self.friction.viscous.values())
+
+    @property
+    def has_friction(self) -> bool:
+        return self.has_coulomb_friction or self.has_viscous_friction
+
+    @property
+    def is_moving(self) -> bool:
+        return not self.motion.is_static
+
+    def mass_of(self, link: int) -> Mass | None:
+        return next((m for m in self.masses if m.link == link), None)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One force-analysis problem at one pose, in SI units and radians: a mechanism drawn
+    as a :class:`~mechcheck.analytic.linkage.Linkage`, which is all a backend sees.
+
+    Parameters
+    ----------
+    name : unique within a run (letters, digits, ``-`` and ``_``).
+    geometry : the linkage, drawn at the case's pose. None only for a preset whose
+        closed form does not assemble at its θ12 (its verdict is then the preset's).
+    preset : the four-bar or slider-crank the linkage was drawn from, or None. Build such
+        a case with :func:`mechcheck.analytic.presets.preset_case`, which draws it.
+    tolerance : per-case tolerance overrides (see :mod:`mechcheck.tolerance`),
+        as ``((selector, rtol, atol), ...)``.
+    source : where the case came from (a file path), for messages only.
+    names : how the linkage's results read under the preset's names
+        (:class:`~mechcheck.analytic.presets.Renaming`); None for a linkage.
+    """
+
+    name: str
+    geometry: Linkage | None
+    preset: Preset | None = None
+    tolerance: tuple[tuple[str, float, float], ...] = ()
+    source: str = ""
+    names: Renaming | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        try:
+            self._validate()
+        except CaseError as error:
+            raise error.located(case=self.name, file=self.source) from None
+
+    def _validate(self) -> None:
+        if not isinstance(self.name, str) or not NAME_PATTERN.fullmatch(self.name):
+            raise CaseError(f"must use only letters, digits, '-' and '_', got {self.name!r}",
+                            key="name")
+        if self.preset is not None and not isinstance(self.preset, Preset):
+            raise CaseError("must be a Preset", key="preset")
+        if self.geometry is None and self.preset is None:
+            raise CaseError("must be a Linkage", key="geometry")
+        if self.geometry is not None and not isinstance(self.geometry, Linkage):
+            raise CaseError("must be a Linkage (a four-bar or slider-crank is drawn as one "
+                            "by mechcheck.analytic.presets.preset_case)", key="geometry")
+
+    # -- derived facts ----------------------------------------------------------------
+    @property
+    def mechanism(self) -> Mechanism:
+        """The case file's ``mechanism``: a label for tables and messages."""
+        return "linkage" if self.preset is None else self.preset.mechanism
+
+    @property
+    def is_preset(self) -> bool:
+        """Drawn from a four-bar or slider-crank: read under the preset's names, swept over
+        θ12 (:mod:`mechcheck.analytic.presets`)."""
+        return self.preset is not None
+
+    @property
+    def linkage(self) -> Linkage:
+        """The mechanism as a linkage at the case's pose."""
+        if self.geometry is None:
+            raise TypeError(f"case {self.name!r} does not assemble at its θ12: it has no "
+                            "linkage to draw")
+        return self.geometry
+
+    @property
+    def gravity(self) -> Vec2:
+        return self.preset.gravity if self.preset is not None else self.linkage.gravity
+
+    @property
+    def scale(self) -> float:
+        """A characteristic length, for dimensionless measures and absolute tolerances: a
+        preset's longest link, a linkage's own scale."""
+        return self.preset.geometry.scale if self.preset is not None else self.linkage.scale
+
+    @property
+    def has_coulomb_friction(self) -> bool:
+        """True when any Coulomb term is present (the equations are then nonlinear)."""
+        return (self.preset or self.linkage).has_coulomb_friction
+
+    @property
+    def has_viscous_friction(self) -> bool:
+        if self.preset is not None:
+            return self.preset.has_viscous_friction
+        f = self.linkage.friction
         return f is not None and any(c > 0.0 for c in f.viscous.values())
 
     @property
@@ -383,12 +437,29 @@ class Case:
         """``static``, ``dynamic`` or ``friction``: keys the tolerance policy."""
         if self.has_friction:
             return "friction"
-        moving = not self.motion.is_static if self.is_preset else self.linkage.is_moving
-        return "dynamic" if moving else "static"
-
-    def mass_of(self, link: int) -> Mass | None:
-        return next((m for m in self.masses if m.link == link), None)
+        return "dynamic" if (self.preset or self.linkage).is_moving else "static"
 
     def with_(self, **changes: object) -> Case:
-        """A copy with some fields changed (and re-validated)."""
+        """A copy with some fields changed (and re-validated). A preset's own fields
+        (``theta12``, ``loads``, …) change through
+        :func:`mechcheck.analytic.presets.redrawn`, which draws its linkage again."""
+        moved = sorted(set(changes) & PRESET_FIELDS)
+        if moved:
+            raise TypeError(f"{', '.join(moved)} belong to the case's preset: "
+                            "mechcheck.analytic.presets.redrawn(case, ...) changes them")
         return replace(self, **changes)  # type: ignore[arg-type]
+
+
+def preset_of(case: Case | Preset) -> Preset:
+    """The preset a case was drawn from (or the preset itself), for code that has a closed
+    form for four-bars and slider-cranks."""
+    if isinstance(case, Preset):
+        return case
+    if case.preset is None:
+        raise TypeError(f"case {case.name!r} is a linkage: it has no four-bar or "
+                        "slider-crank preset")
+    return case.preset
+
+
+#: The preset's fields that a Case does not have (``geometry`` is the case's linkage).
+PRESET_FIELDS = frozenset(f.name for f in fields(Preset)) - {"geometry"}

@@ -137,10 +137,11 @@ def sweep_any(sweep: Callable[..., list[Solution]], solve: Callable[[Case], Solu
     """A simulator's ``sweep`` (of linkages) on any case: a preset's θ12 grid run as its
     linkage's (:func:`~mechcheck.analytic.presets.sweep_preset`)."""
     if case.is_preset:
+        from mechcheck.analytic.case import preset_of
         from mechcheck.analytic.presets import sweep_preset
 
         # A simulator drives a moving or Coulomb-friction preset pose by pose (each is a run
         # of its own from the pose); held statics run as the linkage's sweep.
         return sweep_preset(case, grid, backend, sweep, solve,
-                            one_by_one=not case.motion.is_static or case.has_coulomb_friction)
+                            one_by_one=preset_of(case).is_moving or case.has_coulomb_friction)
     return sweep(case, grid, backend)

@@ -30,7 +30,19 @@ from typing import Any, TypeVar
 import numpy as np
 
 from mechcheck.analytic.assembly import change_point_message, unassembled_verdict
-from mechcheck.analytic.case import Case, FourBarGeometry, Vec2, preset_geometry
+from mechcheck.analytic.case import (
+    Case,
+    CaseError,
+    FourBarGeometry,
+    Friction,
+    Load,
+    Mass,
+    Motion,
+    Preset,
+    PresetGeometry,
+    Vec2,
+    preset_of,
+)
 from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
 from mechcheck.analytic.kinematics import assembles, pose_of
 from mechcheck.analytic.linkage import (
@@ -61,22 +73,22 @@ SLIDER_CRANK_NAMES = LEGACY_NAMES | {"F14_x": "F_slide_x", "F14_y": "F_slide_y",
                                      "M14": "M_slide"}
 
 
-def names_of(case: Case) -> dict[str, str]:
-    """Legacy quantity → linkage quantity for ``case`` (its drive torque included)."""
-    names = FOUR_BAR_NAMES if preset_geometry(case).rocker else SLIDER_CRANK_NAMES
-    if case.drive_link == 4:
+def names_of(preset: Preset) -> dict[str, str]:
+    """Legacy quantity → linkage quantity for ``preset`` (its drive torque included)."""
+    names = FOUR_BAR_NAMES if preset.geometry.rocker else SLIDER_CRANK_NAMES
+    if preset.drive_link == 4:
         names = {k: v for k, v in names.items() if k != "T12"} | {"T14": "Q_B0"}
     return names
 
 
-def link_name(case: Case, link: int) -> str:
+def link_name(preset: Preset, link: int) -> str:
     if link == 4:
-        return "rocker" if preset_geometry(case).rocker else "slider"
+        return "rocker" if preset.geometry.rocker else "slider"
     return LINK_NAMES[link]
 
 
-def linkage_of(case: Case) -> Linkage:
-    """The case's mechanism as a linkage drawn at the case's pose, driven at A0, or at B0
+def linkage_of(case: Preset) -> Linkage:
+    """The preset's mechanism as a linkage drawn at its pose, driven at A0, or at B0
     for ``drive_link = 4``.
 
     LINKAGES.md gives ``drive_link = 4`` no direct spelling because its motion is prescribed
@@ -115,7 +127,7 @@ def linkage_of(case: Case) -> Linkage:
     )
 
 
-def _driver_of(case: Case) -> Driver:
+def _driver_of(case: Preset) -> Driver:
     sense = case.input_sense if case.has_coulomb_friction and not case.motion.omega else 0
     if case.drive_link == 2:
         return Driver("A0", 0.0, case.motion.omega, case.motion.alpha, sense)
@@ -126,33 +138,59 @@ def _driver_of(case: Case) -> Driver:
                   sense * (1 if ratio > 0 else -1))
 
 
-def _friction_of(case: Case) -> JointFriction | None:
+def _friction_of(case: Preset) -> JointFriction | None:
     f = case.friction
     if f is None:
         return None
-    joint_mu = {} if preset_geometry(case).rocker else {"slide": f.slide_coefficient()}
+    joint_mu = {} if case.geometry.rocker else {"slide": f.slide_coefficient()}
     return JointFriction(mu=f.mu, pin_radius=dict(f.pin_radius), joint_mu=joint_mu,
                          viscous=dict(f.viscous))
 
 
-def as_linkage(case: Case) -> Case:
-    """The preset ``case`` as a linkage case drawn at its pose; the last few are kept
-    (:func:`kept_linkage`), as every backend of a sweep translates the same stretches again
-    and building a Linkage checks it whole (0.5 ms for a four-bar)."""
+#: No prescribed motion: a preset held still.
+STILL = Motion()
+
+
+def preset_case(name: str, geometry: PresetGeometry, theta12: float, branch: str = "",
+                ground_angle: float = 0.0, drive_link: int = 2, gravity: Vec2 = (0.0, 0.0),
+                loads: tuple[Load, ...] = (), masses: tuple[Mass, ...] = (),
+                motion: Motion = STILL, friction: Friction | None = None,
+                tolerance: tuple[tuple[str, float, float], ...] = (), source: str = "") -> Case:
+    """A four-bar or slider-crank case, its :class:`Preset` drawn as a linkage
+    (:func:`drawn_case`). The arguments are the preset's (SI, radians) and the case's."""
     try:
-        return kept_linkage(case)
-    except TypeError:  # should a Case ever hold an unhashable value: translated each time
-        return translated(case)
+        preset = Preset(geometry, theta12, branch, ground_angle, drive_link, gravity, loads,
+                        masses, motion, friction)
+    except CaseError as error:
+        raise error.located(case=name, file=source) from None
+    return drawn_case(preset, name, tolerance=tolerance, source=source)
 
 
-def translated(case: Case) -> Case:
-    """:func:`as_linkage`, built anew."""
-    return Case(name=case.name, geometry=linkage_of(case), theta12=0.0,
-                tolerance=case.tolerance, source=case.source)
+def drawn_case(preset: Preset, name: str, *, tolerance: tuple[tuple[str, float, float], ...] = (),
+               source: str = "") -> Case:
+    """The case of ``preset``: its linkage drawn at the preset's pose (none where the closed
+    form does not assemble there) and read under the preset's names."""
+    if not assembles(preset, preset.theta12)[0]:
+        return Case(name, None, preset, tolerance, source)
+    return Case(name, linkage_of(preset), preset, tolerance, source, Renaming.of(preset))
 
 
-#: :func:`translated`, kept for the same Case (immutable, and so is its translation).
-kept_linkage = functools.lru_cache(maxsize=16)(translated)
+def redrawn(case: Case, **changes: Any) -> Case:
+    """``case`` with some of its preset's fields (``theta12``, ``loads``, ``geometry`` as
+    link lengths, …) or its own (``name``, ``tolerance``, ``source``) changed, its linkage
+    drawn again."""
+    own = {k: changes.pop(k) for k in ("name", "tolerance", "source") if k in changes}
+    base = case.with_(**own)
+    try:
+        preset = dataclasses.replace(preset_of(base), **changes)
+    except CaseError as error:
+        raise error.located(case=base.name, file=base.source) from None
+    return drawn_case(preset, base.name, tolerance=base.tolerance, source=base.source)
+
+
+def as_linkage(case: Case) -> Case:
+    """``case`` as a plain linkage case: its results in the linkage's own names."""
+    return Case(case.name, case.linkage, tolerance=case.tolerance, source=case.source)
 
 
 @dataclass(frozen=True)
@@ -167,7 +205,7 @@ class Renaming:
     drawn: dict[str, float]
 
     @classmethod
-    def of(cls, case: Case) -> Renaming:
+    def of(cls, case: Preset) -> Renaming:
         pose = pose_of(case)
         drawn = {"theta13": float(pose.links[3].angle[0])}
         if isinstance(case.geometry, FourBarGeometry):
@@ -214,14 +252,12 @@ class Renaming:
 def preset_values(case: Case, values: Mapping[str, float]) -> dict[str, float]:
     """A linkage solution's values under the preset's names (:class:`Renaming`), for the
     linkage drawn at ``case``'s pose."""
-    return Renaming.of(case).values(values)
+    return Renaming.of(preset_of(case)).values(values)
 
 
-def assembly_verdict(case: Case, theta12: float, backend: str) -> Solution | None:
+def unassembled_solution(case: Case, theta12: float, backend: str) -> Solution:
     """``backend``'s Solution at a θ12 (rad) where the preset's closed form has no position
-    (:func:`~mechcheck.analytic.assembly.unassembled_verdict`), None where it has one."""
-    if assembles(case, theta12)[0]:
-        return None
+    (:func:`~mechcheck.analytic.assembly.unassembled_verdict`)."""
     status, message = unassembled_verdict(case, theta12)
     return Solution(case.name, backend, {}, status=status, message=message,
                     diagnostics={"theta12": theta12})
@@ -231,13 +267,12 @@ def solve_preset(case: Case, solve: Callable[[Case], Solution], backend: str) ->
     """``solve`` (a backend's, on linkages) on the preset ``case``: its linkage drawn at the
     case's pose, read under the preset's names; the preset's verdict where it has no
     position."""
-    verdict = assembly_verdict(case, case.theta12, backend)
-    if verdict is not None:
-        return verdict
-    linkage = as_linkage(case)
-    solution = Renaming.of(case).solution(solve(linkage), case.name)
-    if linkage.linkage.drawn_at_change_point:   # the preset's words for the linkage's verdict
-        return dataclasses.replace(solution, message=change_point_message(case, case.theta12))
+    theta12 = preset_of(case).theta12
+    if case.names is None:
+        return unassembled_solution(case, theta12, backend)
+    solution = case.names.solution(solve(case), case.name)
+    if case.linkage.drawn_at_change_point:   # the preset's words for the linkage's verdict
+        return dataclasses.replace(solution, message=change_point_message(case, theta12))
     return solution
 
 
@@ -245,8 +280,8 @@ def driver_offsets(case: Case, theta12: Sequence[float] | np.ndarray) -> np.ndar
     """The linkage driver's coordinate (rad from the drawn pose) at each θ12 of a preset
     sweep: θ12 itself for a drive at A0, the rocker's θ14 for a drive at B0."""
     grid = np.asarray(theta12, dtype=float)
-    if case.drive_link == 2:
-        return grid - case.theta12
+    if preset_of(case).drive_link == 2:
+        return grid - preset_of(case).theta12
     rocker = pose_of(case, grid).links[4].angle - pose_of(case).links[4].angle[0]
     return np.arctan2(np.sin(rocker), np.cos(rocker))
 
@@ -257,9 +292,10 @@ def branch_side(case: Case, values: Mapping[str, np.ndarray]) -> np.ndarray:
     on its mirror image (open or crossed), a slider's B ahead of A along the slide or behind
     it (right or left). Zero where the branches meet."""
     ax, ay, bx, by = values["x_A"], values["y_A"], values["x_B"], values["y_B"]
-    if isinstance(case.geometry, FourBarGeometry):
+    p = preset_of(case)
+    if isinstance(p.geometry, FourBarGeometry):
         return (values["x_B0"] - ax) * (by - ay) - (values["y_B0"] - ay) * (bx - ax)
-    return (bx - ax) * math.cos(case.ground_angle) + (by - ay) * math.sin(case.ground_angle)
+    return (bx - ax) * math.cos(p.ground_angle) + (by - ay) * math.sin(p.ground_angle)
 
 
 def follows_branch(case: Case, results: LinkageResults) -> int:
@@ -276,27 +312,30 @@ def follows_branch(case: Case, results: LinkageResults) -> int:
 
 @dataclass(frozen=True)
 class Stretch:
-    """A stretch of a preset sweep: the ``linkage`` drawn at its first pose, the driver's
-    values (``offsets``) and the linkage's analysis there (``results``, by the method that
-    split the sweep), and how its Solutions read under the preset's names, as case
-    ``name``."""
+    """A stretch of a preset sweep: the ``case`` drawn at its first pose, its linkage's
+    driver values (``offsets``) and the linkage's analysis there (``results``, by the method
+    that split the sweep)."""
 
-    linkage: Case
+    case: Case
     offsets: np.ndarray
     results: LinkageResults
-    renaming: Renaming
-    name: str
+
+    @property
+    def names(self) -> Renaming:
+        assert self.case.names is not None  # a stretch is drawn: it assembles
+        return self.case.names
 
     def rename(self, solutions: list[Solution]) -> list[Solution]:
         """The linkage's Solutions under the preset's names (:meth:`Renaming.solutions`)."""
-        return self.renaming.solutions(solutions, self.name)
+        return self.names.solutions(solutions, self.case.name)
 
 
 def moves_pose_by_pose(case: Case) -> bool:
     """The preset's linkage changes from pose to pose beyond its driver's value: driven on
     the rocker with a motion or Coulomb friction, the rocker's rates (and the sense friction
     opposes) are the crank's times a ratio that varies along the turn."""
-    return case.drive_link == 4 and (not case.motion.is_static or case.has_coulomb_friction)
+    p = preset_of(case)
+    return p.drive_link == 4 and (p.is_moving or p.has_coulomb_friction)
 
 
 def stretches(case: Case, theta12: np.ndarray, backend: str, *, one_by_one: bool,
@@ -304,7 +343,7 @@ def stretches(case: Case, theta12: np.ndarray, backend: str, *, one_by_one: bool
               solve: Callable[[Case], Solution]) -> list[Stretch | Solution]:
     """A preset sweep over ``theta12`` (rad), as the linkage engine sees it, in order.
 
-    Poses where the preset has no position get its verdict (:func:`assembly_verdict`). The
+    Poses where the preset has no position get its verdict (:func:`unassembled_solution`). The
     rest run as the linkage's driver sweeps (``results_of``: its analysis at driver values),
     each drawn at its first pose and as long as the linkage stays on the preset's branch
     (:func:`follows_branch`); a pose drawn on a change point, and every pose with
@@ -312,21 +351,19 @@ def stretches(case: Case, theta12: np.ndarray, backend: str, *, one_by_one: bool
     (``solve``)."""
     out: list[Stretch | Solution] = []
     alone = one_by_one or moves_pose_by_pose(case)
-    inside = assembles(case, theta12)
     i = 0
     while i < theta12.size:
-        first = dataclasses.replace(case, theta12=float(theta12[i]))
-        linkage = as_linkage(first) if inside[i] and not alone else None
-        if linkage is None or linkage.linkage.drawn_at_change_point:
+        first = redrawn(case, theta12=float(theta12[i]))
+        if first.names is None or alone or first.linkage.drawn_at_change_point:
             out.append(solve_preset(first, solve, backend))
             i += 1
             continue
         offsets = driver_offsets(first, theta12[i:])
-        results = results_of(linkage, offsets)
+        results = results_of(first, offsets)
         n = max(1, follows_branch(first, results))
         if n < offsets.size:
-            results = stretch_results(linkage, offsets[:n], results, results_of)
-        out.append(Stretch(linkage, offsets[:n], results, Renaming.of(first), case.name))
+            results = stretch_results(first, offsets[:n], results, results_of)
+        out.append(Stretch(first, offsets[:n], results))
         i += n
     return out
 
@@ -357,7 +394,7 @@ def sweep_preset(case: Case, theta12: np.ndarray, backend: str,
         if isinstance(item, Solution):
             out.append(item)
         else:
-            out += item.rename(sweep(item.linkage, item.offsets, backend))
+            out += item.rename(sweep(item.case, item.offsets, backend))
     return out
 
 
@@ -377,8 +414,8 @@ def preset_results(case: Case, theta12: np.ndarray, backend: str,
             cond = float(item.diagnostics.get("condition_number", np.nan))
             conditions.append(functools.partial(np.array, [cond]))
             continue
-        status, message = pose_verdicts(item.linkage, item.results)
-        columns.append(item.renaming.columns(item.results.values))
+        status, message = pose_verdicts(item.case, item.results)
+        columns.append(item.names.columns(item.results.values))
         statuses.append(status)
         messages.append(message)
         conditions.append(functools.partial(getattr, item.results, "condition"))

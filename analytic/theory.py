@@ -17,7 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
+from mechcheck.analytic.case import (
+    Case,
+    CaseError,
+    FourBarGeometry,
+    Preset,
+    SliderCrankGeometry,
+    preset_of,
+)
 from mechcheck.analytic.joint_kinds import JointKind
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage import Linkage
@@ -118,14 +125,14 @@ class LimitPosition:
     theta14: float     # rad
 
 
-def limit_positions(case: Case) -> tuple[LimitPosition, LimitPosition]:
+def limit_positions(case: Case | Preset) -> tuple[LimitPosition, LimitPosition]:
     """The two rocker extremes of a crank-rocker on the case's branch.
 
     There the crank and coupler are collinear, so B lies at |A0B| = a2 + a3
     (extended) or a3 − a2 (folded) from A0 and at a4 from B0; of the two
     mirror-image solutions, the one on the case's branch is kept.
     """
-    g = case.geometry
+    g = preset_of(case).geometry
     if not isinstance(g, FourBarGeometry):
         raise CaseError("limit positions are defined here for a four_bar", key="mechanism")
     out = []
@@ -136,7 +143,7 @@ def limit_positions(case: Case) -> tuple[LimitPosition, LimitPosition]:
         phi = math.acos(cos_b0)  # angle of A0B from the ground line
         candidates = []
         for sign in (1.0, -1.0):
-            direction = case.ground_angle + sign * phi
+            direction = preset_of(case).ground_angle + sign * phi
             theta12 = direction if name == "extended" else direction + math.pi
             b = d * np.array([math.cos(direction), math.sin(direction)])
             p = pose_of(case, theta12, omega=0.0, alpha=0.0)
@@ -164,7 +171,7 @@ class TransmissionExtremes:
         return min(self.mu_min, math.pi - self.mu_max)
 
 
-def transmission_extremes(case: Case) -> TransmissionExtremes:
+def transmission_extremes(case: Case | Preset) -> TransmissionExtremes:
     """μmin and μmax in closed form.
 
     Four-bar: μ is the angle at B of triangle A-B-B0, cos μ = (a3² + a4² − d²)/(2 a3 a4)
@@ -173,8 +180,8 @@ def transmission_extremes(case: Case) -> TransmissionExtremes:
     Slider-crank: μ is the angle between the rod and the slide normal,
     cos μ = |e − a2 sin φ12|/a3, smallest μ with the crank perpendicular to the slide.
     """
-    g = case.geometry
-    gd = case.ground_angle
+    g = preset_of(case).geometry
+    gd = preset_of(case).ground_angle
     if isinstance(g, FourBarGeometry):
         def mu(d: float) -> float:
             c = (g.a3**2 + g.a4**2 - d**2) / (2.0 * g.a3 * g.a4)

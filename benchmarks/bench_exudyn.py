@@ -231,7 +231,7 @@ def timed(fn: Callable[[], object], repeats: int) -> list[float]:
 
 def fresh(case: Case) -> Case:
     """The same Case on a Linkage built anew: none of its per-Linkage caches filled."""
-    return Case(name=case.name, geometry=replace(case.linkage), theta12=0.0,
+    return Case(name=case.name, geometry=replace(case.linkage),
                 tolerance=case.tolerance, source=case.source)
 
 

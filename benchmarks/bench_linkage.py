@@ -35,7 +35,7 @@ import numpy as np
 from mechcheck import load_cases
 from mechcheck.analytic.linkage_backends import analytic_results
 from mechcheck.analytic.linkage_forces import solve_linkage
-from mechcheck.analytic.presets import as_linkage, linkage_of
+from mechcheck.analytic.presets import as_linkage
 from mechcheck.casefile import builtin_case_files
 
 
@@ -68,7 +68,7 @@ def main() -> None:
     e1 = cases["seed-E1-as-stated"]
     crank = np.radians(np.linspace(-30.0, 30.0, n))[:, None]
     six = timed(lambda: solve_linkage(watt, crank, np.zeros(1), np.zeros(1)), repeats)
-    preset = linkage_of(e1)
+    preset = e1.linkage
     four = timed(lambda: solve_linkage(preset, crank, np.zeros(1), np.zeros(1)), repeats)
     rate_six = [n / t for t in six]
     rate_four = [n / t for t in four]

@@ -48,7 +48,7 @@ import numpy as np
 
 from mechcheck import backends as registry, solve
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.presets import as_linkage
+from mechcheck.analytic.presets import as_linkage, redrawn
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
 from mechcheck.sweep import gated_poses
@@ -68,8 +68,7 @@ NEAR_TOGGLE_REPEATS = 3
 
 #: (row label, backend). Both keep their models for the next sweep of the same linkage
 #: (:func:`mechcheck.sim_models.mujoco.linkage.sweep_rig`,
-#: :func:`mechcheck.sim_models.mujoco.batch_settle.kept_models`, and the presets'
-#: translation, :func:`mechcheck.analytic.presets.kept_linkage`) and the settled
+#: :func:`mechcheck.sim_models.mujoco.batch_settle.kept_models`) and the settled
 #: sweep's model copies for models of the same sizes
 #: (:func:`mechcheck.sim_models.mujoco.batch_settle.model_copies`): timed with them kept
 #: from the warm-up run, and with them all built anew in every repeat (a sweep run once in
@@ -133,7 +132,6 @@ def stop_rules(label):
 
 def forget_rigs(label):
     """Before a repeat of the run ``label``: the kept models forgotten if it builds them."""
-    from mechcheck.analytic.presets import kept_linkage
     from mechcheck.sim_models.mujoco._fast import COPIES
     from mechcheck.sim_models.mujoco.batch_settle import kept_models
     from mechcheck.sim_models.mujoco.linkage import sweep_rig
@@ -141,7 +139,6 @@ def forget_rigs(label):
     if label in (COLD, COLD_SETTLED):  # as in a fresh process
         sweep_rig.cache_clear()
         kept_models.cache_clear()
-        kept_linkage.cache_clear()
         COPIES.clear()
 
 
@@ -173,7 +170,7 @@ def pose_errors(case, theta, solutions):
     for t, s in zip(theta, solutions, strict=True):
         if s.status != "ok":
             continue
-        at = case.with_(theta12=float(t))
+        at = redrawn(case, theta12=float(t))
         reference = solve(at)
         rows = [r for r in comparison_rows(at, reference, s) if str(r["quantity"])[0] in "FTM"]
         error = max(float(r["rel_err"]) for r in rows)
@@ -210,7 +207,7 @@ def main() -> None:
         reference = (c_floor(linkage, steps, LINKAGE_REPEATS) if backend == "mujoco"
                      else forward_floor(linkage, LINKAGE_REPEATS))
         if backend == "mujoco":  # issue 13's floor: the steps of each pose settled alone
-            alone = [settle(case.with_(theta12=float(t))).diagnostics["steps"] for t in kept]
+            alone = [settle(redrawn(case, theta12=float(t))).diagnostics["steps"] for t in kept]
             floor_alone = c_floor(linkage, alone, LINKAGE_REPEATS)
             alone_cells = f"{spread(floor_alone, '.4f')} | {ratio(times, floor_alone)}"
         else:
@@ -235,7 +232,7 @@ def near_toggle_table(case) -> None:
           "C floor ms | ratio |")
     print("|---:|---:|---|---:|---:|---:|---:|---:|---:|")
     for delta in NEAR_TOGGLE_DELTAS:
-        at = case.with_(theta12=math.pi - math.radians(float(delta)))
+        at = redrawn(case, theta12=math.pi - math.radians(float(delta)))
         times = []
         for _ in range(NEAR_TOGGLE_REPEATS):
             start = time.perf_counter()
@@ -244,7 +241,7 @@ def near_toggle_table(case) -> None:
         steps = sim.diagnostics["steps"]
         floor = c_floor(as_linkage(at), [steps], NEAR_TOGGLE_REPEATS, poses=1)
         reference = solve(at)
-        error = pose_errors(at, [at.theta12], [sim])[0] if sim.status == "ok" else math.nan
+        error = pose_errors(at, [at.preset.theta12], [sim])[0] if sim.status == "ok" else math.nan
         print(f"| {delta:.4g} | {reference.diagnostics['condition_number']:.0f} | {sim.status} | "
               f"{error:.1e} | {steps} | {sim.diagnostics['passes']} | {spread(times, '.1f')} | "
               f"{spread(floor, '.1f')} | {ratio(times, floor)} |")

@@ -20,6 +20,7 @@ import statistics
 import time
 
 from mechcheck.analytic.case import Case, FourBarGeometry, Load
+from mechcheck.analytic.presets import preset_case
 from mechcheck.report import render
 from mechcheck.run import run
 from mechcheck.tables import diagnostics_frame, results_frame
@@ -28,7 +29,7 @@ from mechcheck.tables import diagnostics_frame, results_frame
 def cases(n: int) -> list[Case]:
     """Seed E1's geometry at n crank angles that assemble, with a varying rocker load."""
     geometry = FourBarGeometry(0.14, 0.08, 0.10, 0.12)
-    return [Case(name=f"e1-{i:05d}", geometry=geometry, theta12=0.2 + 2.5 * i / n,
+    return [preset_case(name=f"e1-{i:05d}", geometry=geometry, theta12=0.2 + 2.5 * i / n,
                  loads=(Load(4, (0.09, 0.0), (100.0 + i % 7, 30.0)),)) for i in range(n)]
 
 

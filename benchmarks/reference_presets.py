@@ -41,9 +41,9 @@ SINGULAR_CONDITION = 1.0e8
 def resultants(case: Case) -> dict[int, tuple[float, float, float, float, float]]:
     """Per moving link: (Fx, Fy, P, Q, T), the fixed loads and weights folded together."""
     out = {link: [0.0, 0.0, 0.0, 0.0, 0.0] for link in (2, 3, 4)}
-    items = [(ld.link, ld.at, ld.force, ld.torque) for ld in case.loads]
+    items = [(ld.link, ld.at, ld.force, ld.torque) for ld in case.preset.loads]
     items += [(m.link, m.com, (m.mass * case.gravity[0], m.mass * case.gravity[1]), 0.0)
-              for m in case.masses]
+              for m in case.preset.masses]
     for link, (cx, cy), (fx, fy), torque in items:
         r = out[link]
         r[0] += fx
@@ -78,20 +78,20 @@ def _wrap(angle: Array) -> Array:
 def fourbar_statics(case: Case, theta12: Array) -> dict[str, Array]:
     """The four-bar's static force analysis at each θ12 (rad)."""
     _check(case)
-    g = case.geometry
+    g = case.preset.geometry
     assert isinstance(g, FourBarGeometry)
     a1, a2, a3, a4 = g.a1, g.a2, g.a3, g.a4
     (f2x, f2y, p2, q2, t2), (f3x, f3y, p3, q3, t3), (f4x, f4y, p4, q4, t4) = \
         resultants(case).values()
-    cg, sg = np.cos(case.ground_angle), np.sin(case.ground_angle)
+    cg, sg = np.cos(case.preset.ground_angle), np.sin(case.preset.ground_angle)
     c12, s12 = np.cos(theta12), np.sin(theta12)
     # The closed form in the ground frame (CONVENTIONS.md "Branches").
     c12g, s12g = c12 * cg + s12 * sg, s12 * cg - c12 * sg
     cc = a1 * a1 + a2 * a2 + a4 * a4 - a3 * a3 - 2.0 * a1 * a2 * c12g
     aa = 2.0 * a2 * a4 * c12g - 2.0 * a1 * a4
     bb = 2.0 * a2 * a4 * s12g
-    sign = -1.0 if case.branch == "open" else 1.0
-    theta14 = np.arctan2(bb, aa) + sign * np.arccos(cc / np.hypot(aa, bb)) + case.ground_angle
+    sign = -1.0 if case.preset.branch == "open" else 1.0
+    theta14 = np.arctan2(bb, aa) + sign * np.arccos(cc / np.hypot(aa, bb)) + case.preset.ground_angle
     c14, s14 = np.cos(theta14), np.sin(theta14)
     ax, ay = a2 * c12, a2 * s12
     b0x, b0y = a1 * cg, a1 * sg
@@ -103,7 +103,7 @@ def fourbar_statics(case: Case, theta12: Array) -> dict[str, Array]:
     m2 = p2 * c12 - q2 * s12 + t2          # loads' moments about each link's frame origin
     m3 = p3 * c13 - q3 * s13 + t3
     m4 = p4 * c14 - q4 * s14 + t4
-    if case.drive_link == 2:
+    if case.preset.drive_link == 2:
         # Rocker about B0: u × F34 + m4 = 0; coupler about A: v × (−F34) + m3 = 0.
         det = ux * vy - uy * vx
         f34x = -(m4 * vx + m3 * ux) / det
@@ -121,7 +121,7 @@ def fourbar_statics(case: Case, theta12: Array) -> dict[str, Array]:
     f12x, f12y = f23x - f2x, f23y - f2y
     out = {"F12_x": f12x, "F12_y": f12y, "F23_x": f23x, "F23_y": f23y, "F34_x": f34x,
            "F34_y": f34y, "F14_x": -f34x - f4x, "F14_y": -f34y - f4y}
-    if case.drive_link == 2:
+    if case.preset.drive_link == 2:
         out["T12"] = ax * f23y - ay * f23x - m2   # crank about A0: A × (−F23) + m2 + T12 = 0
     else:
         out["T14"] = -(ux * f34y - uy * f34x) - m4  # rocker about B0: u × F34 + m4 + T14 = 0
@@ -132,17 +132,17 @@ def fourbar_statics(case: Case, theta12: Array) -> dict[str, Array]:
 def slidercrank_statics(case: Case, theta12: Array) -> dict[str, Array]:
     """The slider-crank's static force analysis at each θ12 (rad)."""
     _check(case)
-    g = case.geometry
+    g = case.preset.geometry
     assert isinstance(g, SliderCrankGeometry)
     a2, a3, e = g.a2, g.a3, g.offset
     (f2x, f2y, p2, q2, t2), (f3x, f3y, p3, q3, t3), (f4x, f4y, p4, q4, t4) = \
         resultants(case).values()
-    cg, sg = np.cos(case.ground_angle), np.sin(case.ground_angle)   # u; n = (−sg, cg)
+    cg, sg = np.cos(case.preset.ground_angle), np.sin(case.preset.ground_angle)   # u; n = (−sg, cg)
     c12, s12 = np.cos(theta12), np.sin(theta12)
     ax, ay = a2 * c12, a2 * s12
     # Rod across the slide line: n · (B − A) = e − n · A.
     s13g = (e - (ay * cg - ax * sg)) / a3
-    c13g = np.sqrt(1.0 - s13g * s13g) * (1.0 if case.branch == "right" else -1.0)
+    c13g = np.sqrt(1.0 - s13g * s13g) * (1.0 if case.preset.branch == "right" else -1.0)
     s14 = (ax * cg + ay * sg) + a3 * c13g
     bx, by = s14 * cg - e * sg, s14 * sg + e * cg
     vx, vy = bx - ax, by - ay              # B − A
@@ -174,7 +174,7 @@ def worst_error(case: Case, reference: dict[str, Array], library: dict[str, Arra
     reaction (or drive torque over the longest link; at least FORCE_FLOOR_N = 0.01 N),
     torques over that times the longest link, angles over 1 rad (the difference wrapped),
     s14 over the longest link."""
-    length = case.geometry.scale
+    length = case.scale
     forces = np.array([np.abs(v) for q, v in reference.items() if q.startswith("F")])
     torques = np.array([np.abs(v) for q, v in reference.items() if q[0] in "TM"])
     force_scale = np.maximum(np.maximum(forces.max(axis=0), torques.max(axis=0) / length), 0.01)

@@ -109,7 +109,8 @@ def _built(factory: Any, key: str, *args: Any, **kwargs: Any) -> Any:
 
 
 def case_from_spec(spec: CaseSpec, source: str = "") -> Case:
-    """Convert one validated table: lengths to metres, degrees to radians."""
+    """Convert one validated table (lengths to metres, degrees to radians) and draw it as
+    its linkage (:func:`~mechcheck.analytic.presets.preset_case`)."""
     scale = 1e-3 if spec.length_unit == "mm" else 1.0
 
     def pt(p: list[float]) -> tuple[float, float]:
@@ -137,7 +138,10 @@ def case_from_spec(spec: CaseSpec, source: str = "") -> Case:
             pin_radius={k: v * scale for k, v in f.pin_radius.items()},
             slide_mu=f.slide_mu, viscous=dict(f.viscous),
             direction={"cw": -1, "ccw": 1, None: 0}[f.direction])
-    return Case(
+    # Drawing needs numpy: imported here, so that the commands that only list need none.
+    from mechcheck.analytic.presets import preset_case
+
+    return preset_case(
         name=spec.name, geometry=geometry, theta12=math.radians(spec.theta12),
         branch=spec.branch or "", ground_angle=math.radians(spec.ground_angle),
         drive_link=spec.drive_link, gravity=(spec.gravity[0], spec.gravity[1]),
@@ -155,7 +159,7 @@ AnySpec = CaseSpec | LinkageCaseSpec
 
 def linkage_case(spec: LinkageCaseSpec, source: str = "") -> Case:
     """A ``mechanism = "linkage"`` table as a Case holding its Linkage."""
-    return Case(name=spec.name, geometry=linkage_from_spec(spec), theta12=0.0,
+    return Case(name=spec.name, geometry=linkage_from_spec(spec),
                 tolerance=tuple((f"{t.backend}:{t.quantity}", t.rtol, t.atol)
                                 for t in spec.tolerance),
                 source=source)

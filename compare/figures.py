@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from mechcheck.analytic.case import Case
+from mechcheck.analytic.case import Case, preset_of
 from mechcheck.analytic.transmission import transmission_angle
 from mechcheck.backends import REFERENCE
 from mechcheck.output import file_stem
@@ -106,7 +106,7 @@ class SweepPlot:
 def _names(case: Case) -> tuple[str, str, list[tuple[str, str]], str]:
     """(drive quantity, its unit, reactions as (label, quantity stem), x-axis label)."""
     if case.is_preset:
-        return (f"T1{case.drive_link}", "N·m",
+        return (f"T1{preset_of(case).drive_link}", "N·m",
                 [(f"|F{j}|", f"F{j}") for j in ("12", "23", "34", "14")], "θ12 [deg]")
     linkage = case.linkage
     first = linkage.drivers[0].joint

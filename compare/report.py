@@ -16,7 +16,7 @@ from typing import Any
 import jinja2
 import pandas as pd
 
-from mechcheck.analytic.case import Case
+from mechcheck.analytic.case import Case, preset_of
 from mechcheck.analytic.solution import Solution
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
@@ -90,7 +90,7 @@ def case_inputs(case: Case, spec: AnySpec | None) -> list[str]:
     if spec is None:
         return [f"{case.mechanism} (built in code; no file to echo)"]
     unit = spec.length_unit
-    lines = [f"{spec.mechanism}, θ12 = {fmt(spec.theta12)}°, {case.branch} branch, ground "
+    lines = [f"{spec.mechanism}, θ12 = {fmt(spec.theta12)}°, {preset_of(case).branch} branch, ground "
              f"angle {fmt(spec.ground_angle)}°, drive on link {spec.drive_link}, lengths in {unit}",
              "geometry: " + ", ".join(f"{k} = {fmt(v)}" for k, v in spec.geometry.items())]
     for load in spec.loads:

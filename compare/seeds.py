@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from mechcheck.analytic.case import Case
+from mechcheck.analytic.case import Case, preset_of
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution
 
 
@@ -29,7 +29,8 @@ def derived_value(case: Case, solution: Solution, key: str) -> float | None:
         return _wrap_deg(math.degrees(v["theta13"]) + 180.0) % 360.0
     if key == "N14" and "F14_x" in v:
         # The slide's normal: the slide direction turned +90°.
-        return abs(-v["F14_x"] * math.sin(case.ground_angle) + v["F14_y"] * math.cos(case.ground_angle))
+        ground = preset_of(case).ground_angle
+        return abs(-v["F14_x"] * math.sin(ground) + v["F14_y"] * math.cos(ground))
     if len(key) >= 3 and key[0] == "F" and key[1:3].isdigit():
         i, j = key[1], key[2]
         name = f"F{min(i, j)}{max(i, j)}"

@@ -57,12 +57,12 @@ def kind_scales(case: Case, reference: Solution) -> dict[str, float]:
     the longest link.
     """
     scales = {"force": SCALE_FLOOR, "torque": SCALE_FLOOR, "angle": 1.0,
-              "length": case.geometry.scale}
+              "length": case.scale}
     for q, v in reference.values.items():
         kind = kind_of_unit(reference.unit(q))
         if kind in ("force", "torque"):
             scales[kind] = max(scales[kind], abs(v))
-    forces, torques, length = scales["force"], scales["torque"], case.geometry.scale
+    forces, torques, length = scales["force"], scales["torque"], case.scale
     scales["force"], scales["torque"] = max(forces, torques / length), max(torques, forces * length)
     return scales
 
@@ -167,7 +167,7 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     scale = np.maximum(largest[pose, kind], SCALE_FLOOR)
     # Forces at least the largest torque over the longest link, torques at least the
     # largest reaction times it (see kind_scales).
-    length = case.geometry.scale
+    length = case.scale
     force_at, torque_at = largest[pose, 0], largest[pose, 1]
     scale = np.where(is_torque, np.maximum(scale, force_at * length), scale)
     scale = np.where(is_force, np.maximum(scale, torque_at / length), scale)

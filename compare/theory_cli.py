@@ -94,12 +94,12 @@ def describe(case: Case) -> list[str]:
     """The theory facts of one case, as lines."""
     from mechcheck.analytic import theory
     from mechcheck.analytic.assembly import assembly_range_text
-    from mechcheck.analytic.case import FourBarGeometry, SliderCrankGeometry
+    from mechcheck.analytic.case import FourBarGeometry, SliderCrankGeometry, preset_of
 
     if not case.is_preset:
         return describe_linkage(case)
-    g = case.geometry
-    lines = [f"{case.name} ({case.mechanism}, {case.branch} branch)",
+    g = preset_of(case).geometry
+    lines = [f"{case.name} ({case.mechanism}, {preset_of(case).branch} branch)",
              f"  assembly: {assembly_range_text(case)}"]
     ext = theory.transmission_extremes(case)
     lines.append(f"  transmission angle: μmin = {math.degrees(ext.mu_min):.4f}° at θ12 = "

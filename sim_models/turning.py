@@ -17,7 +17,7 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mechcheck.analytic.case import Case, Load, preset_geometry
+from mechcheck.analytic.case import Case, Load, preset_of
 from mechcheck.analytic.kinematics import pose_of
 
 Array = NDArray[np.float64]
@@ -102,9 +102,9 @@ def branch_sign(case: Case, theta13: ArrayLike, output: ArrayLike) -> Array:
     rod is perpendicular to the slide.
     """
     t13 = np.asarray(theta13, dtype=float)
-    if preset_geometry(case).rocker:
+    if preset_of(case).geometry.rocker:
         return np.sign(np.sin(np.asarray(output, dtype=float) - t13))
-    return np.sign(np.cos(t13 - case.ground_angle))
+    return np.sign(np.cos(t13 - preset_of(case).ground_angle))
 
 
 @dataclass(frozen=True)
@@ -160,7 +160,8 @@ def run_leg(turner: Turner, sense: int, turns: float) -> Leg:
     """
     turner.reset(sense)
     dt = turner.timestep
-    start = turner.case.theta12
+    # A preset's crank starts at its θ12; a linkage's driver at its drawn pose.
+    start = turner.case.preset.theta12 if turner.case.preset is not None else 0.0
     target = 2.0 * LEAD_ANGLE + turns * math.tau
     budget = math.ceil((BUDGET_FACTOR * target / SERVO_SPEED + BUDGET_EXTRA_TIME) / dt)
     window = max(2, round(STALL_TIME / dt))
@@ -257,7 +258,7 @@ class TurnResult:
     @property
     def theta14(self) -> Array:
         """θ14 (rad, unwrapped): four-bar only."""
-        if not preset_geometry(self.case).rocker:
+        if not preset_of(self.case).geometry.rocker:
             raise ValueError(f"{self.case.name}: a slider-crank has no θ14 (use output = s14)")
         return self.output
 
@@ -289,7 +290,7 @@ def turn_result(simulator: str, turner: Turner, turns: float, sense: int,
     forward = run_leg(turner, sense, turns)
     backward = run_leg(turner, -sense, turns) if forward.ending != "turned" else None
     legs = [forward] + ([backward] if backward is not None else [])
-    every = np.concatenate([[case.theta12]] + [leg.samples[:, 0] for leg in legs])
+    every = np.concatenate([[preset_of(case).theta12]] + [leg.samples[:, 0] for leg in legs])
     recorded = forward.samples[forward.progress >= LEAD_ANGLE]
     jams: list[float | None] = [None, None]  # (CW, CCW)
     overshoot = 0.0
@@ -364,9 +365,9 @@ class Amplification:
     def transmission_angle(self) -> Array:
         """μ (rad) of the settled poses (the seed's definition, as in
         :mod:`mechcheck.analytic.transmission`), from the simulator's own link angles."""
-        if preset_geometry(self.case).rocker:
+        if preset_of(self.case).geometry.rocker:
             return np.abs(np.remainder(self.theta13 - self.output + np.pi, 2 * np.pi) - np.pi)
-        rod = np.abs(np.remainder(self.theta13 - self.case.ground_angle + np.pi / 2, np.pi)
+        rod = np.abs(np.remainder(self.theta13 - preset_of(self.case).ground_angle + np.pi / 2, np.pi)
                      - np.pi / 2)
         return np.pi / 2 - rod
 
@@ -398,7 +399,7 @@ def amplification_result(simulator: str, case: Case, load: float,
 def output_load(case: Case, load: float) -> Load:
     """The output load of the holding runs: a pure couple ``load`` on the rocker, or a force
     ``load`` on the slider along the slide direction u through B (no moment)."""
-    if preset_geometry(case).rocker:
+    if preset_of(case).geometry.rocker:
         return Load(4, at=(0.0, 0.0), force=(0.0, 0.0), torque=load)
-    g = case.ground_angle
+    g = preset_of(case).ground_angle
     return Load(4, at=(0.0, 0.0), force=(load * math.cos(g), load * math.sin(g)))

@@ -53,4 +53,4 @@ def sliding_collar() -> Case:
         masses=(LinkMass("bar", 2.0, (0.3, 0.0), 0.0), LinkMass("collar", 1.0, (0.5, 0.0), 0.0)),
         gravity=(0.0, -9.81),
     )
-    return Case(name="sliding-collar", geometry=linkage, theta12=0.0)
+    return Case(name="sliding-collar", geometry=linkage)

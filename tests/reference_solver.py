@@ -161,10 +161,10 @@ class Model:
 
 def build_model(case: Case) -> Model:
     """Pins (and the slide) of the case's mechanism, in link frames."""
-    g = case.geometry
+    g = case.preset.geometry
     zero = np.zeros(2)
     if isinstance(g, FourBarGeometry):
-        b0 = g.a1 * np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
+        b0 = g.a1 * np.array([math.cos(case.preset.ground_angle), math.sin(case.preset.ground_angle)])
         pins = [
             Pin("A0", 1, zero, 2, zero),
             Pin("A", 2, np.array([g.a2, 0.0]), 3, zero),
@@ -173,13 +173,13 @@ def build_model(case: Case) -> Model:
         ]
         return Model(case, pins, None)
     assert isinstance(g, SliderCrankGeometry)
-    u = np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
+    u = np.array([math.cos(case.preset.ground_angle), math.sin(case.preset.ground_angle)])
     pins = [
         Pin("A0", 1, zero, 2, zero),
         Pin("A", 2, np.array([g.a2, 0.0]), 3, zero),
         Pin("B", 3, np.array([g.a3, 0.0]), 4, zero),
     ]
-    return Model(case, pins, (u, perp(u), g.offset, case.ground_angle))
+    return Model(case, pins, (u, perp(u), g.offset, case.preset.ground_angle))
 
 
 def initial_guess(case: Case) -> Vector:
@@ -191,14 +191,14 @@ def initial_guess(case: Case) -> Vector:
     open ⇔ (A − B0) × (B − B0) < 0. Slider-crank: B = s u + e n on the circle
     (A, a3), s = A·u ± √(a3² − (e − A·n)²); right is the larger root.
     """
-    g = case.geometry
-    t2 = case.theta12
+    g = case.preset.geometry
+    t2 = case.preset.theta12
     a = g.a2 * np.array([math.cos(t2), math.sin(t2)])
     q = np.zeros(9)
     q[2] = t2
     q[3:5] = a
     if isinstance(g, FourBarGeometry):
-        b0 = g.a1 * np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
+        b0 = g.a1 * np.array([math.cos(case.preset.ground_angle), math.sin(case.preset.ground_angle)])
         d_vec = a - b0
         d = float(np.hypot(*d_vec))
         along = (g.a4**2 - g.a3**2 + d**2) / (2.0 * d)
@@ -207,21 +207,21 @@ def initial_guess(case: Case) -> Vector:
             raise ReferenceError("the four-bar does not assemble at this θ12")
         h = math.sqrt(max(h2, 0.0))
         e_d = d_vec / d
-        side = -1.0 if case.branch == "open" else 1.0
+        side = -1.0 if case.preset.branch == "open" else 1.0
         b = b0 + along * e_d + side * h * perp(e_d)
         q[6:8] = b0
         q[8] = math.atan2(b[1] - b0[1], b[0] - b0[0])
     else:
         assert isinstance(g, SliderCrankGeometry)
-        u = np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
+        u = np.array([math.cos(case.preset.ground_angle), math.sin(case.preset.ground_angle)])
         n = perp(u)
         disc = g.a3**2 - (g.offset - a @ n) ** 2
         if disc < -1e-9 * g.scale**2:
             raise ReferenceError("the slider-crank does not assemble at this θ12")
-        root = math.sqrt(max(disc, 0.0)) * (1.0 if case.branch == "right" else -1.0)
+        root = math.sqrt(max(disc, 0.0)) * (1.0 if case.preset.branch == "right" else -1.0)
         b = (a @ u + root) * u + g.offset * n
         q[6:8] = b
-        q[8] = case.ground_angle
+        q[8] = case.preset.ground_angle
     q[5] = math.atan2(b[1] - a[1], b[0] - a[0])
     return q
 
@@ -229,15 +229,15 @@ def initial_guess(case: Case) -> Vector:
 def solve_positions(model: Model, q0: Vector) -> tuple[Vector, int]:
     """Newton–Raphson on Φ(q) = 0 (driver on link 2); returns q and the iterations."""
     q = q0.copy()
-    scale = model.case.geometry.scale
+    scale = model.case.scale
     size = np.array([scale, scale, 1.0] * 3)
     previous = math.inf
     for it in range(1, NEWTON_MAX_ITERATIONS + 1):
-        step = np.linalg.solve(model.jacobian(q, 2), model.phi(q, model.case.theta12, 2))
+        step = np.linalg.solve(model.jacobian(q, 2), model.phi(q, model.case.preset.theta12, 2))
         q -= step
         size_of_step = float(np.max(np.abs(step) / size))
         if size_of_step <= NEWTON_RTOL:
-            q -= np.linalg.solve(model.jacobian(q, 2), model.phi(q, model.case.theta12, 2))
+            q -= np.linalg.solve(model.jacobian(q, 2), model.phi(q, model.case.preset.theta12, 2))
             return q, it + 1
         if size_of_step <= ROUNDING_FLOOR and size_of_step > 0.5 * previous:
             return q, it  # stalled at the rounding floor of a near-toggle pose
@@ -270,7 +270,7 @@ def generalized_force(q: Vector, link: int, local: Vector, force: Vector,
 def inertia_terms(case: Case, q: Vector, qd: Vector, qdd: Vector) -> Vector:
     """E: m·a_G and I_G·φ̈ + (r_G − r_O) × m·a_G per link (Newton–Euler at the origin)."""
     out = np.zeros(9)
-    for m in case.masses:
+    for m in case.preset.masses:
         c = COL[m.link]
         rc = rot(q[c + 2]) @ np.asarray(m.com)
         a_g = qdd[c:c + 2] + perp(rc) * qdd[c + 2] - rc * qd[c + 2] ** 2
@@ -282,10 +282,10 @@ def inertia_terms(case: Case, q: Vector, qd: Vector, qdd: Vector) -> Vector:
 def applied_forces(case: Case, q: Vector) -> Vector:
     """Q of the external loads and the weights."""
     out = np.zeros(9)
-    for ld in case.loads:
+    for ld in case.preset.loads:
         out += generalized_force(q, ld.link, np.asarray(ld.at), np.asarray(ld.force), ld.torque)
     g = np.asarray(case.gravity)
-    for m in case.masses:
+    for m in case.preset.masses:
         out += generalized_force(q, m.link, np.asarray(m.com), m.mass * g)
     return out
 
@@ -325,7 +325,7 @@ class Friction:
 
 def friction_terms(model: Model, q: Vector, qd: Vector, qd_sense: Vector) -> Friction:
     case = model.case
-    f = case.friction
+    f = case.preset.friction
     viscous = np.zeros(9)
     pins: list[tuple[int, int, int, float]] = []
     slide_visc = 0.0
@@ -356,8 +356,8 @@ def friction_terms(model: Model, q: Vector, qd: Vector, qd_sense: Vector) -> Fri
         mu_s = f.slide_coefficient()
         if mu_s > 0.0:
             s_dot = float(u @ qd_sense[6:8])
-            speeds.append(abs(s_dot) / (w_in * case.geometry.scale))
-            slide = mu_s * sense(s_dot, w_in * case.geometry.scale)
+            speeds.append(abs(s_dot) / (w_in * case.scale))
+            slide = mu_s * sense(s_dot, w_in * case.scale)
     return Friction(viscous, slide_visc, pins, slide, min(speeds, default=math.inf))
 
 
@@ -402,7 +402,7 @@ class Reference:
 
 def dimensionless_condition(model: Model, jac: Matrix) -> float:
     """cond of Φ_q with length rows divided by L and x, y columns multiplied by L."""
-    length = model.case.geometry.scale
+    length = model.case.scale
     rows = np.ones(9)
     rows[:2 * len(model.pins)] = 1.0 / length
     if model.slide is not None:
@@ -415,14 +415,15 @@ def solve(case: Case) -> Reference:
     """Kinematics, drive torque and every joint reaction of ``case``."""
     model = build_model(case)
     q, pos_it = solve_positions(model, initial_guess(case))
-    qd = velocities(model, q, case.motion.omega)
-    qdd = accelerations(model, q, qd, case.motion.alpha)
-    if case.motion.omega != 0.0:
+    qd = velocities(model, q, case.preset.motion.omega)
+    qdd = accelerations(model, q, qd, case.preset.motion.alpha)
+    if case.preset.motion.omega != 0.0:
         qd_sense = qd
     else:
-        qd_sense = velocities(model, q, float(case.friction.direction) if case.friction else 0.0)
+        friction = case.preset.friction
+        qd_sense = velocities(model, q, float(friction.direction) if friction else 0.0)
 
-    jac = model.jacobian(q, case.drive_link)
+    jac = model.jacobian(q, case.preset.drive_link)
     jt = jac.T
     fr = friction_terms(model, q, qd, qd_sense)
     known = applied_forces(case, q) + fr.viscous - inertia_terms(case, q, qd, qdd)
@@ -460,7 +461,7 @@ def solve(case: Case) -> Reference:
         values["s14"] = float(u @ q[6:8])
         values["F14_x"], values["F14_y"] = f14
         values["M14"] = float(lam[7])
-    values[f"T1{case.drive_link}"] = float(lam[8])
+    values[f"T1{case.preset.drive_link}"] = float(lam[8])
     values = {k: float(v) for k, v in values.items()}
     return Reference(values, q, qd, qdd, dimensionless_condition(model, jac),
                      {"positions": pos_it, "friction": iterations}, fr.min_sense_speed,

@@ -18,6 +18,7 @@ from mechcheck.analytic.case import (
     SliderCrankGeometry,
 )
 from mechcheck.analytic.linkage import Linkage
+from mechcheck.analytic.presets import preset_case
 from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import GROUND
 
@@ -97,7 +98,7 @@ def cases(draw: st.DrawFn, *, mechanism: str | None = None, friction: bool | Non
     branches = ("open", "crossed") if mech == "four_bar" else ("right", "left")
     with_gravity = draw(st.booleans()) if gravity is None else gravity
     try:
-        case = Case(
+        case = preset_case(
             name="random", geometry=geometry, theta12=draw(angle),
             branch=draw(st.sampled_from(branches)), ground_angle=draw(angle),
             drive_link=draw(st.sampled_from((2, 4))) if mech == "four_bar" else 2,

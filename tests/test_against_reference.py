@@ -23,6 +23,7 @@ from mechcheck.analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
+from mechcheck.analytic.presets import preset_case, redrawn
 from mechcheck.analytic.solution import Solution
 
 from . import reference_solver as ref
@@ -69,7 +70,7 @@ def wrap(angle: float) -> float:
 def normalized_errors(case: Case, got: Solution, expected: dict[str, float]
                       ) -> dict[str, float]:
     """Each quantity's error divided by its tolerance (≤ 1 passes)."""
-    length = case.geometry.scale
+    length = case.scale
     forces = [abs(v) for q, v in expected.items() if q.startswith("F")]
     force_scale = max(forces)
     torque_scale = max([abs(expected[q]) for q in ("T12", "T14", "M14") if q in expected]
@@ -166,7 +167,7 @@ def four_bar_cases(draw: st.DrawFn) -> Case:
     assume(abs(side) > 1e-6 * length**2)
     extra = draw(loads_and_masses(max(a1, a2, a3, a4)))
     extra |= draw(motion_and_friction(max(a1, a2, a3, a4), ("A0", "A", "B", "B0"), False))
-    return Case(name="fb-random", geometry=FourBarGeometry(a1, a2, a3, a4), theta12=t12,
+    return preset_case(name="fb-random", geometry=FourBarGeometry(a1, a2, a3, a4), theta12=t12,
                 ground_angle=g, branch="open" if side < 0 else "crossed",
                 drive_link=draw(st.sampled_from([2, 4])), **extra)
 
@@ -188,7 +189,7 @@ def slider_crank_cases(draw: st.DrawFn) -> Case:
     scale = max(a2, a3, abs(offset))
     extra = draw(loads_and_masses(scale))
     extra |= draw(motion_and_friction(scale, ("A0", "A", "B"), True))
-    return Case(name="sc-random", geometry=SliderCrankGeometry(a2, a3, offset), theta12=t12,
+    return preset_case(name="sc-random", geometry=SliderCrankGeometry(a2, a3, offset), theta12=t12,
                 ground_angle=g, branch="right" if delta > 0 else "left",
                 **extra)
 
@@ -245,52 +246,52 @@ _PIN_FRICTION = Friction(mu=0.15, pin_radius={"A0": 0.010, "A": 0.008, "B": 0.00
                          viscous={"A0": 0.02, "B0": 0.01})
 
 UNSEEN: list[tuple[str, Case]] = [
-    ("static-four-bar", Case(name="u1", geometry=_FB, theta12=math.radians(75.0),
+    ("static-four-bar", preset_case(name="u1", geometry=_FB, theta12=math.radians(75.0),
                              loads=_FB_LOADS)),
-    ("dynamic-four-bar", Case(name="u2", geometry=_FB, theta12=math.radians(200.0),
+    ("dynamic-four-bar", preset_case(name="u2", geometry=_FB, theta12=math.radians(200.0),
                               loads=_FB_LOADS, masses=_MASSES, gravity=(0.0, -9.81),
                               motion=Motion(omega=30.0, alpha=-400.0))),
-    ("coulomb-viscous-four-bar", Case(name="u3", geometry=_FB, theta12=math.radians(130.0),
+    ("coulomb-viscous-four-bar", preset_case(name="u3", geometry=_FB, theta12=math.radians(130.0),
                                       loads=_FB_LOADS, masses=_MASSES,
                                       motion=Motion(omega=-12.0, alpha=50.0),
                                       friction=_PIN_FRICTION)),
-    ("quasi-static-friction-ccw", Case(name="u4", geometry=_FB, theta12=math.radians(40.0),
+    ("quasi-static-friction-ccw", preset_case(name="u4", geometry=_FB, theta12=math.radians(40.0),
                                        loads=_FB_LOADS,
                                        friction=Friction(mu=0.2, pin_radius={"A": 0.01, "B": 0.01},
                                                          direction=1))),
-    ("tilted-ground-crossed", Case(name="u5", geometry=_FB, theta12=math.radians(95.0),
+    ("tilted-ground-crossed", preset_case(name="u5", geometry=_FB, theta12=math.radians(95.0),
                                    branch="crossed", ground_angle=math.radians(-35.0),
                                    loads=_FB_LOADS, masses=_MASSES, gravity=(0.0, -9.81),
                                    motion=Motion(omega=8.0, alpha=20.0))),
-    ("drive-on-link-4", Case(name="u6", geometry=_FB, theta12=math.radians(250.0),
+    ("drive-on-link-4", preset_case(name="u6", geometry=_FB, theta12=math.radians(250.0),
                              drive_link=4, loads=_FB_LOADS, masses=_MASSES,
                              gravity=(0.0, -9.81), motion=Motion(omega=5.0, alpha=-60.0),
                              friction=_PIN_FRICTION)),
-    ("mm-sized-four-bar", Case(name="u7", geometry=FourBarGeometry(0.0018, 0.0006, 0.0015,
+    ("mm-sized-four-bar", preset_case(name="u7", geometry=FourBarGeometry(0.0018, 0.0006, 0.0015,
                                                                    0.0011),
                                theta12=math.radians(75.0),
                                loads=(Load(3, (0.0007, 0.0003), _polar(0.8, 115.0)),),
                                masses=(Mass(3, 1e-4, (0.0007, 0.0), 1e-11),),
                                motion=Motion(omega=300.0, alpha=0.0))),
-    ("m-sized-four-bar", Case(name="u8", geometry=FourBarGeometry(18.0, 6.0, 15.0, 11.0),
+    ("m-sized-four-bar", preset_case(name="u8", geometry=FourBarGeometry(18.0, 6.0, 15.0, 11.0),
                               theta12=math.radians(75.0),
                               loads=(Load(3, (7.0, 3.0), _polar(8000.0, 115.0)),),
                               masses=(Mass(3, 500.0, (7.0, 0.0), 9000.0),),
                               gravity=(0.0, -9.81), motion=Motion(omega=0.3, alpha=0.05))),
-    ("static-slider-crank", Case(name="u9", geometry=_SC, theta12=math.radians(35.0),
+    ("static-slider-crank", preset_case(name="u9", geometry=_SC, theta12=math.radians(35.0),
                                  loads=_SC_LOADS)),
-    ("dynamic-slider-left-tilted", Case(name="u10", geometry=_SC, theta12=math.radians(-120.0),
+    ("dynamic-slider-left-tilted", preset_case(name="u10", geometry=_SC, theta12=math.radians(-120.0),
                                         branch="left", ground_angle=math.radians(60.0),
                                         loads=_SC_LOADS, masses=_MASSES, gravity=(0.0, -9.81),
                                         motion=Motion(omega=-40.0, alpha=300.0))),
-    ("slider-coulomb-viscous", Case(name="u11", geometry=_SC, theta12=math.radians(140.0),
+    ("slider-coulomb-viscous", preset_case(name="u11", geometry=_SC, theta12=math.radians(140.0),
                                     loads=_SC_LOADS, masses=_MASSES,
                                     motion=Motion(omega=25.0, alpha=0.0),
                                     friction=Friction(mu=0.1, slide_mu=0.2,
                                                       pin_radius={"A0": 0.01, "A": 0.012,
                                                                   "B": 0.008},
                                                       viscous={"slide": 3.0, "A": 0.01}))),
-    ("slider-quasi-static-cw", Case(name="u12", geometry=_SC, theta12=math.radians(300.0),
+    ("slider-quasi-static-cw", preset_case(name="u12", geometry=_SC, theta12=math.radians(300.0),
                                     ground_angle=math.radians(180.0), loads=_SC_LOADS,
                                     friction=Friction(mu=0.12, pin_radius={"A": 0.01},
                                                       direction=-1))),
@@ -307,7 +308,7 @@ def test_unseen_case(case: Case) -> None:
     assert_agrees(case, got)
 
 
-DEAD_CENTRE = Case(name="u13", geometry=SliderCrankGeometry(0.05, 0.2),
+DEAD_CENTRE = preset_case(name="u13", geometry=SliderCrankGeometry(0.05, 0.2),
               theta12=0.7, ground_angle=0.7, gravity=(0.0, -9.81),
               loads=(Load(4, (0.0, 0.0), (30.0, 10.0)),),
               masses=(Mass(4, 2.0),),
@@ -325,7 +326,7 @@ def test_exact_dead_centre_is_indeterminate() -> None:
     got = analytic_solve(DEAD_CENTRE)
     assert got.status == "indeterminate", got.message
     assert "slide" in got.message and not any(q.startswith(("F", "T")) for q in got.values)
-    frictionless = analytic_solve(DEAD_CENTRE.with_(friction=None))
+    frictionless = analytic_solve(redrawn(DEAD_CENTRE, friction=None))
     expected = ref.solve(DEAD_CENTRE).values
     errors = normalized_errors(DEAD_CENTRE, frictionless, expected)
     assert max(errors.values()) <= 1.0, errors
@@ -334,21 +335,21 @@ def test_exact_dead_centre_is_indeterminate() -> None:
 # -- units: a mechanism 1000× larger ---------------------------------------------------
 def _scaled(case: Case, factor: float) -> Case:
     """The same case with every length (links, offset, points, pin radii) × factor."""
-    g = case.geometry
+    g = case.preset.geometry
     geometry: FourBarGeometry | SliderCrankGeometry
     if isinstance(g, FourBarGeometry):
         geometry = FourBarGeometry(g.a1 * factor, g.a2 * factor, g.a3 * factor, g.a4 * factor)
     else:
         geometry = SliderCrankGeometry(g.a2 * factor, g.a3 * factor, g.offset * factor)
     s = lambda p: (p[0] * factor, p[1] * factor)  # noqa: E731
-    f = case.friction
+    f = case.preset.friction
     friction = None if f is None else Friction(
         mu=f.mu, slide_mu=f.slide_mu, direction=f.direction,
         pin_radius={j: r * factor for j, r in f.pin_radius.items()})
-    return case.with_(
+    return redrawn(case,
         geometry=geometry, friction=friction,
-        loads=tuple(Load(ld.link, s(ld.at), ld.force, ld.torque * factor) for ld in case.loads),
-        masses=tuple(Mass(m.link, m.mass, s(m.com), m.inertia) for m in case.masses))
+        loads=tuple(Load(ld.link, s(ld.at), ld.force, ld.torque * factor) for ld in case.preset.loads),
+        masses=tuple(Mass(m.link, m.mass, s(m.com), m.inertia) for m in case.preset.masses))
 
 
 #: Cases for which scaling lengths by k scales torques by k and leaves forces alone:
@@ -356,12 +357,12 @@ def _scaled(case: Case, factor: float) -> Case:
 #: with motion — inertia forces m·a grow with length — nor with viscous friction,
 #: whose moments c·ω do not depend on length.)
 SCALABLE: list[tuple[str, Case]] = [
-    ("four-bar-coulomb-weight", Case(
+    ("four-bar-coulomb-weight", preset_case(
         name="s1", geometry=_FB, theta12=math.radians(130.0), loads=_FB_LOADS,
         masses=(Mass(3, 1.1, (0.075, 0.005)),), gravity=(0.0, -9.81),
         friction=Friction(mu=0.15, pin_radius={"A0": 0.01, "A": 0.008, "B0": 0.012},
                           direction=-1))),
-    ("slider-slide-friction", Case(
+    ("slider-slide-friction", preset_case(
         name="s2", geometry=_SC, theta12=math.radians(35.0), ground_angle=0.3,
         loads=_SC_LOADS, friction=Friction(mu=0.1, slide_mu=0.25, pin_radius={"B": 0.01},
                                            direction=1))),
@@ -379,7 +380,7 @@ def test_metres_versus_millimetre_sized(case: Case) -> None:
     for q, v in small.values.items():
         if q in ("T12", "T14", "M14"):
             assert big.values[q] == pytest.approx(1000.0 * v, abs=TORQUE_RTOL * 1000.0 * forces
-                                                  * case.geometry.scale)
+                                                  * case.scale)
         elif q == "s14":
             assert big.values[q] == pytest.approx(1000.0 * v, rel=LENGTH_RTOL)
         elif q.startswith("F"):

@@ -171,7 +171,7 @@ def test_both_simulators_report_the_same_diagnostics(name: str) -> None:
         assert not missing, (backend, missing)
         assert solution.diagnostics["method"] in ("settle", "driven", "constraint_solve")
         assert all(math.isfinite(float(solution.diagnostics[k])) for k in COMMON_KEYS[1:])
-        assert float(solution.diagnostics["loop_violation"]) < 1e-6 * case.geometry.scale
+        assert float(solution.diagnostics["loop_violation"]) < 1e-6 * case.scale
 
 
 def test_a_solution_is_read_only() -> None:

@@ -25,6 +25,7 @@ from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass,
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage import Joint
 from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.presets import preset_case, redrawn
 from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
 from mechcheck.sim_models.linkage_motion import coulomb_joints, prescribed_motion
 from mechcheck.sim_models.mujoco.linkage_dynamics import DYNAMIC
@@ -38,8 +39,8 @@ SIMULATORS = ("mujoco", "pymunk")
 
 def angles_along(case: Case, tau: np.ndarray) -> dict[str, np.ndarray]:
     """Closed-form link angles (and s14) at times τ from the reading, prescribed crank motion."""
-    omega, alpha = case.motion.omega, case.motion.alpha
-    pose = pose_of(case, case.theta12 + omega * tau + 0.5 * alpha * tau * tau)
+    omega, alpha = case.preset.motion.omega, case.preset.motion.alpha
+    pose = pose_of(case, case.preset.theta12 + omega * tau + 0.5 * alpha * tau * tau)
     out = {f"w{k}": np.unwrap(pose.links[k].angle) for k in (2, 3, 4)}
     if case.mechanism == "slider_crank":
         assert pose.s14 is not None
@@ -51,7 +52,7 @@ def coulomb_reverses_near_reading(case: Case, span: float, rest: float = 0.0) ->
     """True when some Coulomb term's relative motion is zero (or below ``rest``, rad/s, a
     slide's m/s per the case's length scale) at the reading or changes sense within ``span``
     s before it or one pymunk step after it (central differences of positions)."""
-    f = case.friction
+    f = case.preset.friction
     assert f is not None
     h = DRIVEN.dt / 2.0
     tau = np.concatenate([np.linspace(-span, h, 200), [0.0]])
@@ -63,25 +64,26 @@ def coulomb_reverses_near_reading(case: Case, span: float, rest: float = 0.0) ->
     speeds = [rate[f"w{j}"] - rate[f"w{i}"] for joint, (i, j) in links.items()
               if f.pin_moment_arm(joint) > 0.0]
     if case.mechanism == "slider_crank" and f.slide_coefficient() > 0.0:
-        speeds.append(rate["s"] / case.geometry.scale)
+        speeds.append(rate["s"] / case.scale)
     for v in speeds:
         scale = np.abs(v).max()
         # Differences of positions carry ~1e-9 rad/s of rounding: below that a speed is zero.
         if (abs(v[-1]) <= max(1e-6 * scale, 1e-8, rest)
                 or np.any(np.sign(v) != np.sign(v[-1]))):
             return True
-    crank = case.motion.omega + case.motion.alpha * tau  # a crank turning < 1e-9 rad in 1 s rests
+    motion = case.preset.motion
+    crank = motion.omega + motion.alpha * tau  # a crank turning < 1e-9 rad in 1 s rests
     return bool(speeds) and bool(np.any(np.abs(crank) <= 1e-9))
 
 
 def slide_self_locks(case: Case) -> bool:
     """True when a slider-crank's rod lies within the slide's friction angle of the slide's
     normal: μ·|tan φ| ≥ 1 for φ the rod's angle to the slide axis (the wedge jams)."""
-    f = case.friction
+    f = case.preset.friction
     if case.mechanism != "slider_crank" or f is None or f.slide_coefficient() == 0.0:
         return False
-    rod = pose_of(case, np.array([case.theta12])).links[3].angle[0]
-    return bool(f.slide_coefficient() * abs(math.tan(rod - case.ground_angle)) >= 1.0)
+    rod = pose_of(case, np.array([case.preset.theta12])).links[3].angle[0]
+    return bool(f.slide_coefficient() * abs(math.tan(rod - case.preset.ground_angle)) >= 1.0)
 
 
 #: rad/s at a Coulomb joint (README, pymunk, slow drives): below it pymunk's measured joint
@@ -145,7 +147,7 @@ def check(case: Case, backend: str) -> None:
 def issue_slider_crank() -> Case:
     """The issue's worst case, reconstructed: a slider-crank at ω = −29.6 rad/s, μ = 0.174
     on every pin and the slide, massless crank and slider (pymunk was 4.6e-3 off in T12)."""
-    return Case(name="issue-slider-crank", geometry=SliderCrankGeometry(0.25, 0.7, offset=0.05),
+    return preset_case(name="issue-slider-crank", geometry=SliderCrankGeometry(0.25, 0.7, offset=0.05),
                 theta12=math.radians(50.0), ground_angle=0.0, branch="right",
                 loads=(Load(4, force=(-150.0, 0.0)), Load(3, at=(0.3, 0.0), force=(0.0, -40.0))),
                 masses=(Mass(3, 1.2, (0.3, 0.0), 0.05),), motion=Motion(-29.6, 0.0),
@@ -154,7 +156,7 @@ def issue_slider_crank() -> Case:
 
 def fast_four_bar() -> Case:
     """A massless four-bar at 25 rad/s with pin friction and viscous terms."""
-    return Case(name="fast-four-bar", geometry=FourBarGeometry(0.6, 0.2, 0.5, 0.4),
+    return preset_case(name="fast-four-bar", geometry=FourBarGeometry(0.6, 0.2, 0.5, 0.4),
                 theta12=math.radians(70.0), branch="open",
                 loads=(Load(4, at=(0.3, 0.0), force=(0.0, -120.0)),), motion=Motion(25.0, 80.0),
                 friction=Friction(mu=0.3, pin_radius={"A0": 0.03, "A": 0.02, "B": 0.02, "B0": 0.03},
@@ -164,7 +166,7 @@ def fast_four_bar() -> Case:
 def aborting_case() -> Case:
     """A random draw that made Chipmunk abort the whole process ("maxForce must be positive", a
     C assertion): a massive coupler with 5.7e-158 kg·m² about its centre made the run non-finite."""
-    return Case(name="chipmunk-abort",
+    return preset_case(name="chipmunk-abort",
                 geometry=FourBarGeometry(0.5845414461863723, 0.16967686173787216,
                                          0.6106521509858792, 0.06807329314948889),
                 theta12=3.1836811790967262e-273, branch="crossed",
@@ -218,7 +220,7 @@ def test_case_that_aborted_chipmunk_runs(backend: str) -> None:
 
 def test_crank_at_rest_is_indeterminate_in_both() -> None:
     """ω = 0 with α ≠ 0: the Coulomb senses are the case's convention, not the motion's."""
-    case = issue_slider_crank().with_(name="at-rest", motion=Motion(0.0, 150.0),
+    case = redrawn(issue_slider_crank(), name="at-rest", motion=Motion(0.0, 150.0),
                                       friction=Friction(mu=0.174, pin_radius={"A0": 0.02},
                                                         direction=1))
     assert coulomb_reverses_near_reading(case, 0.0)
@@ -234,7 +236,7 @@ def test_a_crank_reversing_just_before_the_reading_is_indeterminate_in_both() ->
     it; friction at A0 only, under a load through A0. The analytic T12 is +μ·r·|F| = +3.9e-3
     N·m (the sense of ω); MuJoCo read −3.9e-3 from its own joint velocity. Such a reading
     has no measurable sense: both simulators give no number, with the reason."""
-    case = Case(name="reversing", geometry=SliderCrankGeometry(1.0, 1.0, offset=0.0),
+    case = preset_case(name="reversing", geometry=SliderCrankGeometry(1.0, 1.0, offset=0.0),
                 theta12=0.0, loads=(Load(2, at=(0.0, 0.0), force=(0.0, 1.0)),),
                 motion=Motion(5.960464477539063e-08, 1.0),
                 friction=Friction(mu=0.25, pin_radius={"A0": 0.015625}, slide_mu=0.0,
@@ -250,7 +252,7 @@ def test_a_crank_reversing_just_before_the_reading_is_indeterminate_in_both() ->
 def slow_four_bar(omega: float) -> Case:
     """A random draw (2026-11-26, shrunk): a massless four-bar with friction at B0 only,
     2 N on the rocker, driven at ``omega``."""
-    return Case(name="slow", geometry=FourBarGeometry(0.6328125, 0.359375, 0.8125, 0.1015625),
+    return preset_case(name="slow", geometry=FourBarGeometry(0.6328125, 0.359375, 0.8125, 0.1015625),
                 theta12=0.0, ground_angle=1.5625, branch="open",
                 loads=(Load(4, at=(0.0, 0.0), force=(0.0, 2.0)),), motion=Motion(omega, 0.0),
                 friction=Friction(mu=0.25, pin_radius={"B0": 0.015625},
@@ -277,7 +279,7 @@ def test_self_locking_slide_gives_no_number_in_either() -> None:
     whose rod is 12.5° from the slide's normal with μ = 0.25 (friction angle 14°). The rod
     carries nothing (analytic: every force on links 3 and 4 is 0); both simulators' friction
     loop has gain μ·|tan φ| = 1.13 there and does not settle. Pinned: no number, with a reason."""
-    case = Case(name="self-locking", geometry=SliderCrankGeometry(0.75, 0.6875, offset=0.0),
+    case = preset_case(name="self-locking", geometry=SliderCrankGeometry(0.75, 0.6875, offset=0.0),
                 theta12=2.75, ground_angle=-1.5, branch="right",
                 masses=(Mass(2, 1.0, (0.0, 0.5), 0.0),), motion=Motion(3.0, 0.0),
                 friction=Friction(mu=0.25, pin_radius={"A0": 0.0}, slide_mu=0.25, direction=1))
@@ -305,13 +307,13 @@ def test_the_friction_loop_gain_of_a_slide_is_mu_tan_phi(theta12: float, mu: flo
     from mechcheck.analytic.linkage_backends import analytic_results
     from mechcheck.analytic.presets import as_linkage
 
-    case = Case(name="slide-loop", geometry=SliderCrankGeometry(0.75, 0.6875, offset=0.0),
+    case = preset_case(name="slide-loop", geometry=SliderCrankGeometry(0.75, 0.6875, offset=0.0),
                 theta12=theta12, ground_angle=-1.5, branch="right",
                 masses=(Mass(2, 1.0, (0.0, 0.5), 0.0),),
                 loads=(Load(4, (0.0, 0.0), (load, 1.0), 0.0),), motion=Motion(3.0, 0.0),
                 friction=Friction(mu=mu, pin_radius={"A0": 0.0}, slide_mu=mu, direction=1))
     rod = pose_of(case, np.array([theta12])).links[3].angle[0]
-    hand = mu * abs(math.tan(rod - case.ground_angle))
+    hand = mu * abs(math.tan(rod - case.preset.ground_angle))
     gain = analytic_results(as_linkage(case)).friction_gain
     assert gain is not None and gain[0] == pytest.approx(hand, rel=1e-9)
 
@@ -346,13 +348,13 @@ def test_random_driven_friction_cases_agree(case: Case, backend: str) -> None:
     that loop's gain μ·|tan φ| exceeds 1, so the run does not settle). A pymunk draw
     whose Coulomb joint is slower than :data:`SENSED_RATE` at the reading is
     ``indeterminate`` (:func:`check`)."""
-    assume(case.has_friction and not case.motion.is_static)
+    assume(case.has_friction and not case.preset.motion.is_static)
     assume(not slide_self_locks(case))
     reference = mechcheck.solve(case, "analytic")
     assume(any(abs(v) > FORCE_FLOOR_N for q, v in reference.values.items()
                if quantity_kind(q) != "pose"))
     if mechcheck.solve(case, backend).status == "not_settled":
         # Not this item's: the frictionless case fails the same way (reported separately).
-        assume(mechcheck.solve(case.with_(friction=None), backend).status != "not_settled")
+        assume(mechcheck.solve(redrawn(case, friction=None), backend).status != "not_settled")
     assume(not timestep_stops_at_first_order(mechcheck.solve(case, backend)))
     check(case, backend)

@@ -478,7 +478,7 @@ def test_the_api_names_its_units() -> None:
     from .closed_form import forces
 
     case = mechcheck.load_cases()[0]
-    results = forces.solve_poses(case, theta12_rad=[case.theta12])
+    results = forces.solve_poses(case, theta12_rad=[case.preset.theta12])
     assert results.values["theta13"][0] == mechcheck.solve(case).values["theta13"]
     solution = Solution("c", "b", {"theta14": 3.5, "T12": 2.0})
     assert solution.in_table_units() == pytest.approx({"theta14": math.degrees(3.5) - 360.0,

@@ -71,7 +71,7 @@ def q1(force: float = 10.0, mass: float = 3.0, length: float = 0.6, stiffness: f
                               stiffness, free),),
         gravity=(0.0, -G),
     )
-    return Case(name=name, geometry=linkage, theta12=0.0)
+    return Case(name=name, geometry=linkage)
 
 
 def q1_hand(case: Case) -> dict[str, float]:
@@ -214,7 +214,7 @@ def q2(x: float, velocity: float, acceleration: float, mass: float = 2.0, k1: fl
         gravity=(0.0, -G),
         friction=JointFriction(mu=mu) if mu else None,
     )
-    return Case(name=name, geometry=linkage, theta12=0.0)
+    return Case(name=name, geometry=linkage)
 
 
 def q2_hand(x: float, velocity: float, acceleration: float, mass: float = 2.0,
@@ -305,7 +305,7 @@ def test_q2_a_spring_without_tension_where_its_ends_meet_adds_nothing() -> None:
     def case(x: float) -> Case:
         base = q2(x, 0.5, 3.0).linkage
         k1 = base.springs[0]
-        return Case(name="q2-slack", theta12=0.0, geometry=dataclasses.replace(
+        return Case(name="q2-slack", geometry=dataclasses.replace(
             base, springs=(dataclasses.replace(k1, free_length=0.0), base.springs[1])))
     at = mechcheck.solve(case(-0.3), "analytic")
     assert at.status == "ok", at.message

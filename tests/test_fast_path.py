@@ -17,6 +17,7 @@ from hypothesis import given, settings
 
 from mechcheck.analytic.case import Case, FourBarGeometry, Load, Mass, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.presets import preset_case
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, rule
 
 from .builtin import builtin
@@ -79,7 +80,7 @@ def test_the_reference_reproduces_the_printed_seed_e1() -> None:
     """The reference alone at E1's pose (θ12 = 60°) against Söylemez Ex. 6.3 as printed
     (compare/cases/seeds.toml): within half a unit of the printed last digit."""
     case = builtin("seed-E1-as-printed")
-    got = {q: float(v[0]) for q, v in reference_of(case, np.array([case.theta12])).items()}
+    got = {q: float(v[0]) for q, v in reference_of(case, np.array([case.preset.theta12])).items()}
     assert abs(got["T12"] - -2.90133) <= 0.5e-5
     for joint, magnitude in (("23", 139.46), ("34", 89.77), ("14", 37.74)):
         assert abs(math.hypot(got[f"F{joint}_x"], got[f"F{joint}_y"]) - magnitude) <= 0.5e-2
@@ -94,11 +95,11 @@ MASSES = (Mass(2, 0.4, (0.02, 0.0)), Mass(3, 0.7, (0.04, 0.01)), Mass(4, 1.1, (0
 
 
 @pytest.mark.parametrize("case", [
-    Case("rocker-driven-crossed", FourBarGeometry(0.14, 0.08, 0.10, 0.12), 1.0, branch="crossed",
+    preset_case("rocker-driven-crossed", FourBarGeometry(0.14, 0.08, 0.10, 0.12), 1.0, branch="crossed",
          ground_angle=0.5, drive_link=4, gravity=(1.0, -9.81), loads=LOADS, masses=MASSES),
-    Case("crank-driven-open", FourBarGeometry(0.14, 0.08, 0.10, 0.12), 1.0, ground_angle=-2.0,
+    preset_case("crank-driven-open", FourBarGeometry(0.14, 0.08, 0.10, 0.12), 1.0, ground_angle=-2.0,
          gravity=(0.0, -9.81), loads=LOADS, masses=MASSES),
-    Case("slider-tilted-left", SliderCrankGeometry(0.08, 0.2, offset=0.03), 1.0, branch="left",
+    preset_case("slider-tilted-left", SliderCrankGeometry(0.08, 0.2, offset=0.03), 1.0, branch="left",
          ground_angle=0.4, gravity=(0.0, -9.81), loads=LOADS, masses=MASSES),
 ], ids=lambda c: c.name)
 def test_every_drive_branch_and_load_term_agrees_with_the_reference(case: Case) -> None:

@@ -15,6 +15,7 @@ from hypothesis import given, settings, strategies as st
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.kinematics import cross, pose_of
+from mechcheck.analytic.presets import redrawn
 from mechcheck.analytic.solution import quantity_kind
 
 from .closed_form import forces, superposition, virtual_work
@@ -38,7 +39,7 @@ def force_scale(values: dict[str, float]) -> float:
 
 def torque_scale(case: Case, values: dict[str, float]) -> float:
     return max([abs(v) for q, v in values.items() if quantity_kind(q) == "torque"]
-               + [force_scale(values) * case.geometry.scale])
+               + [force_scale(values) * case.scale])
 
 
 def link_resultants(case: Case, values: dict[str, float]) -> dict[int, tuple[float, float, float]]:
@@ -60,18 +61,18 @@ def link_resultants(case: Case, values: dict[str, float]) -> dict[int, tuple[flo
     for link, parts in contributions.items():
         force = sum((fv for fv, _ in parts), np.zeros(2))
         moment = sum(float(cross(r, fv)) for fv, r in parts)
-        for ld in (x for x in case.loads if x.link == link):
+        for ld in (x for x in case.preset.loads if x.link == link):
             r, _, _ = (v[0] for v in p.point(link, ld.at))
             force = force + np.array(ld.force)
             moment += float(cross(r, np.array(ld.force))) + ld.torque
-        m = case.mass_of(link)
+        m = case.preset.mass_of(link)
         if m is not None:
             r, _, acc = (v[0] for v in p.point(link, m.com))
             applied = m.mass * (np.array(case.gravity) - acc)
             force = force + applied
             moment += float(cross(r, applied)) - m.inertia * float(p.links[link].alpha[0])
-        if link == case.drive_link:
-            moment += values[f"T1{case.drive_link}"]
+        if link == case.preset.drive_link:
+            moment += values[f"T1{case.preset.drive_link}"]
         if link == 4 and case.mechanism == "slider_crank":
             moment += values["M14"]
         net[link] = (float(force[0]), float(force[1]), moment)
@@ -95,7 +96,7 @@ def test_virtual_work_torque_equals_matrix_method(case: Case) -> None:
     """The power equation's drive torque equals the matrix method's, inertia included."""
     a = forces.solve(case).values
     b = virtual_work.solve(case)
-    q = f"T1{case.drive_link}"
+    q = f"T1{case.preset.drive_link}"
     assert b.status == "ok"
     assert close(b.values[q], a[q], torque_scale(case, dict(a)))
 
@@ -118,9 +119,9 @@ def rotated(case: Case, phi: float) -> Case:
     def turn(v: tuple[float, float]) -> tuple[float, float]:
         return (c * v[0] - s * v[1], s * v[0] + c * v[1])
 
-    return replace(case, theta12=case.theta12 + phi, ground_angle=case.ground_angle + phi,
+    return redrawn(case, theta12=case.preset.theta12 + phi, ground_angle=case.preset.ground_angle + phi,
                    gravity=turn(case.gravity),
-                   loads=tuple(replace(ld, force=turn(ld.force)) for ld in case.loads))
+                   loads=tuple(replace(ld, force=turn(ld.force)) for ld in case.preset.loads))
 
 
 @SETTINGS
@@ -134,7 +135,7 @@ def test_rotating_the_problem_rotates_the_answer(case: Case, phi: float) -> None
     for j in ("12", "23", "34", "14"):
         x, y = a[f"F{j}_x"], a[f"F{j}_y"]
         assert close(b[f"F{j}_x"], c * x - s * y, fs) and close(b[f"F{j}_y"], s * x + c * y, fs)
-    for q in (f"T1{case.drive_link}", "M14"):
+    for q in (f"T1{case.preset.drive_link}", "M14"):
         if q in a:
             assert close(b[q], a[q], ts), q
     assert abs(math.remainder(b["theta13"] - a["theta13"] - phi, math.tau)) < 1e-9
@@ -145,8 +146,8 @@ def test_rotating_the_problem_rotates_the_answer(case: Case, phi: float) -> None
 def test_results_are_linear_in_the_loads(case: Case, k: float) -> None:
     """Without friction, scaling every load by k scales every reaction and the torque by k."""
     a = dict(forces.solve(case).values)
-    scaled = replace(case, loads=tuple(replace(ld, force=(k * ld.force[0], k * ld.force[1]),
-                                               torque=k * ld.torque) for ld in case.loads))
+    scaled = redrawn(case, loads=tuple(replace(ld, force=(k * ld.force[0], k * ld.force[1]),
+                                               torque=k * ld.torque) for ld in case.preset.loads))
     b = forces.solve(scaled).values
     for q, v in a.items():
         if quantity_kind(q) == "pose":
@@ -160,9 +161,9 @@ def test_results_are_linear_in_the_loads(case: Case, k: float) -> None:
 def test_friction_never_lowers_the_input_power(case: Case) -> None:
     """With friction the drive supplies at least the frictionless input power (friction only dissipates)."""
     with_f = forces.solve(case)
-    without = forces.solve(replace(case, friction=None))
-    q = f"T1{case.drive_link}"
-    speed = float(pose_of(case, omega=float(case.input_sense)).links[case.drive_link].omega[0])
+    without = forces.solve(redrawn(case, friction=None))
+    q = f"T1{case.preset.drive_link}"
+    speed = float(pose_of(case, omega=float(case.preset.input_sense)).links[case.preset.drive_link].omega[0])
     power_f, power_0 = with_f.values[q] * speed, without.values[q] * speed
     assert power_f >= power_0 - IDENTITY_RTOL * torque_scale(case, dict(without.values))
 

@@ -8,6 +8,7 @@ from hypothesis import example, given, settings
 
 from mechcheck.analytic.case import Case, FourBarGeometry, Motion, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.presets import preset_case
 
 from .strategies import cases
 
@@ -26,27 +27,27 @@ H2 = 2e-4
 
 def positions(case: Case, theta12: np.ndarray) -> np.ndarray:
     p = pose_of(case, theta12, omega=0.0, alpha=0.0)
-    rows = [p.theta13, p.theta14 if p.s14 is None else p.s14 / case.geometry.scale]
-    rows += [p.point(k, (0.03, -0.02))[0][:, i] / case.geometry.scale for k in (2, 3, 4)
+    rows = [p.theta13, p.theta14 if p.s14 is None else p.s14 / case.scale]
+    rows += [p.point(k, (0.03, -0.02))[0][:, i] / case.scale for k in (2, 3, 4)
              for i in (0, 1)]
     return np.stack(rows, axis=1)
 
 
 def first_difference(case: Case, h: float) -> np.ndarray:
     """dq/dθ12 by the central difference with step h."""
-    q = np.unwrap(positions(case, np.array([case.theta12 - h, case.theta12 + h])), axis=0)
+    q = np.unwrap(positions(case, np.array([case.preset.theta12 - h, case.preset.theta12 + h])), axis=0)
     return (q[1] - q[0]) / (2 * h)
 
 
 def second_difference(case: Case, h: float) -> np.ndarray:
     """d²q/dθ12² by the central second difference with step h."""
-    q = np.unwrap(positions(case, np.array([case.theta12 - h, case.theta12, case.theta12 + h])),
-                  axis=0)
+    t = case.preset.theta12
+    q = np.unwrap(positions(case, np.array([t - h, t, t + h])), axis=0)
     return (q[2] - 2 * q[1] + q[0]) / h**2
 
 
 #: The draw whose positions round to ~100 eps (see the test).
-THIN_CROSSED = Case("thin-crossed", FourBarGeometry(0.05965875594280917, 0.7130397078480268,
+THIN_CROSSED = preset_case("thin-crossed", FourBarGeometry(0.05965875594280917, 0.7130397078480268,
                                                     0.05, 0.7130397078480268),
                     0.0, branch="crossed", ground_angle=1.330078125, motion=Motion(1.0, 0.0))
 
@@ -56,7 +57,7 @@ THIN_CROSSED = Case("thin-crossed", FourBarGeometry(0.05965875594280917, 0.71303
 @example(case=THIN_CROSSED)
 def test_velocities_and_accelerations_are_derivatives_of_positions(case: Case) -> None:
     """ω, α of links 3 and 4, slider ṡ, s̈ and any body point's v, a equal d/dt of the positions."""
-    w, a = case.motion.omega, case.motion.alpha
+    w, a = case.preset.motion.omega, case.preset.motion.alpha
     # Next to an assembly limit q' grows like 1/c and q changes its character within
     # Δθ12 ~ c² (c: the distance in cos θ13), so the steps shrink like 1/|q'|², with
     # |q'| taken from a plain difference of the positions, never from the code under test.
@@ -77,11 +78,11 @@ def test_velocities_and_accelerations_are_derivatives_of_positions(case: Case) -
     d2q = estimates[1]
     d2q_error = np.max([np.abs(e - d2q) for e in estimates], axis=0)
     p = pose_of(case)
-    rate = [p.links[3].omega, p.links[4].omega if p.s14 is None else p.s14_dot / case.geometry.scale]
-    rate += [p.point(k, (0.03, -0.02))[1][:, i] / case.geometry.scale for k in (2, 3, 4)
+    rate = [p.links[3].omega, p.links[4].omega if p.s14 is None else p.s14_dot / case.scale]
+    rate += [p.point(k, (0.03, -0.02))[1][:, i] / case.scale for k in (2, 3, 4)
              for i in (0, 1)]
-    acc = [p.links[3].alpha, p.links[4].alpha if p.s14 is None else p.s14_ddot / case.geometry.scale]
-    acc += [p.point(k, (0.03, -0.02))[2][:, i] / case.geometry.scale for k in (2, 3, 4)
+    acc = [p.links[3].alpha, p.links[4].alpha if p.s14 is None else p.s14_ddot / case.scale]
+    acc += [p.point(k, (0.03, -0.02))[2][:, i] / case.scale for k in (2, 3, 4)
             for i in (0, 1)]
     expected_rate = dq * w
     expected_acc = d2q * w**2 + dq * a
@@ -95,7 +96,7 @@ def test_velocities_and_accelerations_are_derivatives_of_positions(case: Case) -
 def test_a_short_rod_at_dead_centre_has_the_closed_form_acceleration() -> None:
     """The random draw whose shrunk steps met the second difference's rounding: s =
     a2·cos θ + √(a3² − a2²·sin²θ), so at θ = 0 s̈ = −a2·ω²·(1 + a2/a3) exactly."""
-    case = Case("short-rod", SliderCrankGeometry(0.96875, 0.05), 0.0, motion=Motion(1.0, 0.0))
+    case = preset_case("short-rod", SliderCrankGeometry(0.96875, 0.05), 0.0, motion=Motion(1.0, 0.0))
     p = pose_of(case)
     assert p.s14_ddot is not None
     assert float(p.s14_ddot[0]) == pytest.approx(-0.96875 * (1 + 0.96875 / 0.05), rel=1e-12)
@@ -107,7 +108,7 @@ def test_a_short_rod_at_dead_centre_has_the_closed_form_acceleration() -> None:
 def test_pose_closes_the_loop_with_the_right_lengths(case: Case) -> None:
     """|AB| = a3, |B0B| = a4 (or B on the slide line at the offset), on the stated branch."""
     p = pose_of(case)
-    g = case.geometry
+    g = case.preset.geometry
     a, b = p.joints["A"][0], p.joints["B"][0]
     assert np.isclose(np.linalg.norm(b - a), g.a3, rtol=1e-12)
     assert np.isclose(np.linalg.norm(a), g.a2, rtol=1e-12)
@@ -118,10 +119,10 @@ def test_pose_closes_the_loop_with_the_right_lengths(case: Case) -> None:
         b0 = p.joints["B0"][0]
         d, e = b0 - a, b - a
         side = d[0] * e[1] - d[1] * e[0]
-        assert (side >= 0) if case.branch == "open" else (side <= 0)
+        assert (side >= 0) if case.preset.branch == "open" else (side <= 0)
     else:
-        u = np.array([np.cos(case.ground_angle), np.sin(case.ground_angle)])
+        u = np.array([np.cos(case.preset.ground_angle), np.sin(case.preset.ground_angle)])
         n = np.array([-u[1], u[0]])
         assert np.isclose(b @ n, g.offset, atol=1e-12 * g.scale)
         along = (b - a) @ u
-        assert (along >= 0) if case.branch == "right" else (along <= 0)
+        assert (along >= 0) if case.preset.branch == "right" else (along <= 0)

@@ -14,7 +14,7 @@ from mechcheck.analytic.case import Case, FourBarGeometry
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_forces import solve_linkage
 from mechcheck.analytic.linkage_kinematics import solve_pose
-from mechcheck.analytic.presets import FOUR_BAR_NAMES, SLIDER_CRANK_NAMES, linkage_of
+from mechcheck.analytic.presets import FOUR_BAR_NAMES, SLIDER_CRANK_NAMES, preset_case, redrawn
 
 from .closed_form import forces
 from .strategies import MAX_CONDITION, cases
@@ -35,11 +35,11 @@ def scales(values: dict[str, float], length: float) -> tuple[float, float]:
 def test_presets_through_the_generic_engine_equal_the_closed_forms(case: Case) -> None:
     """A random four-bar or slider-crank (static, dynamic, friction; any branch, ground
     angle, offset) written as a linkage has the closed form's reactions and drive torque."""
-    assume(case.drive_link == 2)
+    assume(case.preset.drive_link == 2)
     closed = forces.solve(case)
-    generic = solve_linkage(linkage_of(case))
+    generic = solve_linkage(case.linkage)
     names = FOUR_BAR_NAMES if case.mechanism == "four_bar" else SLIDER_CRANK_NAMES
-    force, torque = scales(dict(closed.values), case.geometry.scale)
+    force, torque = scales(dict(closed.values), case.scale)
     for legacy, name in names.items():
         expected = closed.values[legacy]
         got = float(generic.values[name][0])
@@ -57,25 +57,25 @@ def test_presets_through_the_generic_engine_equal_the_closed_forms(case: Case) -
 def test_a_driven_preset_reaches_the_closed_form_pose_and_motion(case: Case) -> None:
     """Driving the crank 40° on from the drawn pose reaches the closed form's coupler angle,
     angular velocity and acceleration at θ12 + 40° on the same branch (continuation)."""
-    assume(case.drive_link == 2)
-    later = case.with_(theta12=case.theta12 + math.radians(40.0))
+    assume(case.preset.drive_link == 2)
+    later = redrawn(case, theta12=case.preset.theta12 + math.radians(40.0))
     assume(forces.solve(later).status == "ok")
     # No lock or branch point on the way: where the path passes a singular pose (an
     # isosceles slider-crank's B through A0) the branches meet and either may follow.
-    path = forces.solve_poses(case, np.linspace(case.theta12, later.theta12, 81))
+    path = forces.solve_poses(case, np.linspace(case.preset.theta12, later.preset.theta12, 81))
     assume(bool(np.all(path.condition < MAX_CONDITION)))
     # A change-point geometry folds flat at one pose, where the branches cross: sampled
     # conditions can step over that one pose. For a four-bar that is s + l = p + q; for a
     # slider-crank a3 = a2 + |e|, where the rod's reach of the slide line just touches its
     # limit (the rod stands square to the slide) instead of crossing it (isosceles, e = 0:
     # B passes through A0). Seen: a2 = a3 = 1 m, θ12 = 1 rad followed the other branch.
-    g = case.geometry
+    g = case.preset.geometry
     if isinstance(g, FourBarGeometry):
         s, p, q, l_ = sorted((g.a1, g.a2, g.a3, g.a4))
         assume(abs(s + l_ - p - q) > 1e-3 * l_)
     else:
         assume(abs(g.a3 - g.a2 - abs(g.offset)) > 1e-3 * g.scale)
-    linkage = linkage_of(case)
+    linkage = case.linkage
     moved = solve_pose(linkage, [math.radians(40.0)])
     start, end = pose_of(case), pose_of(later)
     phi, omega, alpha = (float(v[0]) for v in moved.angle("coupler"))
@@ -88,10 +88,10 @@ def test_a_driven_preset_reaches_the_closed_form_pose_and_motion(case: Case) -> 
 def test_a_non_grashof_crank_locks_where_the_theory_says() -> None:
     """The non-Grashof four-bar (100, 229, 99, 300) drawn at θ12 = 0 locks at ±97.2616°
     (|A B0| reaches a3 + a4 = 328: cos θ12 = (300² + 100² − 328²)/(2·300·100))."""
-    case = Case("jam", FourBarGeometry(0.300, 0.100, 0.229, 0.099), 0.0)
+    case = preset_case("jam", FourBarGeometry(0.300, 0.100, 0.229, 0.099), 0.0)
     limit = math.degrees(math.acos((0.300**2 + 0.100**2 - 0.328**2) / (2 * 0.300 * 0.100)))
     assert limit == pytest.approx(97.2616, abs=1e-4)
-    pose = solve_pose(linkage_of(case), np.radians([[50.0], [120.0], [-150.0]]), [0.0], [0.0])
+    pose = solve_pose(case.linkage, np.radians([[50.0], [120.0], [-150.0]]), [0.0], [0.0])
     assert pose.assembled.tolist() == [True, False, False]
     reached = np.degrees(pose.locked_at[1:] * np.radians([120.0, -150.0]))
     assert reached == pytest.approx([limit, -limit], abs=1e-6)

@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+from mechcheck.analytic.presets import preset_case
 from mechcheck.cli import app
 
 
@@ -18,10 +19,10 @@ def drawn_four_bar() -> str:
     """Seed E1's four-bar (a1..a4 = 140, 80, 100, 120 mm) drawn at θ12 = 60° on the open
     branch, with a rocker load of 100 N at 20° at D, 90 mm from B0 along the rocker: the
     points come from the closed-form position analysis, in mm."""
-    from mechcheck.analytic.case import Case, FourBarGeometry
+    from mechcheck.analytic.case import FourBarGeometry
     from mechcheck.analytic.kinematics import pose_of
 
-    pose = pose_of(Case("e1", FourBarGeometry(0.14, 0.08, 0.10, 0.12), math.radians(60.0)))
+    pose = pose_of(preset_case("e1", FourBarGeometry(0.14, 0.08, 0.10, 0.12), math.radians(60.0)))
     p = {name: 1000 * xy[0] for name, xy in pose.joints.items()}
     p["D"] = p["B0"] + 0.75 * (p["B"] - p["B0"])
     points = "\n".join(f"{n} = [{float(v[0])!r}, {float(v[1])!r}]" for n, v in p.items())

@@ -64,7 +64,7 @@ def test_seed_e2_equals_the_slider_cranks_closed_form_statics() -> None:
     want = forces.solve_poses(case, theta).values
     linkage = as_linkage(case).linkage
     assert linkage.assur_plan is not None
-    got = static_results(linkage.assur_plan, (theta - case.theta12)[:, None]).values
+    got = static_results(linkage.assur_plan, (theta - case.preset.theta12)[:, None]).values
     for legacy, name in SLIDER_CRANK_NAMES.items():
         scale = max(float(np.nanmax(np.abs(want[legacy]))), 1e-2)   # M_slide is 0 here
         assert np.nanmax(np.abs(got[name] - want[legacy])) <= RTOL * scale, name

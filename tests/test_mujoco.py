@@ -25,7 +25,7 @@ import mechcheck
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Mass, Motion, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_backends import analytic_results
-from mechcheck.analytic.presets import as_linkage, linkage_of
+from mechcheck.analytic.presets import as_linkage, preset_case, redrawn
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import driven_motion, lead_limit
 from mechcheck.sim_models.mujoco import backend as _mujoco, settle as mj_settle
@@ -90,10 +90,10 @@ MASSES_SC = (Mass(2, 0.4, (0.02, 0.0), 2e-4), Mass(3, 0.6, (0.1, 0.0), 2e-3), Ma
 
 def tilted_slider(name: str, **changes: object) -> Case:
     """An offset slider-crank on a slide tilted 15°, loaded on the slider and the rod."""
-    base = Case(name=name, geometry=SliderCrankGeometry(0.05, 0.2, 0.02),
+    base = preset_case(name=name, geometry=SliderCrankGeometry(0.05, 0.2, 0.02),
                 theta12=math.radians(40.0), ground_angle=math.radians(15.0),
                 loads=(Load(4, (0.0, 0.0), (-200.0, 30.0)), Load(3, (0.1, 0.01), (5.0, -20.0))))
-    return base.with_(**changes)
+    return redrawn(base, **changes)
 
 
 STATIC_CASES = [
@@ -101,24 +101,24 @@ STATIC_CASES = [
     slidercrank_e2(with_friction=False),
     tilted_slider("slider-offset-tilted"),
     tilted_slider("slider-left-branch", branch="left"),
-    fourbar_e1().with_(name="fourbar-crossed", branch="crossed"),
-    fourbar_e1().with_(name="fourbar-gravity", gravity=(0.0, -9.81), masses=MASSES_4,
+    redrawn(fourbar_e1(), name="fourbar-crossed", branch="crossed"),
+    redrawn(fourbar_e1(), name="fourbar-gravity", gravity=(0.0, -9.81), masses=MASSES_4,
                        ground_angle=math.radians(10.0)),
-    fourbar_e1().with_(name="fourbar-drive-on-4", drive_link=4),
+    redrawn(fourbar_e1(), name="fourbar-drive-on-4", drive_link=4),
 ]
 DYNAMIC_CASES = [
-    fourbar_e1().with_(name="fourbar-dynamic", masses=MASSES_4, gravity=(0.0, -9.81),
+    redrawn(fourbar_e1(), name="fourbar-dynamic", masses=MASSES_4, gravity=(0.0, -9.81),
                        motion=Motion(-10.0, 5.0)),
-    fourbar_e1().with_(name="fourbar-dynamic-drive-4", masses=MASSES_4, drive_link=4,
+    redrawn(fourbar_e1(), name="fourbar-dynamic-drive-4", masses=MASSES_4, drive_link=4,
                        motion=Motion(-10.0, 5.0)),
-    fourbar_e1().with_(name="fourbar-dynamic-crossed", masses=MASSES_4, branch="crossed",
+    redrawn(fourbar_e1(), name="fourbar-dynamic-crossed", masses=MASSES_4, branch="crossed",
                        motion=Motion(8.0, -20.0)),
     tilted_slider("slider-dynamic", masses=MASSES_SC, gravity=(0.0, -9.81),
                   motion=Motion(-30.0, 10.0)),
 ]
 FRICTION_CASES = [
     slidercrank_e2(),
-    fourbar_e1().with_(name="fourbar-friction", friction=Friction(
+    redrawn(fourbar_e1(), name="fourbar-friction", friction=Friction(
         mu=0.15, pin_radius={"A0": 0.01, "A": 0.012, "B": 0.008, "B0": 0.01}, direction=1)),
     tilted_slider("slider-friction-slide", friction=Friction(
         mu=0.1, pin_radius={"A0": 0.01, "A": 0.01, "B": 0.01}, slide_mu=0.12, direction=-1)),
@@ -184,7 +184,7 @@ def test_lead_in_stops_short_of_a_rocker_dead_point() -> None:
     driver = linkage.linkage.drivers[0]
     # By hand, from the closed-form kinematics: the rocker's range about θ14* on a 0.005°
     # grid of the crank, and when the prescribed rocker motion reaches its top (t < 0).
-    grid = case.theta12 + np.radians(np.linspace(-180.0, 180.0, 72001))
+    grid = case.preset.theta12 + np.radians(np.linspace(-180.0, 180.0, 72001))
     turned = pose_of(case, grid).links[4].angle - pose_of(case).links[4].angle[0]
     top = float(np.max(np.angle(np.exp(1j * turned))))
     v, a = driver.velocity, driver.acceleration
@@ -427,7 +427,7 @@ def test_a_batched_sweep_to_condition_number_ten_thousand_settles_every_pose() -
     case = fourbar_e1()
     theta = math.pi - np.radians(np.geomspace(0.2, 0.0115, 17))
     for t, sim in zip(theta, sweep(case, theta), strict=True):
-        at = case.with_(theta12=float(t))
+        at = redrawn(case, theta12=float(t))
         assert sim.status == "ok", f"θ12 = {np.degrees(t):.4f}°: {sim.message}"
         assert_solution_close(at, sim, complete=True)
 
@@ -440,9 +440,9 @@ def test_settled_statics_reach_condition_number_ten_thousand() -> None:
     """Seed E1 at condition number 1.03e4 settles within the static target, alone and in a
     batch (it was ``not_settled`` from condition number ~5300: the passes contracted by
     0.5–0.9 each and ran out)."""
-    case = fourbar_e1().with_(theta12=math.pi - math.radians(REACH_DELTA))
+    case = redrawn(fourbar_e1(), theta12=math.pi - math.radians(REACH_DELTA))
     assert mechcheck.solve(case, "analytic").diagnostics["condition_number"] > 1e4
-    for sim in (settle(case), *sweep(fourbar_e1(), [case.theta12])):
+    for sim in (settle(case), *sweep(fourbar_e1(), [case.preset.theta12])):
         assert sim.status == "ok", sim.message
         assert sim.diagnostics["passes"] > 2
         assert_solution_close(case, sim, complete=True)
@@ -458,7 +458,7 @@ def test_sweep_next_to_the_change_point_settles_as_its_poses_alone() -> None:
     case = fourbar_e1()
     theta = math.pi - np.radians(np.geomspace(0.2, 0.0164, 15))
     for t, sim in zip(theta, sweep(case, theta), strict=True):
-        at = case.with_(theta12=float(t))
+        at = redrawn(case, theta12=float(t))
         assert mechcheck.solve(at, "analytic").diagnostics["condition_number"] < 3e4
         assert sim.status == "ok", f"θ12 = {np.degrees(t):.4f}°: {sim.message}"
         assert_solution_close(at, sim, complete=True)
@@ -474,7 +474,7 @@ def test_settled_statics_near_the_change_point_do_not_depend_on_luck(delta: floa
     """Seed E1 0.817° and 0.332° from its change point (condition numbers 145 and 357) settle
     within the static target, as 2.01° and 0.135° do: they were ``not_settled`` (3000 steps on
     a rounding floor of 1–3e-8 that the stop rule only took below 1e-8)."""
-    case = fourbar_e1().with_(theta12=math.pi - math.radians(float(delta)))
+    case = redrawn(fourbar_e1(), theta12=math.pi - math.radians(float(delta)))
     sim = settle(case)
     assert sim.status == "ok", sim.message
     assert_solution_close(case, sim, complete=True)
@@ -487,7 +487,7 @@ def test_settled_statics_are_monotonic_towards_the_change_point() -> None:
     theta = math.pi - np.radians(np.geomspace(2.0, 0.1, 14))
     for t, sim in zip(theta, sweep(case, theta), strict=True):
         assert sim.status == "ok", f"θ12 = {np.degrees(t):.4f}°: {sim.message}"
-        assert_solution_close(case.with_(theta12=float(t)), sim, complete=True)
+        assert_solution_close(redrawn(case, theta12=float(t)), sim, complete=True)
 
 
 def test_settled_statics_next_to_the_change_point() -> None:
@@ -497,7 +497,7 @@ def test_settled_statics_next_to_the_change_point() -> None:
     theta = np.radians([178.0, 179.0, 181.0, 182.0])
     for t, sim in zip(theta, sweep(case, theta), strict=True):
         assert sim.diagnostics["passes"] >= 2
-        assert_solution_close(case.with_(theta12=float(t)), sim, complete=True)
+        assert_solution_close(redrawn(case, theta12=float(t)), sim, complete=True)
 
 
 def test_whole_cycle_sweep_is_within_tolerance() -> None:
@@ -508,7 +508,7 @@ def test_whole_cycle_sweep_is_within_tolerance() -> None:
     assert [i for i, s in enumerate(sols) if s.status != "ok"] == [180]
     for t, sim in zip(theta, sols, strict=True):
         if sim.status == "ok":
-            assert_solution_close(case.with_(theta12=float(t)), sim, complete=True)
+            assert_solution_close(redrawn(case, theta12=float(t)), sim, complete=True)
 
 
 def test_change_point_case_is_singular() -> None:
@@ -541,7 +541,7 @@ def test_sweep_marks_change_point_singular() -> None:
         assert list(status["status"]) == ["ok", "ok", "singular", "ok"]
         regular = np.radians(np.delete(theta_deg, 2))
         for t, solution in zip(regular, sweep(case, regular, backend), strict=True):
-            assert_solution_close(case.with_(theta12=float(t)), solution, complete=True)
+            assert_solution_close(redrawn(case, theta12=float(t)), solution, complete=True)
 
 
 def test_unsettled_run_reports_no_forces(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -558,7 +558,7 @@ def test_unsettled_run_reports_no_forces(monkeypatch: pytest.MonkeyPatch) -> Non
 def test_golden_xml_is_reproduced(name: str) -> None:
     """The committed MJCF of each seed case, built as its linkage, is exactly what the builder
     produces today."""
-    assert model_xml(name, linkage_of(builtin(name))) == (GOLDEN / f"{name}.xml").read_text()
+    assert model_xml(name, builtin(name).linkage) == (GOLDEN / f"{name}.xml").read_text()
 
 
 def test_model_is_planar_fourbar() -> None:
@@ -573,8 +573,8 @@ def test_model_is_planar_fourbar() -> None:
 
 def test_geometry_types_unchanged() -> None:
     """The seed cases use the shared Case geometry types (no private copies)."""
-    assert isinstance(fourbar_e1().geometry, FourBarGeometry)
-    assert isinstance(slidercrank_e2().geometry, SliderCrankGeometry)
+    assert isinstance(fourbar_e1().preset.geometry, FourBarGeometry)
+    assert isinstance(slidercrank_e2().preset.geometry, SliderCrankGeometry)
 
 
 def test_mujoco_warnings_go_to_diagnostics_not_to_a_file(tmp_path: Path,

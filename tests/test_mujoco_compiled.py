@@ -12,7 +12,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from mechcheck.analytic.presets import as_linkage, kept_linkage, translated
+from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.mujoco import _fast, backend as _mujoco, batch_settle
 from mechcheck.sweep import gated_poses
@@ -94,16 +94,6 @@ def test_an_arena_laid_out_elsewhere_falls_back_to_python(monkeypatch: pytest.Mo
 
     monkeypatch.setattr(_fast, "check_arena", moved)
     assert identical(sweep(case, values, "mujoco_solve"), expected)
-
-
-def test_a_kept_translation_is_the_translation() -> None:
-    """:func:`as_linkage` keeps the last translations (the same object again for the same
-    Case), equal to one made anew; another pose is another translation."""
-    e1 = builtin("seed-E1-as-stated")
-    kept_linkage.cache_clear()
-    assert as_linkage(e1) is as_linkage(e1)
-    assert as_linkage(e1) == translated(e1) and as_linkage(e1) is not translated(e1)
-    assert as_linkage(e1.with_(theta12=e1.theta12 + 0.1)) != as_linkage(e1)
 
 
 def settled_sweep(name: str) -> list[Solution]:

@@ -21,7 +21,7 @@ from mechcheck.analytic.case import Case, CaseError, Friction, Load, Motion
 from mechcheck.analytic.linkage import Joint, Link, Linkage, PointLoad
 from mechcheck.analytic.linkage_backends import analytic_results, solution_from, solve
 from mechcheck.analytic.linkage_kinematics import solve_pose
-from mechcheck.analytic.presets import linkage_of
+from mechcheck.analytic.presets import redrawn
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import linkage_case
 from mechcheck.linkage_file import LinkageCaseSpec
@@ -152,7 +152,7 @@ def test_a_loop_without_a_revolute_joint_is_refused_with_the_reason() -> None:
     linkage = prismatic_triangle()
     with pytest.raises(Unbuildable, match="ga, ab, gb"):
         spanning_tree(linkage)
-    case = Case(name="prismatic-loop", geometry=linkage, theta12=0.0)
+    case = Case(name="prismatic-loop", geometry=linkage)
     for backend in (settle, solve_at_pose):
         sim = backend(case)
         assert sim.status == "not_applicable"
@@ -569,11 +569,11 @@ def test_four_bar_load_next_to_a_pin_keeps_its_moment(backend: Any,
     (1 N) times the mechanism's length (measured: 2.2e-12 N·m off), 30× below the moment."""
     case = builtin_cases()["seed-E1-as-stated"]
     force = (0.0, 1.0)
-    case = case.with_(loads=(Load(2, at, force, 0.0),), masses=())
-    c, s = np.cos(case.theta12), np.sin(case.theta12)
+    case = redrawn(case, loads=(Load(2, at, force, 0.0),), masses=())
+    c, s = np.cos(case.preset.theta12), np.sin(case.preset.theta12)
     r = (c * at[0] - s * at[1], s * at[0] + c * at[1])
     expected = -(r[0] * force[1] - r[1] * force[0])
-    floor = SETTLE_RTOL * 1.0 * case.geometry.scale if backend is settle else 0.0
+    floor = SETTLE_RTOL * 1.0 * case.scale if backend is settle else 0.0
     assert backend(case).values["T12"] == pytest.approx(expected, rel=1e-6, abs=floor)
 
 
@@ -582,10 +582,10 @@ def test_dampers_at_every_pin_of_a_driven_four_bar() -> None:
     closes the loop, where MuJoCo has no joint to damp (the model was refused before); its
     damper is the couple −c·q̇ from MuJoCo's joint rates. The reading agrees with the
     closed-form D'Alembert answer within the dynamic tolerance, as pymunk's does."""
-    case = builtin_cases()["seed-E1-as-stated"].with_(
+    case = redrawn(builtin_cases()["seed-E1-as-stated"],
         name="e1-dampers", motion=Motion(5.0, 0.0),
         friction=Friction(viscous={"A": 0.02, "B": 0.03, "B0": 0.05}))
-    assert spanning_tree(linkage_of(case)).closures
+    assert spanning_tree(case.linkage).closures
     for backend in ("mujoco", "pymunk"):
         assert_solution_close(case, mechcheck.solve(case, backend), complete=True)
 

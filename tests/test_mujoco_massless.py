@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from mechcheck.analytic.case import Case, FourBarGeometry, Friction, Load, Motion, SliderCrankGeometry
+from mechcheck.analytic.presets import preset_case, redrawn
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
 from mechcheck.sim_models.mujoco import backend as _mujoco
 from mechcheck.testing import assert_solution_close
@@ -33,17 +34,17 @@ SLIDER_CRANK = SliderCrankGeometry(a2=0.1, a3=0.3)
 
 
 def unloaded_fourbar() -> Case:
-    return Case("fourbar-unloaded-massless", SEED_FOURBAR, math.radians(60.0),
+    return preset_case("fourbar-unloaded-massless", SEED_FOURBAR, math.radians(60.0),
                 motion=Motion(omega=5.0))
 
 
 def unloaded_slidercrank() -> Case:
-    return Case("slidercrank-unloaded-massless", SLIDER_CRANK, math.radians(50.0),
+    return preset_case("slidercrank-unloaded-massless", SLIDER_CRANK, math.radians(50.0),
                 motion=Motion(omega=5.0))
 
 
 def unloaded_friction_slidercrank() -> Case:
-    return Case("slidercrank-unloaded-friction", SLIDER_CRANK, math.radians(50.0),
+    return preset_case("slidercrank-unloaded-friction", SLIDER_CRANK, math.radians(50.0),
                 friction=Friction(mu=0.1, pin_radius={"A": 0.01}, direction=1))
 
 
@@ -86,14 +87,14 @@ def test_unloaded_massless_fourbar_reads_zero_over_a_sweep() -> None:
     case = unloaded_fourbar()
     angles = np.radians(np.arange(10.0, 180.0, 20.0))
     for theta, sim in zip(angles, sweep(case, angles), strict=True):
-        assert_solution_close(case.with_(theta12=float(theta)), sim, complete=True)
+        assert_solution_close(redrawn(case, theta12=float(theta)), sim, complete=True)
 
 
 def test_fictitious_inertia_of_a_loaded_massless_fourbar_is_removed() -> None:
     """A massless four-bar at 10 rad/s under 1 N loads carries a fictitious inertia worth
     more than the dynamic tolerance (m_f·ω²·L ≈ 1e-2 kg · 100 s⁻² · 0.1 m ≈ 0.1 N), and
     its reading still matches the massless D'Alembert answer within that tolerance."""
-    case = Case("fourbar-massless-light-loads", SEED_FOURBAR, math.radians(60.0),
+    case = preset_case("fourbar-massless-light-loads", SEED_FOURBAR, math.radians(60.0),
                 loads=(Load(4, at=(0.09, 0.0), force=(0.3, 1.0)),
                        Load(3, at=(0.05, 0.02), force=(-0.5, 0.0))),
                 motion=Motion(omega=10.0, alpha=20.0))
@@ -109,7 +110,7 @@ def test_lightly_loaded_quasi_static_friction_reads_no_inertia() -> None:
     """A slider-crank with pin and slide friction under a 0.05 N load, driven quasi-statically
     on heavy fictitious links, gives the static friction-circle answer: the links' inertia
     (~1e-4 N, 2e-3 of the load) is not part of the reading."""
-    case = Case("slidercrank-friction-light-load", SLIDER_CRANK, math.radians(50.0),
+    case = preset_case("slidercrank-friction-light-load", SLIDER_CRANK, math.radians(50.0),
                 loads=(Load(4, force=(-0.05, 0.0)),),
                 friction=Friction(mu=0.1, pin_radius={"A0": 0.01, "A": 0.01, "B": 0.01},
                                   slide_mu=0.12, direction=1))

@@ -18,7 +18,7 @@ import mechcheck
 from mechcheck.analytic.case import Case, Friction, Load, Mass, Motion, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_kinematics import solve_pose
-from mechcheck.analytic.presets import as_linkage
+from mechcheck.analytic.presets import as_linkage, preset_case, redrawn
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
 from mechcheck.sim_models.convergence import LEAD_AGREEMENT_RTOL, TIMESTEP_AGREEMENT_RTOL
@@ -57,7 +57,7 @@ def assert_agrees(sol: Solution, case: Case) -> None:
 
 
 def slider_offset_tilted() -> Case:
-    return Case(name="slider-offset-tilted", geometry=SliderCrankGeometry(0.1, 0.35, offset=0.04),
+    return preset_case(name="slider-offset-tilted", geometry=SliderCrankGeometry(0.1, 0.35, offset=0.04),
                 theta12=2.0, ground_angle=0.3,
                 loads=(Load(4, force=(-80.0, 10.0)), Load(3, at=(0.1, 0.02), force=(5.0, -30.0),
                                                          torque=1.5)))
@@ -65,13 +65,13 @@ def slider_offset_tilted() -> Case:
 
 STATIC_CASES = {
     "E1-fourbar": e1,
-    "E1-crossed": lambda: e1().with_(name="E1-crossed", branch="crossed"),
-    "E1-tilted-ground": lambda: e1().with_(name="E1-tilted", ground_angle=0.4, theta12=1.5),
+    "E1-crossed": lambda: redrawn(e1(), name="E1-crossed", branch="crossed"),
+    "E1-tilted-ground": lambda: redrawn(e1(), name="E1-tilted", ground_angle=0.4, theta12=1.5),
     "slider-offset-tilted": slider_offset_tilted,
-    "slider-left": lambda: slider_offset_tilted().with_(name="slider-left", branch="left"),
-    "E2-frictionless": lambda: e2().with_(name="E2-frictionless", friction=None),
-    "gravity-masses": lambda: e1().with_(name="E1-gravity", gravity=(0.0, -9.81), masses=MASSES),
-    "drive-on-link-4": lambda: e1().with_(name="E1-T14", drive_link=4),
+    "slider-left": lambda: redrawn(slider_offset_tilted(), name="slider-left", branch="left"),
+    "E2-frictionless": lambda: redrawn(e2(), name="E2-frictionless", friction=None),
+    "gravity-masses": lambda: redrawn(e1(), name="E1-gravity", gravity=(0.0, -9.81), masses=MASSES),
+    "drive-on-link-4": lambda: redrawn(e1(), name="E1-T14", drive_link=4),
 }
 
 
@@ -82,7 +82,7 @@ def test_settled_statics_match_analytic(make: object) -> None:
     sol = settle(case)
     assert_agrees(sol, case)
     assert sol.diagnostics["method"] == "settle"
-    assert float(sol.diagnostics["pose_drift"]) < 1e-9 * case.geometry.scale
+    assert float(sol.diagnostics["pose_drift"]) < 1e-9 * case.scale
 
 
 @pytest.mark.parametrize("make", STATIC_CASES.values(), ids=STATIC_CASES.keys())
@@ -100,21 +100,21 @@ def test_seed_e1_drive_torque_is_ccw_2_901() -> None:
 
 
 DRIVEN_CASES = {
-    "fourbar-masses-omega": lambda: e1().with_(name="dyn", masses=MASSES, motion=Motion(-10.0)),
-    "fourbar-accel-gravity": lambda: e1().with_(name="dyn-acc", masses=MASSES, gravity=(0, -9.81),
+    "fourbar-masses-omega": lambda: redrawn(e1(), name="dyn", masses=MASSES, motion=Motion(-10.0)),
+    "fourbar-accel-gravity": lambda: redrawn(e1(), name="dyn-acc", masses=MASSES, gravity=(0, -9.81),
                                                 motion=Motion(-10.0, 50.0)),
-    "fourbar-drive-link-4": lambda: e1().with_(name="dyn-T14", masses=MASSES, drive_link=4,
+    "fourbar-drive-link-4": lambda: redrawn(e1(), name="dyn-T14", masses=MASSES, drive_link=4,
                                                motion=Motion(-10.0, 50.0)),
-    "fourbar-massless-crank": lambda: e1().with_(name="dyn-massless", masses=MASSES[1:],
+    "fourbar-massless-crank": lambda: redrawn(e1(), name="dyn-massless", masses=MASSES[1:],
                                                  motion=Motion(-10.0)),
-    "slider-masses": lambda: e2().with_(name="sc-dyn", friction=None, motion=Motion(20.0),
+    "slider-masses": lambda: redrawn(e2(), name="sc-dyn", friction=None, motion=Motion(20.0),
                                         masses=(Mass(2, 2.0, (0.1, 0.0), 0.01),
                                                 Mass(3, 4.0, (0.3, 0.0), 0.2), Mass(4, 3.0))),
     # ω = 0 at θ12*: the crank is momentarily at rest there, read at t* by time.
-    "fourbar-from-rest": lambda: e1().with_(name="dyn-rest", masses=MASSES, gravity=(0, -9.81),
+    "fourbar-from-rest": lambda: redrawn(e1(), name="dyn-rest", masses=MASSES, gravity=(0, -9.81),
                                             motion=Motion(0.0, 50.0)),
     # ω(t) = 0.5 + 200·τ reverses 2.5 ms before θ12*, inside the lead-in.
-    "fourbar-omega-reverses": lambda: e1().with_(name="dyn-rev", masses=MASSES,
+    "fourbar-omega-reverses": lambda: redrawn(e1(), name="dyn-rev", masses=MASSES,
                                                  gravity=(0, -9.81), motion=Motion(0.5, 200.0)),
 }
 
@@ -166,14 +166,14 @@ def test_lead_in_stops_short_of_the_rocker_dead_point() -> None:
     # By hand (the crank's motion, θ12 + ω·t + α·t²/2): the dead point is 300–400 steps of
     # 1e-4 s before the instant, so a lead-in twice as long as the run's would pass it.
     t = -1e-4 * np.arange(400)
-    theta = case.theta12 + case.motion.omega * t + 0.5 * case.motion.alpha * t**2
+    theta = case.preset.theta12 + case.preset.motion.omega * t + 0.5 * case.preset.motion.alpha * t**2
     ratio = pose_of(case, theta, omega=1.0, alpha=0.0).links[4].omega
     assert 300 < int(np.argmax(ratio <= 0.0)) < 400
 
 
 def test_reading_next_to_a_rocker_dead_point_is_withheld_with_the_reason() -> None:
     """1.2° short of the dead point there is no room for a lead-in: no forces, and it says why."""
-    case = builtin_case("fourbar-dynamic-drive4").with_(theta12=math.radians(222.5))
+    case = redrawn(builtin_case("fourbar-dynamic-drive4"), theta12=math.radians(222.5))
     sol = settle(case)
     assert sol.status == "not_settled"
     assert not any(q[0] in "FTM" for q in sol.values)
@@ -183,7 +183,7 @@ def test_reading_next_to_a_rocker_dead_point_is_withheld_with_the_reason() -> No
 
 def test_rocker_clock_is_continuous_where_the_closed_form_theta14_wraps() -> None:
     """The closed-form θ14 jumps by 2π at θ12 = 180°; a lead-in across it still follows the rocker."""
-    case = builtin_case("fourbar-dynamic-drive4").with_(theta12=math.radians(180.5),
+    case = redrawn(builtin_case("fourbar-dynamic-drive4"), theta12=math.radians(180.5),
                                                         motion=Motion(12.0, 0.0))
     jump = np.diff(pose_of(case, np.radians([179.9, 180.1]), omega=0.0, alpha=0.0).theta14)
     assert abs(abs(float(jump[0])) - 2 * math.pi) < 0.1
@@ -192,17 +192,17 @@ def test_rocker_clock_is_continuous_where_the_closed_form_theta14_wraps() -> Non
 
 FRICTION_CASES = {
     "E2-pins-and-slide": e2,
-    "fourbar-pins-ccw": lambda: e1().with_(
+    "fourbar-pins-ccw": lambda: redrawn(e1(),
         name="E1-friction", friction=Friction(mu=0.2, direction=1,
                                               pin_radius={"A0": 0.01, "A": 0.01, "B": 0.01,
                                                           "B0": 0.01})),
-    "slider-tilted-pin-and-slide": lambda: slider_offset_tilted().with_(
+    "slider-tilted-pin-and-slide": lambda: redrawn(slider_offset_tilted(),
         name="sc-friction", friction=Friction(mu=0.15, pin_radius={"A": 0.02}, slide_mu=0.3,
                                               direction=1)),
-    "fourbar-viscous-dynamic": lambda: e1().with_(
+    "fourbar-viscous-dynamic": lambda: redrawn(e1(),
         name="E1-viscous", masses=MASSES, motion=Motion(-10.0),
         friction=Friction(viscous={"A0": 0.05, "A": 0.02, "B0": 0.03})),
-    "E2-coulomb-dynamic": lambda: e2().with_(
+    "E2-coulomb-dynamic": lambda: redrawn(e2(),
         name="E2-dynamic", motion=Motion(-3.0),
         masses=(Mass(3, 1.0, (0.4, 0.0), 0.05), Mass(4, 2.0))),
 }
@@ -219,7 +219,7 @@ def test_e2_friction_raises_torque_from_frictionless() -> None:
     """Friction makes E2's clockwise drive torque larger in magnitude (−22.90 vs −18.78 N·m)."""
     with_friction = settle(e2()).values["T12"]
     assert with_friction == pytest.approx(-22.897, rel=1e-4)
-    assert settle(e2().with_(friction=None)).values["T12"] == pytest.approx(-18.783, rel=1e-4)
+    assert settle(redrawn(e2(), friction=None)).values["T12"] == pytest.approx(-18.783, rel=1e-4)
 
 
 def test_sweep_keeps_the_change_point_from_pymunk_and_agrees_elsewhere() -> None:
@@ -231,14 +231,14 @@ def test_sweep_keeps_the_change_point_from_pymunk_and_agrees_elsewhere() -> None
     assert status.set_index("theta12").loc[180.0, "status"] == "singular"
     sols = sweep(e1(), np.radians(np.delete(theta_deg, 18)))
     for theta, sol in zip(np.delete(theta_deg, 18), sols, strict=True):
-        assert_agrees(sol, e1().with_(theta12=math.radians(theta)))
+        assert_agrees(sol, redrawn(e1(), theta12=math.radians(theta)))
 
 
 def test_sweep_with_constraint_solve_backend() -> None:
     """The re-posed constraint solve keeps rounding-level agreement along a continuation sweep."""
     theta = np.radians(np.arange(5.0, 360.0, 30.0))
     for k, sol in enumerate(sweep(e1(), theta, backend="pymunk_solve")):
-        assert_agrees(sol, e1().with_(theta12=float(theta[k])))
+        assert_agrees(sol, redrawn(e1(), theta12=float(theta[k])))
 
 
 def test_budget_exhausted_reports_not_settled_without_forces() -> None:
@@ -252,13 +252,13 @@ def test_budget_exhausted_reports_not_settled_without_forces() -> None:
 
 def test_singular_pose_is_withheld() -> None:
     """At the E1 change point statics is singular, so no force is reported."""
-    sol = mechcheck.solve(e1().with_(theta12=math.pi), "pymunk")
+    sol = mechcheck.solve(redrawn(e1(), theta12=math.pi), "pymunk")
     assert sol.status == "singular" and not sol.values and "not run" in sol.message
 
 
 def test_constraint_solve_declines_motion() -> None:
     """The fixed-pose solve cannot represent velocities, so a dynamic case is not_applicable."""
-    assert solve_at_pose(e1().with_(masses=MASSES, motion=Motion(5.0))).status == "not_applicable"
+    assert solve_at_pose(redrawn(e1(), masses=MASSES, motion=Motion(5.0))).status == "not_applicable"
 
 
 @pytest.mark.slow
@@ -268,4 +268,4 @@ def test_full_cycle_sweep_of_e1() -> None:
     regular = theta[~solve_poses(e1(), theta).singular]  # the harness sweeps only these
     assert len(regular) >= 355
     for t, sol in zip(regular, sweep(e1(), regular), strict=True):
-        assert_agrees(sol, e1().with_(theta12=float(t)))
+        assert_agrees(sol, redrawn(e1(), theta12=float(t)))

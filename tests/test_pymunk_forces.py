@@ -7,7 +7,7 @@ import pytest
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results
-from mechcheck.analytic.presets import as_linkage
+from mechcheck.analytic.presets import as_linkage, redrawn
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.pymunk import forces
 from mechcheck.sim_models.pymunk._fast import layout
@@ -59,7 +59,7 @@ def test_read_magnitudes_equal_public_impulse() -> None:
         assert abs(complex(jx, jy)) == pytest.approx(pin.impulse, rel=1e-12)
 
 
-@pytest.mark.parametrize("make", [e1, lambda: e2().with_(friction=None)], ids=["fourbar", "slider"])
+@pytest.mark.parametrize("make", [e1, lambda: redrawn(e2(), friction=None)], ids=["fourbar", "slider"])
 def test_read_forces_balance_each_body_momentum(make: object) -> None:
     """Per body, m·Δv/dt equals the loads plus the read joint forces (F_ij on j, −F_ij on i).
 

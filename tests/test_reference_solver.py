@@ -22,6 +22,7 @@ from mechcheck.analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
+from mechcheck.analytic.presets import preset_case, redrawn
 
 from . import reference_solver as ref
 
@@ -65,7 +66,7 @@ E1_D = (0.090, 0.0)  # rocker point, link-4 frame
 
 
 def e1_case(coupler_load_deg: float, rocker_load_deg: float) -> Case:
-    return Case(
+    return preset_case(
         name="E1",
         geometry=FourBarGeometry(a1=0.140, a2=0.080, a3=0.100, a4=0.120),
         theta12=math.radians(60.0),
@@ -106,7 +107,7 @@ def test_e1_seed_sign_reading() -> None:
 def test_e1_virtual_work() -> None:
     """E1's drive torque equals minus the loads' virtual power per unit crank speed."""
     case = e1_case(50.0, 20.0)
-    unit_speed = ref.solve(case.with_(motion=Motion(omega=1.0)))
+    unit_speed = ref.solve(redrawn(case, motion=Motion(omega=1.0)))
     _, v_c = ref.point_state(unit_speed, 3, E1_C)
     _, v_d = ref.point_state(unit_speed, 4, E1_D)
     power = np.dot(polar(50.0, 50.0), v_c) + np.dot(polar(100.0, 20.0), v_d)
@@ -120,7 +121,7 @@ E2_FACE = 0.050
 
 
 def e2_case(friction: bool) -> Case:
-    return Case(
+    return preset_case(
         name="E2",
         geometry=SliderCrankGeometry(a2=0.200, a3=0.800),
         theta12=math.radians(55.0),
@@ -163,7 +164,7 @@ def test_e2_friction_dissipates() -> None:
     Σ μ·r·|F|·|ω_rel| + μ·|N|·|ṡ| (per unit crank speed)."""
     case = e2_case(friction=True)
     sol = ref.solve(case)
-    kin = ref.solve(case.with_(friction=None, motion=Motion(omega=-1.0)))
+    kin = ref.solve(redrawn(case, friction=None, motion=Motion(omega=-1.0)))
     w2, w3 = kin.qd[2], kin.qd[5]
     s_dot = kin.qd[6]
     v = sol.values
@@ -189,7 +190,7 @@ def q3_case() -> Case:
     shared with the coupler, so T14 is the same either way (only F34 changes)."""
     e = lambda t: np.array([math.cos(t), math.sin(t)])  # noqa: E731
     b0 = Q3_A2 * e(Q3_TH2) + Q3_A3 * e(Q3_TH3) - Q3_A4 * e(Q3_TH4)
-    return Case(
+    return preset_case(
         name="Q3",
         geometry=FourBarGeometry(a1=float(np.hypot(*b0)), a2=Q3_A2, a3=Q3_A3, a4=Q3_A4),
         theta12=Q3_TH2,
@@ -207,9 +208,9 @@ def test_q3_ground_from_loop() -> None:
     """Q3's ground link A0B0 is ≈ 204.9 mm at −0.30°, and the reference reassembles the
     printed angles θ3 = 38.62°, θ4 = 92.02° and speeds ω3 = −2.75, ω4 = −0.62 rad/s."""
     case = q3_case()
-    assert isinstance(case.geometry, FourBarGeometry)
-    assert case.geometry.a1 * 1000.0 == pytest.approx(204.9, abs=0.05)
-    assert math.degrees(case.ground_angle) == pytest.approx(-0.30, abs=PRINTED_2DP)
+    assert isinstance(case.preset.geometry, FourBarGeometry)
+    assert case.preset.geometry.a1 * 1000.0 == pytest.approx(204.9, abs=0.05)
+    assert math.degrees(case.preset.ground_angle) == pytest.approx(-0.30, abs=PRINTED_2DP)
     sol = ref.solve(case)
     assert sol.q[5] == pytest.approx(Q3_TH3, abs=1e-12)
     assert sol.q[8] == pytest.approx(Q3_TH4, abs=1e-12)
@@ -244,11 +245,11 @@ def generic_cases() -> list[Case]:
     common = {"loads": loads, "masses": masses, "gravity": (1.5, -9.81),
               "motion": Motion(omega=-7.0, alpha=35.0)}
     return [
-        Case(name="fb", geometry=FourBarGeometry(0.13, 0.05, 0.11, 0.09),
+        preset_case(name="fb", geometry=FourBarGeometry(0.13, 0.05, 0.11, 0.09),
              theta12=1.1, ground_angle=0.3, **common),
-        Case(name="fb4", geometry=FourBarGeometry(0.13, 0.05, 0.11, 0.09), branch="crossed",
+        preset_case(name="fb4", geometry=FourBarGeometry(0.13, 0.05, 0.11, 0.09), branch="crossed",
              theta12=2.3, drive_link=4, **common),
-        Case(name="sc", geometry=SliderCrankGeometry(0.05, 0.16, 0.02), branch="left",
+        preset_case(name="sc", geometry=SliderCrankGeometry(0.05, 0.16, 0.02), branch="left",
              theta12=-0.7, ground_angle=-0.4, **common),
     ]
 
@@ -258,12 +259,12 @@ def test_power_balance(case: Case) -> None:
     """Without friction the drive's power plus every applied force's power equals the
     rate of change of kinetic energy (the constraint forces do no work)."""
     sol = ref.solve(case)
-    power = sol.values[f"T1{case.drive_link}"] * sol.qd[ref.COL[case.drive_link] + 2]
-    for ld in case.loads:
+    power = sol.values[f"T1{case.preset.drive_link}"] * sol.qd[ref.COL[case.preset.drive_link] + 2]
+    for ld in case.preset.loads:
         _, v = ref.point_state(sol, ld.link, ld.at)
         power += float(np.dot(ld.force, v)) + ld.torque * sol.qd[ref.COL[ld.link] + 2]
     kinetic_rate = 0.0
-    for m in case.masses:
+    for m in case.preset.masses:
         c = ref.COL[m.link]
         rc = ref.rot(sol.q[c + 2]) @ np.asarray(m.com)
         _, v_g = ref.point_state(sol, m.link, m.com)
@@ -284,22 +285,22 @@ def test_free_body_equilibrium(case: Case) -> None:
     force = {name: np.array([v[f"F{i}{j}_x"], v[f"F{i}{j}_y"]])
              for name, (i, j) in joints.items()}
     at = {"A0": (2, (0.0, 0.0)), "A": (3, (0.0, 0.0)), "B": (4, (0.0, 0.0))}
-    g = case.geometry
+    g = case.preset.geometry
     if isinstance(g, FourBarGeometry):
         joints["B0"] = (1, 4)
         force["B0"] = np.array([v["F14_x"], v["F14_y"]])
         at["B0"] = (4, (0.0, 0.0))
         at["B"] = (4, (g.a4, 0.0))
-    drive = v[f"T1{case.drive_link}"]
+    drive = v[f"T1{case.preset.drive_link}"]
     for link in (2, 3, 4):
         c = ref.COL[link]
-        m = case.mass_of(link)
+        m = case.preset.mass_of(link)
         com = (0.0, 0.0) if m is None else m.com
         p_g, _ = ref.point_state(sol, link, com)
         rc = ref.rot(sol.q[c + 2]) @ np.asarray(com)
         a_g = sol.qdd[c:c + 2] + ref.perp(rc) * sol.qdd[c + 2] - rc * sol.qd[c + 2] ** 2
         total_f = np.zeros(2)
-        total_m = drive if link == case.drive_link else 0.0
+        total_m = drive if link == case.preset.drive_link else 0.0
         if link == 4 and "M14" in v:
             total_m += v["M14"]
         applied: list[tuple[np.ndarray, np.ndarray]] = []
@@ -312,7 +313,7 @@ def test_free_body_equilibrium(case: Case) -> None:
         if link == 4 and "M14" in v:
             applied.append((ref.point_state(sol, 4, (0.0, 0.0))[0],
                             np.array([v["F14_x"], v["F14_y"]])))
-        for ld in case.loads:
+        for ld in case.preset.loads:
             if ld.link == link:
                 applied.append((ref.point_state(sol, link, ld.at)[0], np.asarray(ld.force)))
                 total_m += ld.torque
@@ -335,15 +336,15 @@ def test_velocities_match_finite_differences(case: Case) -> None:
     ω²·q'' + α·q'."""
     h = 1e-6
     sol = ref.solve(case)
-    plus = ref.solve(case.with_(theta12=case.theta12 + h))
-    minus = ref.solve(case.with_(theta12=case.theta12 - h))
-    w, a = case.motion.omega, case.motion.alpha
+    plus = ref.solve(redrawn(case, theta12=case.preset.theta12 + h))
+    minus = ref.solve(redrawn(case, theta12=case.preset.theta12 - h))
+    w, a = case.preset.motion.omega, case.preset.motion.alpha
     dq = (plus.q - minus.q) / (2 * h)
     np.testing.assert_allclose(sol.qd, w * dq, rtol=FINITE_DIFF_RTOL, atol=1e-9)
     # The second difference needs a larger step (rounding ~eps/h², truncation ~h²).
     h2 = 1e-4
-    plus = ref.solve(case.with_(theta12=case.theta12 + h2))
-    minus = ref.solve(case.with_(theta12=case.theta12 - h2))
+    plus = ref.solve(redrawn(case, theta12=case.preset.theta12 + h2))
+    minus = ref.solve(redrawn(case, theta12=case.preset.theta12 - h2))
     d2q = (plus.q - 2 * sol.q + minus.q) / h2**2
     np.testing.assert_allclose(sol.qdd, w**2 * d2q + a * dq, rtol=SECOND_DIFF_RTOL, atol=1e-6)
 
@@ -352,9 +353,9 @@ def test_branches_are_mirror_images() -> None:
     """The open and crossed four-bar poses are mirror images in the line A–B0, with
     B on the clockwise side of B0→A for open; the slider's right branch has the larger s14."""
     g = FourBarGeometry(0.14, 0.08, 0.10, 0.12)
-    base = Case(name="b", geometry=g, theta12=1.0, ground_angle=0.4)
+    base = preset_case(name="b", geometry=g, theta12=1.0, ground_angle=0.4)
     qo = ref.solve(base).q
-    qc = ref.solve(base.with_(branch="crossed")).q
+    qc = ref.solve(redrawn(base, branch="crossed")).q
     a = qo[3:5]
     b0 = qo[6:8]
     b_open = b0 + g.a4 * np.array([math.cos(qo[8]), math.sin(qo[8])])
@@ -363,5 +364,5 @@ def test_branches_are_mirror_images() -> None:
     e = (a - b0) / np.linalg.norm(a - b0)
     mirror = b0 + 2 * np.dot(b_open - b0, e) * e - (b_open - b0)
     np.testing.assert_allclose(b_crossed, mirror, atol=1e-14)
-    sc = Case(name="s", geometry=SliderCrankGeometry(0.05, 0.12, 0.01), theta12=0.8)
-    assert ref.solve(sc).values["s14"] > ref.solve(sc.with_(branch="left")).values["s14"]
+    sc = preset_case(name="s", geometry=SliderCrankGeometry(0.05, 0.12, 0.01), theta12=0.8)
+    assert ref.solve(sc).values["s14"] > ref.solve(redrawn(sc, branch="left")).values["s14"]

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import mechcheck
+from mechcheck.analytic.presets import redrawn
 from mechcheck.tolerance import rule
 
 from .builtin import builtin
@@ -28,7 +29,7 @@ def test_each_pose_is_the_single_case_solve() -> None:
     assert table["driver"].tolist() == theta.tolist()
     assert round(float(table["T12"].iloc[0]), 5) == 2.90133
     for row, t in zip(table.itertuples(), theta, strict=True):
-        alone = mechcheck.solve(e1.with_(theta12=float(t)))
+        alone = mechcheck.solve(redrawn(e1, theta12=float(t)))
         assert row.status == alone.status
         if alone.status == "ok":
             assert row.T12 == pytest.approx(alone.values["T12"], rel=ANALYTIC)

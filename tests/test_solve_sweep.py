@@ -11,7 +11,6 @@ solve's 1e-9).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from types import MappingProxyType
 
@@ -28,6 +27,7 @@ from mechcheck.analytic.presets import (
     as_linkage,
     driver_offsets,
     follows_branch,
+    redrawn,
     stretch_results,
 )
 from mechcheck.analytic.solution import Solution
@@ -130,8 +130,8 @@ def preset_stretches() -> list[tuple[Case, np.ndarray]]:
     cases = builtin_cases()
     e1 = cases["seed-E1-as-stated"]
     grid = np.radians(np.arange(1.0, 360.0))
-    out = [(dataclasses.replace(e1, theta12=float(grid[0])), grid)]
-    out += [(c, c.theta12 + np.radians(np.arange(0.0, 360.0, 3.0)))
+    out = [(redrawn(e1, theta12=float(grid[0])), grid)]
+    out += [(c, c.preset.theta12 + np.radians(np.arange(0.0, 360.0, 3.0)))
             for c in cases.values() if c.mechanism == "slider_crank" and c.kind == "static"]
     return out
 
@@ -147,7 +147,7 @@ def closed_form_branch_end(case: Case, grid: np.ndarray, pose: LinkagePose) -> i
         turned = closed.links[link].angle - closed.links[link].angle[0]
         gap = np.maximum(gap, np.abs(np.sin(0.5 * (turned - pose.angle(name)[0]))))
     if case.mechanism == "slider_crank":
-        u = np.array([math.cos(case.ground_angle), math.sin(case.ground_angle)])
+        u = np.array([math.cos(case.preset.ground_angle), math.sin(case.preset.ground_angle)])
         s14 = closed.joints["B"] @ u
         slide = pose.joint_coordinate(pose.linkage.joint("slide"))[0]
         gap = np.maximum(gap, np.abs(s14 - s14[0] - slide) / pose.linkage.scale)
@@ -181,7 +181,7 @@ def test_a_renamed_sweep_is_each_solution_renamed(index: int) -> None:
     offsets = driver_offsets(case, grid)
     n = max(1, follows_branch(case, analytic_results(linkage, offsets)))
     solutions = sweep_linkage(linkage, offsets[:n], "mujoco_solve")
-    renaming = Renaming.of(case)
+    renaming = Renaming.of(case.preset)
     assert renaming.solutions(solutions, case.name) == [renaming.solution(s, case.name)
                                                         for s in solutions]
 

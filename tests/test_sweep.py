@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 
 from mechcheck import backends as registry, sweep as sweep_module, sweep_run
+from mechcheck.analytic.presets import redrawn
 from mechcheck.analytic.solution import Solution, unit_factor
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import load_cases
@@ -102,8 +103,8 @@ def test_changed_case_does_not_reuse_stale_parts(tmp_path: Path,
     tasks = small_plan(monkeypatch)
     run_sweep(tasks, tmp_path, LocalExecutor())
     case = builtin("seed-E1-as-stated")
-    heavier = case.with_(loads=tuple(ld.__class__(ld.link, ld.at, (2 * ld.force[0], 2 * ld.force[1]))
-                                     for ld in case.loads))
+    heavier = redrawn(case, loads=tuple(ld.__class__(ld.link, ld.at, (2 * ld.force[0], 2 * ld.force[1]))
+                                     for ld in case.preset.loads))
     again = plan([heavier], ["superposition"], parse_range("0:360:2"))
     outcome = run_sweep(again, tmp_path, LocalExecutor())
     assert outcome.reused == 0

@@ -13,6 +13,7 @@ from typer.testing import CliRunner
 from mechcheck.analytic import theory
 from mechcheck.analytic.case import Case, CaseError, FourBarGeometry, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.presets import preset_case
 from mechcheck.analytic.transmission import transmission_angle
 from mechcheck.cli import app
 from mechcheck.theory_cli import GRASHOF_CATALOGUE, MOBILITY_CATALOGUE, parse_joints
@@ -63,7 +64,7 @@ def test_seed_e1_linkage_is_a_change_point() -> None:
 
 def dead_example(branch: str = "open") -> Case:
     """Seed 001 dead positions: A0B0 = 80, A0A = 20, B0B = 60, AB = 50 (mm)."""
-    return Case(name="dead", geometry=FourBarGeometry(0.08, 0.02, 0.05, 0.06), theta12=0.3,
+    return preset_case(name="dead", geometry=FourBarGeometry(0.08, 0.02, 0.05, 0.06), theta12=0.3,
                 branch=branch)
 
 
@@ -91,15 +92,15 @@ def test_dead_positions_are_the_rocker_extremes(branch: str) -> None:
 
 def test_no_dead_positions_for_a_double_crank() -> None:
     """A double-crank (seed 001: 300, 315, 290, 215) has no crank–coupler dead position."""
-    case = Case(name="dc", geometry=FourBarGeometry(0.215, 0.300, 0.315, 0.290), theta12=0.3)
-    assert theory.crank_turns_fully(case.geometry)
+    case = preset_case(name="dc", geometry=FourBarGeometry(0.215, 0.300, 0.315, 0.290), theta12=0.3)
+    assert theory.crank_turns_fully(case.preset.geometry)
     with pytest.raises(CaseError):
         theory.limit_positions(case)
 
 
 def test_slider_crank_transmission_minimum_of_seed_001() -> None:
     """Centric slider-crank with a/b = 1/4: μmin = acos(1/4) ≈ 75.5° with the crank at 90°."""
-    case = Case(name="sc", geometry=SliderCrankGeometry(0.05, 0.2), theta12=0.0)
+    case = preset_case(name="sc", geometry=SliderCrankGeometry(0.05, 0.2), theta12=0.0)
     ext = theory.transmission_extremes(case)
     assert math.degrees(ext.mu_min) == pytest.approx(math.degrees(math.acos(0.25)), abs=1e-12)
     assert abs(math.degrees(ext.mu_min) - 75.5) < 0.05
@@ -135,7 +136,7 @@ def test_transmission_extremes_match_a_brute_force_search(g: FourBarGeometry, gr
     assert theory.crank_turns_fully(g)
     cls = theory.grashof(ground=g.a1, crank=g.a2, coupler=g.a3, rocker=g.a4)
     assume(abs(cls.s_plus_l - cls.p_plus_q) > 1e-3 * cls.s_plus_l)
-    case = Case(name="t", geometry=g, theta12=ground + 0.5 * math.pi, ground_angle=ground,
+    case = preset_case(name="t", geometry=g, theta12=ground + 0.5 * math.pi, ground_angle=ground,
                 branch=branch)
     mu = transmission_angle(case, np.radians(np.arange(0.0, 360.0, 0.01)))
     ext = theory.transmission_extremes(case)
@@ -145,7 +146,7 @@ def test_transmission_extremes_match_a_brute_force_search(g: FourBarGeometry, gr
 
 def _assembles(g: FourBarGeometry, ground: float, branch: str) -> bool:
     try:
-        Case(name="t", geometry=g, theta12=ground + 0.5 * math.pi, ground_angle=ground,
+        preset_case(name="t", geometry=g, theta12=ground + 0.5 * math.pi, ground_angle=ground,
              branch=branch)
     except CaseError:
         return False
@@ -164,7 +165,7 @@ def test_slider_crank_rotates_exactly_when_every_pose_assembles(a2: float, a3: f
     probe = None
     for t in theta[::100]:
         try:
-            probe = Case(theta12=float(t), **case_args)  # type: ignore[arg-type]
+            probe = preset_case(theta12=float(t), **case_args)  # type: ignore[arg-type]
             break
         except CaseError:
             continue

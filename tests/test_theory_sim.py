@@ -33,6 +33,7 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics, theory
 from mechcheck.analytic.case import Case, FourBarGeometry, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.presets import preset_case
 from mechcheck.sim_models.mujoco import turning as mujoco_turning
 from mechcheck.sim_models.pymunk import turning as pymunk_turning
 from mechcheck.sim_models.turning import Amplification, TurnResult
@@ -109,13 +110,13 @@ def mm(value: float) -> float:
 def four_bar(name: str, crank: float, coupler: float, rocker: float, ground: float,
              branch: str = "open") -> Case:
     """A four-bar from seed 001's (A0A, AB, B0B, A0B0) in mm, at θ12 = 0 (every example assembles there)."""
-    return Case(name=name, geometry=FourBarGeometry(mm(ground), mm(crank), mm(coupler), mm(rocker)),
+    return preset_case(name=name, geometry=FourBarGeometry(mm(ground), mm(crank), mm(coupler), mm(rocker)),
                 theta12=0.0, branch=branch)
 
 
 def slider_crank(name: str, crank: float, rod: float, offset: float = 0.0) -> Case:
     """A slider-crank in mm, at θ12 = 90° (the middle of a non-rotating one's range)."""
-    return Case(name=name, geometry=SliderCrankGeometry(mm(crank), mm(rod), mm(offset)),
+    return preset_case(name=name, geometry=SliderCrankGeometry(mm(crank), mm(rod), mm(offset)),
                 theta12=math.pi / 2)
 
 
@@ -171,16 +172,16 @@ def angle_error_deg(a: float, b: float) -> float:
 
 
 def analytic_reach(case: Case) -> tuple[float, float]:
-    """The θ12 interval, around case.theta12, in which the case assembles (rad)."""
-    g = case.geometry
+    """The θ12 interval, around case.preset.theta12, in which the case assembles (rad)."""
+    g = case.preset.geometry
     if isinstance(g, FourBarGeometry):
         interval = fourbar_kinematics.assembly_interval(g)
         assert interval is not None and interval[0] == 0.0, "a range through φ12 = 0 is expected"
-        return case.ground_angle - interval[1], case.ground_angle + interval[1]
+        return case.preset.ground_angle - interval[1], case.preset.ground_angle + interval[1]
     interval = slidercrank_kinematics.assembly_interval(g)
     assert interval is not None and interval[1] >= 1.0, "a range through φ12 = 90° is expected"
     low = math.asin(interval[0])
-    return case.ground_angle + low, case.ground_angle + math.pi - low
+    return case.preset.ground_angle + low, case.preset.ground_angle + math.pi - low
 
 
 def case_id(case: Case) -> str:
@@ -197,7 +198,7 @@ parametrize_simulator = pytest.mark.parametrize("simulator", list(SIMULATORS))
 def test_grashof_cranks_turn_fully(simulator: str, case: Case) -> None:
     """The crank of a Grashof crank-rocker or double-crank (seed 001) makes a full turn
     against a bounded servo torque, with the loop closed all the way."""
-    g = case.geometry
+    g = case.preset.geometry
     assert isinstance(g, FourBarGeometry)
     assert theory.crank_turns_fully(g)
     result = turned(simulator, case)
@@ -234,7 +235,7 @@ def test_non_grashof_crank_jams_at_the_assembly_limits(simulator: str) -> None:
     """The non-Grashof crank (seed 001: 100, 229, 99, 300) cannot turn: driven either way it
     jams where coupler and rocker fall in line, at the analytic assembly limits ±97.26°."""
     case = SEED_NON_GRASHOF
-    g = case.geometry
+    g = case.preset.geometry
     assert isinstance(g, FourBarGeometry)
     assert not theory.crank_turns_fully(g)
     result = turned(simulator, case)
@@ -253,7 +254,7 @@ def test_slider_crank_turns_fully_iff_crank_plus_offset_is_shorter_than_the_rod(
         simulator: str, case: Case) -> None:
     """A slider-crank's crank turns fully exactly when a2 + |e| < a3 (seed 001); otherwise it
     jams where the rod stands perpendicular to the slide, at the analytic assembly limits."""
-    g = case.geometry
+    g = case.preset.geometry
     assert isinstance(g, SliderCrankGeometry)
     result = turned(simulator, case)
     assert result.completed == theory.slider_crank_rotates(g) == (g.a2 + abs(g.offset) < g.a3)
@@ -293,7 +294,7 @@ def test_seed_dead_position_distances_measured_in_both_simulators() -> None:
     """At the measured rocker extremes |A0B| is A0A + AB = 70 mm and AB − A0A = 30 mm (seed 001;
     the seed's '20' is a typo)."""
     case = seed_dead_positions()
-    g = case.geometry
+    g = case.preset.geometry
     assert isinstance(g, FourBarGeometry)
     tol = mm(1.0e-3)  # 0.1° of rocker on a 60 mm rocker is 0.1 mm; measured ≤ 1e-4 mm
     for simulator in SIMULATORS:
@@ -332,7 +333,7 @@ def test_amplification_follows_the_transmission_angle_over_a_turn(simulator: str
     """Holding a torque on the rocker of the seed crank-rocker needs T12 = −T_out·ω4/ω2 at
     every crank angle, i.e. |T12/T_out|·sin μ = (a2/a4)·|sin(θ13 − θ12)|."""
     case = seed_crank_rocker()
-    g = case.geometry
+    g = case.preset.geometry
     assert isinstance(g, FourBarGeometry)
     result = held(simulator, case, TURN_POSES)
     assert result.settled.all() and result.branch_kept.all()
@@ -347,7 +348,7 @@ def test_amplification_grows_without_bound_toward_the_toggle(simulator: str) -> 
     torque grows like 1/(π − μ) — like 1/√Δ in the crank's distance Δ from the limit —
     while |T12/T_out|·sin μ / |sin(θ13 − θ12)| stays a2/a4."""
     case = SEED_NON_GRASHOF
-    g = case.geometry
+    g = case.preset.geometry
     assert isinstance(g, FourBarGeometry)
     _, limit = analytic_reach(case)
     distance = np.radians(np.array(TOGGLE_DISTANCES_DEG))
@@ -395,7 +396,7 @@ def crank_rockers(draw: st.DrawFn) -> Case:
     assume(theory.grashof(ground=g.a1, crank=g.a2, coupler=g.a3, rocker=g.a4).kind
            == "crank-rocker")
     ground = draw(st.floats(-math.pi, math.pi))
-    case = Case(name="random-crank-rocker", geometry=g, theta12=ground,
+    case = preset_case(name="random-crank-rocker", geometry=g, theta12=ground,
                 branch=draw(st.sampled_from(["open", "crossed"])), ground_angle=ground)
     assume(theory.transmission_extremes(case).worst >= MIN_TRANSMISSION)
     return case
@@ -412,7 +413,7 @@ def non_grashof_cranks(draw: st.DrawFn) -> Case:
     assert interval is not None
     assume(math.radians(20.0) < interval[1] < math.radians(160.0))
     assume(abs(g.a1 - g.a2) - abs(g.a3 - g.a4) > 0.05 * g.scale)
-    return Case(name="random-non-grashof", geometry=g, theta12=0.0)
+    return preset_case(name="random-non-grashof", geometry=g, theta12=0.0)
 
 
 @parametrize_simulator

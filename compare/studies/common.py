@@ -19,7 +19,8 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
 from mechcheck import backends
-from mechcheck.analytic.case import Case, Mass
+from mechcheck.analytic.case import Case, FourBarGeometry, Mass, preset_of
+from mechcheck.analytic.presets import redrawn
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, load_cases
 
@@ -67,9 +68,10 @@ def steel_bar(link: int, length: float, width: float = 0.02, thickness: float = 
 def realistic_e1(**changes: object) -> Case:
     """Seed E1 (SEEDS.md) with steel links of 20 × 5 mm section under gravity."""
     case = builtin("seed-E1-as-stated")
-    g = case.geometry
-    masses = (steel_bar(2, g.a2), steel_bar(3, g.a3), steel_bar(4, g.a4))  # type: ignore[union-attr]
-    return case.with_(name="E1-steel", masses=masses, gravity=(0.0, -9.81), **changes)
+    g = preset_of(case).geometry
+    assert isinstance(g, FourBarGeometry)
+    masses = (steel_bar(2, g.a2), steel_bar(3, g.a3), steel_bar(4, g.a4))
+    return redrawn(case, name="E1-steel", masses=masses, gravity=(0.0, -9.81), **changes)
 
 
 def groups(data: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
@@ -141,7 +143,7 @@ def png(fig: Figure) -> bytes:
 
 def torque(solution: Solution, case: Case) -> float:
     """The drive torque of a solution, NaN when the backend gave none."""
-    return float(solution.values.get(f"T1{case.drive_link}", math.nan))
+    return float(solution.values.get(f"T1{preset_of(case).drive_link}", math.nan))
 
 
 Study = Callable[[bool], StudyResult]

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from mechcheck.analytic.case import Case, Friction
+from mechcheck.analytic.case import Case, Friction, preset_of
+from mechcheck.analytic.presets import redrawn
 from mechcheck.studies.common import (
     SIMULATORS,
     StudyResult,
@@ -31,9 +32,9 @@ def with_pin_coefficient(case: Case, mu: float, pin_mu: float) -> Case:
     A friction circle of radius ρ is the moment arm μ'·r = ρ: the exact radius
     r·sin(atan μ) is obtained with μ' = sin(atan μ).
     """
-    f = case.friction
+    f = preset_of(case).friction
     assert f is not None
-    return case.with_(friction=Friction(mu=pin_mu, pin_radius=dict(f.pin_radius), slide_mu=mu,
+    return redrawn(case, friction=Friction(mu=pin_mu, pin_radius=dict(f.pin_radius), slide_mu=mu,
                                         viscous=dict(f.viscous), direction=f.direction))
 
 

@@ -7,6 +7,8 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
+from mechcheck.analytic.case import preset_of
+from mechcheck.analytic.presets import redrawn
 from mechcheck.studies.common import (
     SIMULATORS,
     StudyResult,
@@ -31,9 +33,9 @@ def run(quick: bool = False) -> StudyResult:
     rows = []
     for k in scales:
         loads = tuple(dataclasses.replace(ld, force=(k * ld.force[0], k * ld.force[1]))
-                      for ld in base.loads)
-        heavy = base.with_(loads=loads)
-        massless = heavy.with_(masses=(), gravity=(0.0, 0.0))
+                      for ld in preset_of(base).loads)
+        heavy = redrawn(base, loads=loads)
+        massless = redrawn(heavy, masses=(), gravity=(0.0, 0.0))
         t0 = torque(reference(massless), massless)
         load = float(np.hypot(*loads[1].force))
         rows.append({"source": "analytic (with weights)", "load_N": load, "T_massless": t0,
@@ -55,7 +57,7 @@ def run(quick: bool = False) -> StudyResult:
         xlabel="rocker load |F14| [N] (the coupler load scales with it)",
         ylabel="|T_massless − T_weighted| / |T_weighted|",
         title="Massless-link assumption (seed E1, steel links)")
-    weight = sum(m.mass for m in base.masses) * 9.81
+    weight = sum(m.mass for m in preset_of(base).masses) * 9.81
     def load_at(level: int) -> dict[str, float | None]:
         """The load (N) at which the error falls through a level: 1 / the crossing of 1/load."""
         out: dict[str, float | None] = {}

@@ -9,6 +9,7 @@ from typing import cast
 import numpy as np
 import pandas as pd
 
+from mechcheck.analytic.presets import redrawn
 from mechcheck.studies.common import SIMULATORS, StudyResult, builtin, plt, png, reference, simulate
 from mechcheck.tables import comparison_rows
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION
@@ -29,7 +30,7 @@ def run(quick: bool = False) -> StudyResult:
         deltas = np.sort(np.append(deltas, MUJOCO_REACH_DELTA))[::-1]
     rows = []
     for d in deltas:
-        case = base.with_(theta12=math.pi - math.radians(float(d)))
+        case = redrawn(base, theta12=math.pi - math.radians(float(d)))
         ref = reference(case)
         f34 = math.hypot(ref.values.get("F34_x", math.nan), ref.values.get("F34_y", math.nan))
         row = {"delta_deg": d, "F34_N": f34,

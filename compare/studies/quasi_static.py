@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 
 from mechcheck.analytic.case import Motion
+from mechcheck.analytic.presets import redrawn
 from mechcheck.studies.common import (
     SIMULATORS,
     StudyResult,
@@ -30,7 +31,7 @@ def run(quick: bool = False) -> StudyResult:
     omegas = np.geomspace(0.5, 200.0, 6 if quick else 14)
     rows = []
     for w in omegas:
-        moving = static_case.with_(motion=Motion(float(w), 0.0))
+        moving = redrawn(static_case, motion=Motion(float(w), 0.0))
         rows.append({"source": "analytic (D'Alembert)", "omega": w,
                      "T_dynamic": torque(reference(moving), moving)})
         for sim in SIMULATORS:

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pandas as pd
 
-from mechcheck.analytic.case import Case, Friction
+from mechcheck.analytic.case import Case, Friction, preset_of
+from mechcheck.analytic.presets import redrawn
 from mechcheck.studies.common import (
     SIMULATORS,
     StudyResult,
@@ -26,12 +25,12 @@ LEVELS = (0.01, 0.10)
 
 def with_friction(case: Case, mu: float) -> Case:
     """Seed E1 with friction circles at all four pins (radius 10 mm), crank turning CCW."""
-    return case.with_(friction=Friction(mu=mu, pin_radius={"A0": 0.01, "A": 0.01, "B": 0.01,
+    return redrawn(case, friction=Friction(mu=mu, pin_radius={"A0": 0.01, "A": 0.01, "B": 0.01,
                                                            "B0": 0.01}, direction=1))
 
 
 def single_loads(case: Case) -> list[Case]:
-    return [dataclasses.replace(case, loads=(ld,)) for ld in case.loads]
+    return [redrawn(case, loads=(ld,)) for ld in preset_of(case).loads]
 
 
 def run(quick: bool = False) -> StudyResult:

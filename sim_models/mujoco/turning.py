@@ -29,8 +29,8 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mechcheck.analytic.case import Case, Motion
-from mechcheck.analytic.presets import Renaming, as_linkage
+from mechcheck.analytic.case import Case, Motion, preset_of
+from mechcheck.analytic.presets import Renaming, as_linkage, redrawn
 from mechcheck.sim_models.locks import held_at_drawn
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.locks import LinkageServo
@@ -52,7 +52,7 @@ SIMULATOR = "mujoco"
 def bare(case: Case, theta12: float | None = None) -> Case:
     """The case at rest without its loads, masses and friction (the turning and holding
     experiments apply their own), at ``theta12`` if given."""
-    return case.with_(theta12=case.theta12 if theta12 is None else theta12, loads=(), masses=(),
+    return redrawn(case, theta12=preset_of(case).theta12 if theta12 is None else theta12, loads=(), masses=(),
                       friction=None, motion=Motion())
 
 
@@ -60,8 +60,8 @@ class PresetPose:
     """θ12, θ13 and θ14 (or s14) of a preset from its linkage rig's own joint coordinates."""
 
     def __init__(self, case: Case, rig: LinkageRig) -> None:
-        self.theta12 = case.theta12
-        self.renaming = Renaming.of(case)
+        self.theta12 = preset_of(case).theta12
+        self.renaming = Renaming.of(preset_of(case))
         self.rig = rig
 
     def read(self) -> tuple[float, float, float]:
@@ -130,7 +130,7 @@ def hold_at(case: Case, theta12: float, load: float
             ) -> tuple[tuple[float, float, float], float, bool, int]:
     """Hold the crank at ``theta12`` against ``load`` until settled (the linkage drawn at
     that pose, at rest in it). Returns (pose θ12, θ13, output; T12; settled; steps)."""
-    held = bare(case, theta12).with_(loads=(output_load(case, load),))
+    held = redrawn(bare(case, theta12), loads=(output_load(case, load),))
     rig = LinkageRig(as_linkage(held), HOLD_SETTINGS)
     pose = PresetPose(held, rig)
     m, d = rig.model, rig.data

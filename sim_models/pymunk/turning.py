@@ -24,9 +24,9 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mechcheck.analytic.case import Case
+from mechcheck.analytic.case import Case, preset_of
 from mechcheck.analytic.linkage_kinematics import solve_pose
-from mechcheck.analytic.presets import Renaming, as_linkage
+from mechcheck.analytic.presets import Renaming, as_linkage, redrawn
 from mechcheck.sim_models.locks import held_at_drawn
 from mechcheck.sim_models.mujoco.turning import bare
 from mechcheck.sim_models.pymunk.forces import torque_on_b
@@ -62,10 +62,10 @@ def preset_pose(case: Case, renaming: Renaming, model: LinkageModel) -> tuple[fl
     if "theta14" in drawn:
         output = drawn["theta14"] + bodies["rocker"].angle
     else:
-        g = case.ground_angle
+        g = preset_of(case).ground_angle
         slider = bodies["slider"].position
         output = drawn["s14"] + slider.x * math.cos(g) + slider.y * math.sin(g)
-    return (case.theta12 + crank.angle, drawn["theta13"] + coupler.angle, float(output))
+    return (preset_of(case).theta12 + crank.angle, drawn["theta13"] + coupler.angle, float(output))
 
 
 class PymunkTurner(LinkageServo):
@@ -76,7 +76,7 @@ class PymunkTurner(LinkageServo):
         super().__init__(held_at_drawn(as_linkage(bare(case))), "A0")
         # The protocol starts at the preset's θ12 (run_leg reads case.theta12).
         self.case = case
-        self.renaming = Renaming.of(case)
+        self.renaming = Renaming.of(preset_of(case))
 
     def step(self) -> Sample:
         model, motor = self.model, self.motor
@@ -126,7 +126,7 @@ def hold_at(case: Case, theta12: float, load: float
             ) -> tuple[tuple[float, float, float], float, bool, int]:
     """Hold the crank at ``theta12`` against ``load`` until settled (the linkage drawn at
     that pose, at rest in it). Returns (pose θ12, θ13, output; T12; settled; steps)."""
-    held = bare(case, theta12).with_(loads=(output_load(case, load),))
+    held = redrawn(bare(case, theta12), loads=(output_load(case, load),))
     linkage = as_linkage(held)
     model = build_linkage_model(linkage, HOLD_SETTINGS, solve_pose(linkage.linkage).q[0])
     dt = HOLD_SETTINGS.dt
@@ -148,7 +148,7 @@ def hold_at(case: Case, theta12: float, load: float
         if calm >= HOLD_PATIENCE:
             settled = True
             break
-    return preset_pose(held, Renaming.of(held), model), torque, settled, steps
+    return preset_pose(held, Renaming.of(preset_of(held)), model), torque, settled, steps
 
 
 def amplification(case: Case, theta12_values: ArrayLike, output_load: float = 1.0) -> Amplification:

@@ -55,7 +55,7 @@ def row(link: int) -> int:
 
 def slide_frame(case: Case) -> tuple[Array, Array]:
     """(u, n): slide direction and its +90° normal."""
-    u = unit(np.array(case.ground_angle))
+    u = unit(np.array(case.preset.ground_angle))
     return u, np.array([-u[1], u[0]])
 
 
@@ -78,7 +78,7 @@ def coefficient_matrix(case: Case, pose: Pose) -> Array:
     put_force(3, 2, j["A"], +1.0)    # F23 on 3
     put_force(3, 4, j["B"], -1.0)    # F43 on 3
     put_force(4, 4, j["B"], +1.0)    # F34 on 4
-    if isinstance(case.geometry, FourBarGeometry):
+    if isinstance(case.preset.geometry, FourBarGeometry):
         put_force(4, 6, j["B0"], +1.0)  # F14 on 4
     else:
         _, nrm = slide_frame(case)
@@ -86,7 +86,7 @@ def coefficient_matrix(case: Case, pose: Pose) -> Array:
         k[:, 7, 6] = nrm[1]
         k[:, 8, 6] = cross(j["B"], np.broadcast_to(nrm, j["B"].shape))
         k[:, 8, 7] = 1.0                # M14: the guide's moment on the slider
-    k[:, row(case.drive_link) + 2, 8] = 1.0
+    k[:, row(case.preset.drive_link) + 2, 8] = 1.0
     return k
 
 
@@ -97,11 +97,11 @@ FixedLoad = tuple[int, Vec2, Vec2, float]
 def fixed_loads(case: Case) -> list[tuple[str, FixedLoad]]:
     """The external loads and the weights m·g at the centres of mass, labelled."""
     out: list[tuple[str, FixedLoad]] = [(f"load[{i}]", (ld.link, ld.at, ld.force, ld.torque))
-                                        for i, ld in enumerate(case.loads)]
+                                        for i, ld in enumerate(case.preset.loads)]
     if case.gravity != (0.0, 0.0):
         gx, gy = case.gravity
         out += [(f"weight{m.link}", (m.link, m.com, (m.mass * gx, m.mass * gy), 0.0))
-                for m in case.masses]
+                for m in case.preset.masses]
     return out
 
 
@@ -171,10 +171,10 @@ def slide_force_vector(case: Case, pose: Pose, force_along_u: Array) -> Array:
 
 def viscous_vectors(case: Case, pose: Pose) -> list[Array]:
     """b contributions of the viscous friction terms, one per joint (−c·ω_rel, −c·v)."""
-    if case.friction is None:
+    if case.preset.friction is None:
         return []
     out = []
-    for joint, c in case.friction.viscous.items():
+    for joint, c in case.preset.friction.viscous.items():
         if c == 0.0:
             continue
         if joint == "slide":
@@ -188,8 +188,8 @@ def viscous_vectors(case: Case, pose: Pose) -> list[Array]:
 def known_vectors(case: Case, pose: Pose) -> list[tuple[str, Array]]:
     """Every known contribution to b, labelled, one per 'load' (superposition sums these)."""
     parts = [(label, wrench_vector(case, pose, [ld])) for label, ld in fixed_loads(case)]
-    if not case.motion.is_static:
-        parts += [(f"inertia{m.link}", inertia_vector(pose, m)) for m in case.masses]
+    if not case.preset.motion.is_static:
+        parts += [(f"inertia{m.link}", inertia_vector(pose, m)) for m in case.preset.masses]
     parts += [(f"viscous[{i}]", v) for i, v in enumerate(viscous_vectors(case, pose))]
     return parts
 
@@ -198,8 +198,8 @@ def known_vector(case: Case, pose: Pose) -> Array:
     """b: every known load in one right-hand side, shape (N, 9): the fixed loads folded per
     link, then the pose-dependent inertia and viscous terms."""
     b = wrench_vector(case, pose, (ld for _, ld in fixed_loads(case)))
-    if not case.motion.is_static:
-        for m in case.masses:
+    if not case.preset.motion.is_static:
+        for m in case.preset.masses:
             b += inertia_vector(pose, m)
     for v in viscous_vectors(case, pose):
         b += v
@@ -219,7 +219,7 @@ def levers(case: Case, joints: dict[str, Coordinates]) -> tuple[Coordinates, Coo
     if case.mechanism == "slider_crank":
         u, _ = slide_frame(case)
         return first, (float(u[1]), -float(u[0]))
-    if case.drive_link == 2:
+    if case.preset.drive_link == 2:
         b0x, b0y = joints["B0"]
         return first, (bx - b0x, by - b0y)
     a0x, a0y = joints["A0"]
@@ -269,7 +269,7 @@ def condition(case: Case, pose: Pose) -> Array:
     """The condition number a force analysis reports: the force core's, and the
     velocity equations' too when velocities enter (motion or friction)."""
     cond = core_condition(case, coordinates(pose.joints))
-    if not case.motion.is_static or case.has_friction:
+    if not case.preset.motion.is_static or case.has_friction:
         cond = np.maximum(cond, kinematic_condition(case, pose))
     return cond
 
@@ -296,7 +296,7 @@ def solve_members(case: Case, joints: dict[str, Coordinates],
     if case.mechanism == "slider_crank":
         u, nrm = slide_frame(case)
         rhs2: Array | float = -(f4x * u[0] + f4y * u[1])
-    elif case.drive_link == 2:
+    elif case.preset.drive_link == 2:
         rhs2 = -m4
     else:
         rhs2 = (v2x * f3y - v2y * f3x) - m2
@@ -314,7 +314,7 @@ def solve_members(case: Case, joints: dict[str, Coordinates],
         j2 = -m4 if isinstance(m4, np.ndarray) else np.full(np.shape(f34x), -m4)
     else:
         j1, j2 = -f34x - f4x, -f34y - f4y
-    if case.drive_link == 2:  # crank about A0, the ground frame's origin
+    if case.preset.drive_link == 2:  # crank about A0, the ground frame's origin
         torque = ax * f23y - ay * f23x - m2
     else:  # rocker about B0: (B − B0) × F34 + m4 + T = 0
         b0x, b0y = joints["B0"]

@@ -43,7 +43,7 @@ FORCE_QUANTITIES = ("F12_x", "F12_y", "F23_x", "F23_y", "F34_x", "F34_y", "F14_x
 
 def drive_quantity(case: Case) -> str:
     """``T12`` or ``T14``, after the link the drive acts on."""
-    return f"T1{case.drive_link}"
+    return f"T1{case.preset.drive_link}"
 
 
 @dataclass(frozen=True)
@@ -88,7 +88,7 @@ def wrap_angle(angle: Array) -> Array:
 def pose_values(case: Case, pose: Pose | Placement) -> dict[str, Array]:
     """theta13 and theta14 (four-bar) or s14 (slider-crank)."""
     out = {"theta13": wrap_angle(pose.theta13)}
-    if isinstance(case.geometry, FourBarGeometry):
+    if isinstance(case.preset.geometry, FourBarGeometry):
         out["theta14"] = wrap_angle(pose.theta14)
     else:
         assert pose.s14 is not None
@@ -102,9 +102,9 @@ def slide_friction_along(case: Case, pose: Pose, normal: Array) -> Array | float
     for t in coulomb_terms(case, pose.theta12):
         if t.joint == "slide":
             along = along + slide_friction_force(t, normal)
-    if case.friction is not None and case.friction.viscous.get("slide", 0.0) > 0.0:
+    if case.preset.friction is not None and case.preset.friction.viscous.get("slide", 0.0) > 0.0:
         assert pose.s14_dot is not None
-        along = along - case.friction.viscous["slide"] * pose.s14_dot
+        along = along - case.preset.friction.viscous["slide"] * pose.s14_dot
     return along
 
 
@@ -112,7 +112,7 @@ def unknowns_to_values(case: Case, x: list[Array], along: Array | float = 0.0) -
     """Name the solved unknowns (x's columns) in CONVENTIONS terms: F14 is assembled for a
     slider from the normal N14 and the friction ``along`` the slide."""
     out = dict(zip(FORCE_QUANTITIES[:6], x[:6], strict=True))
-    if isinstance(case.geometry, FourBarGeometry):
+    if isinstance(case.preset.geometry, FourBarGeometry):
         out["F14_x"], out["F14_y"] = x[6], x[7]
     else:
         u, nrm = slide_frame(case)
@@ -153,7 +153,7 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
     # A pose that does not assemble is NaN by design (its verdict is no_solution):
     # the arithmetic on it must not warn.
     with np.errstate(invalid="ignore", divide="ignore"):
-        angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
+        angles = as_angles(case.preset.theta12 if theta12_rad is None else theta12_rad)
         if case.kind == "static":
             return static_results(case, angles)
         pose = pose_of(case, angles)

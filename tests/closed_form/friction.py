@@ -54,9 +54,9 @@ def sense_pose(case: Case, theta12: Array) -> Pose:
     A static case with friction is quasi-static motion in ``direction``: the
     velocity *ratios* follow from a unit input speed in that sense.
     """
-    if case.motion.omega != 0.0:
+    if case.preset.motion.omega != 0.0:
         return pose_of(case, theta12)
-    return pose_of(case, theta12, omega=float(case.input_sense), alpha=0.0)
+    return pose_of(case, theta12, omega=float(case.preset.input_sense), alpha=0.0)
 
 
 #: Relative speeds below this fraction of the input speed count as zero: at an
@@ -72,7 +72,7 @@ def sense(speed: Array, reference: float) -> Array:
 
 def coulomb_terms(case: Case, theta12: Array) -> list[CoulombTerm]:
     """The active Coulomb terms with the sense each opposes."""
-    f = case.friction
+    f = case.preset.friction
     if f is None or not case.has_coulomb_friction:
         return []
     pose = sense_pose(case, theta12)
@@ -85,7 +85,7 @@ def coulomb_terms(case: Case, theta12: Array) -> list[CoulombTerm]:
     if case.mechanism == "slider_crank" and f.slide_coefficient() > 0.0:
         assert pose.s14_dot is not None
         terms.append(CoulombTerm("slide", f.slide_coefficient(),
-                                 sense(pose.s14_dot, w2 * case.geometry.scale)))
+                                 sense(pose.s14_dot, w2 * case.scale)))
     return terms
 
 

@@ -31,7 +31,7 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
     with np.errstate(invalid="ignore", divide="ignore"):
         if case.has_coulomb_friction:
             raise ValueError(REFUSAL)
-        angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
+        angles = as_angles(case.preset.theta12 if theta12_rad is None else theta12_rad)
         pose = pose_of(case, angles)
         x = np.zeros((angles.shape[0], 9))
         for _, b in known_vectors(case, pose):

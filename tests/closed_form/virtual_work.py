@@ -30,17 +30,17 @@ REFUSAL = ("the power (virtual work) method gives the drive torque only for syst
 def load_power(case: Case, actual: Pose, virtual: Pose) -> Array:
     """Virtual power of every known load: actual forces times virtual velocities."""
     power = np.zeros(actual.theta12.shape[0])
-    for load in case.loads:
+    for load in case.preset.loads:
         _, v, _ = virtual.point(load.link, load.at)
         power += v @ np.asarray(load.force) + load.torque * virtual.links[load.link].omega
-    for m in case.masses:
+    for m in case.preset.masses:
         _, v, _ = virtual.point(m.link, m.com)
         _, _, acc = actual.point(m.link, m.com)
         power += m.mass * (v @ np.asarray(case.gravity))
         power -= m.mass * np.einsum("ij,ij->i", acc, v)
         power -= m.inertia * actual.links[m.link].alpha * virtual.links[m.link].omega
-    if case.friction is not None:
-        for joint, c in case.friction.viscous.items():
+    if case.preset.friction is not None:
+        for joint, c in case.preset.friction.viscous.items():
             if joint == "slide":
                 assert actual.s14_dot is not None and virtual.s14_dot is not None
                 power -= c * actual.s14_dot * virtual.s14_dot
@@ -54,10 +54,10 @@ def drive_torque(case: Case, theta12: ArrayLike | None = None) -> tuple[Array, A
 
     ω_d → 0 (a rocker dead point with drive_link = 4) makes T singular.
     """
-    angles = as_angles(case.theta12 if theta12 is None else theta12)
+    angles = as_angles(case.preset.theta12 if theta12 is None else theta12)
     actual = pose_of(case, angles)
     virtual = pose_of(case, angles, omega=1.0, alpha=0.0)
-    omega_d = virtual.links[case.drive_link].omega
+    omega_d = virtual.links[case.preset.drive_link].omega
     with np.errstate(divide="ignore", invalid="ignore"):
         return -load_power(case, actual, virtual) / omega_d, omega_d
 
@@ -66,7 +66,7 @@ def transmission_sine(case: Case, pose: Pose) -> Array:
     """|sin μ| per pose: coupler–rocker angle (four-bar) or rod–slide normal (slider-crank)."""
     if pose.s14 is None:
         return np.abs(np.sin(pose.theta13 - pose.theta14))
-    return np.abs(np.cos(pose.theta13 - case.ground_angle))
+    return np.abs(np.cos(pose.theta13 - case.preset.ground_angle))
 
 
 def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults:
@@ -82,13 +82,13 @@ def solve_poses(case: Case, theta12_rad: ArrayLike | None = None) -> PoseResults
     with np.errstate(invalid="ignore", divide="ignore"):
         if case.has_coulomb_friction:
             raise ValueError(REFUSAL)
-        angles = as_angles(case.theta12 if theta12_rad is None else theta12_rad)
+        angles = as_angles(case.preset.theta12 if theta12_rad is None else theta12_rad)
         torque, omega_d = drive_torque(case, angles)
         pose = pose_of(case, angles, omega=0.0, alpha=0.0)
         virtual = pose_of(case, angles, omega=1.0, alpha=0.0)
         speeds = [np.abs(virtual.links[k].omega) for k in (2, 3, 4)]
         if virtual.s14_dot is not None:
-            speeds.append(np.abs(virtual.s14_dot) / case.geometry.scale)
+            speeds.append(np.abs(virtual.s14_dot) / case.scale)
         ratio = np.abs(omega_d) / np.max(speeds, axis=0)
         with np.errstate(divide="ignore"):
             condition = 1.0 / np.minimum(ratio, transmission_sine(case, pose))
@@ -113,7 +113,7 @@ def solve(case: Case) -> Solution:
         "wall_time_s": time.perf_counter() - start,
     }
     if not np.isfinite(values["theta13"]):
-        status, message = unassembled_verdict(case, case.theta12)
+        status, message = unassembled_verdict(case, case.preset.theta12)
         return Solution(case.name, "virtual_work", {}, status=status, message=message,
                         diagnostics=diagnostics)
     if results.singular[0]:
