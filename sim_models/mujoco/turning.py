@@ -29,7 +29,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mechcheck.analytic.case import Case, Motion
+from mechcheck.analytic.case import Case
 from mechcheck.analytic.presets import Renaming, as_linkage
 from mechcheck.sim_models.locks import held_at_drawn
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
@@ -39,21 +39,13 @@ from mechcheck.sim_models.turning import (
     Amplification,
     Sample,
     TurnResult,
-    amplification_result,
-    branch_sign,
-    output_load,
-    seed_pose,
+    bare,
+    held_against,
+    measure_amplification,
     turn_result,
 )
 
 SIMULATOR = "mujoco"
-
-
-def bare(case: Case, theta12: float | None = None) -> Case:
-    """The case at rest without its loads, masses and friction (the turning and holding
-    experiments apply their own), at ``theta12`` if given."""
-    return case.with_(theta12=case.theta12 if theta12 is None else theta12, loads=(), masses=(),
-                      friction=None, motion=Motion())
 
 
 class PresetPose:
@@ -130,7 +122,7 @@ def hold_at(case: Case, theta12: float, load: float
             ) -> tuple[tuple[float, float, float], float, bool, int]:
     """Hold the crank at ``theta12`` against ``load`` until settled (the linkage drawn at
     that pose, at rest in it). Returns (pose θ12, θ13, output; T12; settled; steps)."""
-    held = bare(case, theta12).with_(loads=(output_load(case, load),))
+    held = held_against(case, theta12, load)
     rig = LinkageRig(as_linkage(held), HOLD_SETTINGS)
     pose = PresetPose(held, rig)
     m, d = rig.model, rig.data
@@ -162,8 +154,4 @@ def amplification(case: Case, theta12_values: ArrayLike, output_load: float = 1.
     equality at each θ12, starting at rest from the analytic pose, and the model is stepped
     until settled; T12 is the equality's force.
     """
-    start = time.perf_counter()
-    thetas = np.atleast_1d(np.asarray(theta12_values, dtype=float))
-    seed_branch = branch_sign(case, *np.array([seed_pose(case, t)[1:] for t in thetas]).T)
-    rows = [hold_at(case, float(t), output_load) for t in thetas]
-    return amplification_result(SIMULATOR, case, output_load, rows, seed_branch, start)
+    return measure_amplification(SIMULATOR, hold_at, case, theta12_values, output_load)

@@ -21,14 +21,12 @@ from __future__ import annotations
 import math
 import time
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.presets import Renaming, as_linkage
 from mechcheck.sim_models.locks import held_at_drawn
-from mechcheck.sim_models.mujoco.turning import bare
 from mechcheck.sim_models.pymunk.forces import torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -42,10 +40,9 @@ from mechcheck.sim_models.turning import (
     Amplification,
     Sample,
     TurnResult,
-    amplification_result,
-    branch_sign,
-    output_load,
-    seed_pose,
+    bare,
+    held_against,
+    measure_amplification,
     turn_result,
 )
 
@@ -126,7 +123,7 @@ def hold_at(case: Case, theta12: float, load: float
             ) -> tuple[tuple[float, float, float], float, bool, int]:
     """Hold the crank at ``theta12`` against ``load`` until settled (the linkage drawn at
     that pose, at rest in it). Returns (pose θ12, θ13, output; T12; settled; steps)."""
-    held = bare(case, theta12).with_(loads=(output_load(case, load),))
+    held = held_against(case, theta12, load)
     linkage = as_linkage(held)
     model = build_linkage_model(linkage, HOLD_SETTINGS, solve_pose(linkage.linkage).q[0])
     dt = HOLD_SETTINGS.dt
@@ -159,8 +156,4 @@ def amplification(case: Case, theta12_values: ArrayLike, output_load: float = 1.
     case's own loads, masses and friction are not applied). Each θ12 gets a fresh model held
     there, seeded on the analytic pose at rest, stepped until settled.
     """
-    start = time.perf_counter()
-    thetas = np.atleast_1d(np.asarray(theta12_values, dtype=float))
-    seed_branch = branch_sign(case, *np.array([seed_pose(case, t)[1:] for t in thetas]).T)
-    rows = [hold_at(case, float(t), output_load) for t in thetas]
-    return amplification_result(SIMULATOR, case, output_load, rows, seed_branch, start)
+    return measure_amplification(SIMULATOR, hold_at, case, theta12_values, output_load)
