@@ -1,13 +1,13 @@
 """Seed 001's mechanism theory measured in pymunk: turn the crank and see.
 
-The same two experiments as :mod:`mechcheck.sim_models.mujoco.turning`, on the four-bar or
+The same two experiments as :mod:`.mujoco_turning`, on the four-bar or
 slider-crank as its linkage (the linkage builder's model, :mod:`mechcheck.analytic.presets`),
 judged by the same run protocol, result types and extreme finder
-(:mod:`mechcheck.sim_models.turning`):
+(:mod:`.protocol`):
 
 - :func:`turn_crank` drives the crank with a :class:`pymunk.SimpleMotor` of bounded torque
   (``max_force``) in place of the crank's gear lock, every other joint damped (the servo
-  model of :mod:`.locks`);
+  model of :mod:`.pymunk_locks`);
 - :func:`amplification` holds the crank with its own gear lock against a pure torque on
   the rocker (or a force along the slide) and steps until settled; the lock's signed
   accumulated impulse / dt (:mod:`mechcheck.sim_models.pymunk.forces`) is T12.
@@ -26,7 +26,6 @@ from numpy.typing import ArrayLike
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.presets import Renaming, as_linkage
-from mechcheck.sim_models.locks import held_at_drawn
 from mechcheck.sim_models.pymunk.forces import torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -34,9 +33,10 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     build_linkage_model,
     damp,
 )
-from mechcheck.sim_models.pymunk.locks import LINK_MASS, LinkageServo, loop_gap
 from mechcheck.sim_models.pymunk.settings import SolverSettings
-from mechcheck.sim_models.turning import (
+
+from .locks import held_at_drawn
+from .protocol import (
     Amplification,
     Sample,
     TurnResult,
@@ -45,6 +45,7 @@ from mechcheck.sim_models.turning import (
     measure_amplification,
     turn_result,
 )
+from .pymunk_locks import LINK_MASS, LinkageServo, loop_gap
 
 SIMULATOR = "pymunk"
 
@@ -67,7 +68,7 @@ def preset_pose(case: Case, renaming: Renaming, model: LinkageModel) -> tuple[fl
 
 class PymunkTurner(LinkageServo):
     """The servo-driven pymunk model of a four-bar's or slider-crank's crank (a
-    :class:`~mechcheck.sim_models.turning.Turner`)."""
+    :class:`.protocol.Turner`)."""
 
     def __init__(self, case: Case) -> None:
         super().__init__(held_at_drawn(as_linkage(bare(case))), "A0")

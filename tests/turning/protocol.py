@@ -3,7 +3,7 @@
 The run protocol (:func:`run_leg`, :func:`turn_result`), the result types
 (:class:`TurnResult`, :class:`Amplification`) and the extreme finder
 (:func:`rocker_extremes`) are simulator-independent, so MuJoCo
-(:mod:`mechcheck.sim_models.mujoco.turning`) and pymunk (:mod:`mechcheck.sim_models.pymunk.turning`)
+(:mod:`.mujoco_turning`) and pymunk (:mod:`.pymunk_turning`)
 are judged by the same rules. Each simulator supplies a :class:`Turner`.
 """
 
