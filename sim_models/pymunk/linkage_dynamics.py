@@ -56,15 +56,11 @@ from mechcheck.sim_models.linkage_motion import (
     Motion,
     at_rest_reason,
     driven_motion,
+    has_free_coordinates,
     lead_limit,
     self_locking_note,
 )
-from mechcheck.sim_models.pymunk.linkage import (
-    has_free_coordinates,
-    loop_violations,
-    pose_drifts,
-    pose_table,
-)
+from mechcheck.sim_models.pymunk.linkage import loop_violations, pose_drifts, pose_table
 from mechcheck.sim_models.pymunk.linkage_friction import (
     Diverged,
     JointLoads,
