@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mechcheck.analytic.solution import FORCE_FLOOR_N, quantity_kind
+from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution, quantity_kind
 
 #: First lead time, in steps, and the most it may grow to.
 LEAD_STEPS = 50
@@ -164,6 +164,16 @@ def lengthen_lead(read: Reading, limit: LeadLimit, dt: float, scale: float, runs
     return out
 
 
+def converge(read: Reading, limit: LeadLimit, dt: float, scale: float, runs: int,
+             units: dict[str, str] | None = None) -> Convergence:
+    """Both checks in turn: the lead-in lengthened (:func:`lengthen_lead`) and, once two
+    readings agree on it, the time step halved (:func:`halve_timestep`)."""
+    out = lengthen_lead(read, limit, dt, scale, runs, units)
+    if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
+        out = halve_timestep(read, out, scale, runs, units)
+    return out
+
+
 def halve_timestep(read: Reading, out: Convergence, scale: float, runs: int,
                    units: dict[str, str] | None = None) -> Convergence:
     """Halve the time step until two readings agree within :data:`TIMESTEP_AGREEMENT_RTOL`,
@@ -200,3 +210,16 @@ def left_assembly(drift: float, scale: float) -> str:
     return (f"the driven run reached the instant {drift:.3g} m from the prescribed pose: it "
             "left the assembly it was started on (readings that agree there are another "
             "linkage's); forces withheld")
+
+
+def driven_verdict(case: str, backend: str, out: Convergence, diagnostics: dict[str, float | str],
+                   units: dict[str, str], scale: float, why_not: Callable[[], str]) -> Solution:
+    """A driven reading as a Solution: ``not_settled`` with the pose alone where a check
+    failed (``why_not()`` says why) or the run left its assembly (:func:`left_assembly`,
+    from the diagnostics' ``pose_drift``), else every value."""
+    pose = {q: v for q, v in out.values.items() if quantity_kind(q, units.get(q)) == "pose"}
+    why = why_not() if not out.converged else left_assembly(float(diagnostics["pose_drift"]), scale)
+    if why:
+        return Solution(case, backend, pose, status="not_settled", message=why,
+                        diagnostics=diagnostics, units=units)
+    return Solution(case, backend, out.values, diagnostics=diagnostics, units=units)

@@ -48,6 +48,11 @@ def is_driven(case: Case) -> bool:
     return case.linkage.is_moving or case.has_coulomb_friction
 
 
+def has_free_coordinates(case: Case) -> bool:
+    """The linkage has coordinates no driver holds (settled from the drawn pose)."""
+    return case.linkage.dof > len(case.linkage.drivers)
+
+
 #: rad/s or m/s: a joint slower than this at the reading is at rest for a simulator. In 1 s
 #: it moves 1e-9, below what a driven run tracks its motion to; measured (four-bar,
 #: 2026-11): MuJoCo read T12 7.8e-3 off at ω = −3e-232 rad/s, α = 0, where only the sign of

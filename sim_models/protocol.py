@@ -60,3 +60,15 @@ class Simulator:
                         error_of: ErrorOf) -> StiffnessStudy:
         study: Any = resolve(self.stiffness)(case, driven, quick, error_of)
         return study
+
+
+def held_and_exact(name: str, module: str, held: str, exact: str, stiffness: str) -> Simulator:
+    """The usual simulator package: the backend ``name`` (held until settled, or driven:
+    tolerance family ``settled``) and ``name_solve`` (forces at the analytic pose:
+    ``exact_solve``), their functions ``settle``, ``solve_at_pose`` and ``sweep`` in
+    ``module``, described by ``held`` and ``exact``; both need the package ``name``."""
+    return Simulator(name, (
+        Backend(name, f"{module}:settle", "settled", held, sweep=f"{module}:sweep", requires=name),
+        Backend(f"{name}_solve", f"{module}:solve_at_pose", "exact_solve", exact,
+                sweep=f"{module}:sweep", requires=name),
+    ), stiffness, requires=name)

@@ -22,7 +22,6 @@ from mechcheck.sim_models.mujoco.settle import (
     STOP_WINDOW,
     VELOCITY_TOL,
     WOBBLE_RTOL,
-    wobble_allowed,
 )
 
 Array = np.ndarray
@@ -50,7 +49,7 @@ class StepWatch:
             self.changes.append(max(abs(a - b) for a, b in zip(values, previous, strict=True))
                                 / size)
         self.readings.append(values)
-        wobble = wobble_allowed(size, self.rounding)
+        wobble = max(WOBBLE_RTOL, self.rounding / size)  # or the rounding floor where larger
         if remaining_change(self.changes) <= SETTLE_RTOL:
             self.rule = "decay"
         elif len(self.changes) >= STOP_WINDOW and max(self.changes[-STOP_WINDOW:]) <= QUIET_RTOL:
@@ -117,7 +116,7 @@ def vectorised_stops(history: Array, readings: Array, speed: Array,
     quiet = largest <= QUIET_RTOL
     here = size[:, STOP_WINDOW:]  # the size at each reading of the chunk
     with np.errstate(invalid="ignore"):
-        wobble = np.maximum(WOBBLE_RTOL, rounding / here)  # :func:`.settle.wobble_allowed`
+        wobble = np.maximum(WOBBLE_RTOL, rounding / here)  # or the rounding floor where larger
     # The floor's spread only where the rest of its rule holds and no single step in its
     # window is larger than the spread allowed (a spread is at least every step within
     # it): a window of 32 readings at every reading costs more than the rollout.

@@ -12,10 +12,9 @@ import math
 import pytest
 
 from mechcheck.analytic.theory import driver_ranges
-from mechcheck.sim_models.mujoco import locks as mujoco_locks
-from mechcheck.sim_models.pymunk import locks as pymunk_locks
 
 from .builtin import builtin_cases
+from .turning import mujoco_locks, pymunk_locks
 
 SIMULATORS = {"mujoco": mujoco_locks.driver_locks, "pymunk": pymunk_locks.driver_locks}
 

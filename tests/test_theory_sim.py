@@ -34,11 +34,10 @@ from mechcheck.analytic import fourbar_kinematics, slidercrank_kinematics, theor
 from mechcheck.analytic.case import Case, FourBarGeometry, SliderCrankGeometry
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.presets import preset_case
-from mechcheck.sim_models.mujoco import turning as mujoco_turning
-from mechcheck.sim_models.pymunk import turning as pymunk_turning
-from mechcheck.sim_models.turning import Amplification, TurnResult
 
 from .strategies import assembling
+from .turning import mujoco_turning, pymunk_turning
+from .turning.protocol import Amplification, TurnResult
 
 SIMULATORS: dict[str, ModuleType] = {"mujoco": mujoco_turning, "pymunk": pymunk_turning}
 

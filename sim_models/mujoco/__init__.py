@@ -12,19 +12,10 @@ Nothing here imports MuJoCo, so that listing the backends stays light: the funct
 
 from __future__ import annotations
 
-from mechcheck.analytic.contract import Backend
-from mechcheck.sim_models.protocol import Simulator
+from mechcheck.sim_models.protocol import held_and_exact
 
-_HERE = "mechcheck.sim_models.mujoco.backend"
-
-BACKENDS = (
-    Backend("mujoco", f"{_HERE}:settle", "settled",
-            "MuJoCo, held until settled (statics) or driven (dynamics, friction)",
-            sweep=f"{_HERE}:sweep", requires="mujoco"),
-    Backend("mujoco_solve", f"{_HERE}:solve_at_pose", "exact_solve",
-            "MuJoCo's constraint forces at the exact analytic pose",
-            sweep=f"{_HERE}:sweep", requires="mujoco"),
-)
-
-SIMULATOR = Simulator("mujoco", BACKENDS, "mechcheck.sim_models.mujoco.softness:stiffness_study",
-                      requires="mujoco")
+SIMULATOR = held_and_exact("mujoco", "mechcheck.sim_models.mujoco.backend",
+                           "MuJoCo, held until settled (statics) or driven (dynamics, friction)",
+                           "MuJoCo's constraint forces at the exact analytic pose",
+                           "mechcheck.sim_models.mujoco.softness:stiffness_study")
+BACKENDS = SIMULATOR.backends

@@ -30,7 +30,7 @@ from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
-from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
+from mechcheck.sim_models.linkage_motion import driven_sweep, has_free_coordinates, is_driven
 from mechcheck.sim_models.mujoco import _fast
 from mechcheck.sim_models.mujoco.batch_settle import (
     BatchSettler,
@@ -80,10 +80,6 @@ def unbuildable(case: Case) -> str | None:
     except Unbuildable as error:
         return str(error)
     return None
-
-
-def has_free_coordinates(case: Case) -> bool:
-    return case.linkage.dof > len(case.linkage.drivers)
 
 
 def settle_linkage(case: Case, rig: LinkageRig | None = None,

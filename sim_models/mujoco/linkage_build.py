@@ -40,7 +40,7 @@ class RigModel:
     def __init__(self, case: Case, settings: Settings = STATIC,
                  customize: Callable[[mujoco.MjSpec], None] | None = None) -> None:
         """``customize`` edits the spec before it is compiled (the servo models of
-        :mod:`.locks` and :mod:`.turning`)."""
+        ``tests/turning/``)."""
         self.case = case
         self.settings = settings
         self.linkage = linkage = case.linkage

@@ -48,15 +48,13 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.linkage_kinematics import solve_pose
-from mechcheck.analytic.solution import Solution, quantity_kind
+from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.convergence import (
-    LEAD_AGREEMENT_RTOL,
     Convergence,
-    halve_timestep,
+    converge,
+    driven_verdict,
     inertia_correction,
-    left_assembly,
-    lengthen_lead,
     massless_limit,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
@@ -239,10 +237,7 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
         return read_drive(rigs, motion, steps, dt, friction)
 
     limit = lead_limit(case, motion, float(results.condition[0]))
-    out = lengthen_lead(read, limit, rigs.base.settings.timestep, rigs.base.scale, rigs.runs,
-                        units)
-    if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
-        out = halve_timestep(read, out, rigs.base.scale, rigs.runs, units)
+    out = converge(read, limit, rigs.base.settings.timestep, rigs.base.scale, rigs.runs, units)
     return driven_solution(case, rigs, out, results, time.perf_counter() - start)
 
 
@@ -262,13 +257,5 @@ def driven_solution(case: Case, rigs: LinkageRigs, out: Convergence, results: Li
               fictitious_runs=rigs.runs, fictitious_inertia_correction=(
                   inertia_correction(rig.read(), out.values, rig.scale, units)
                   if rigs.doubled is not None else 0.0))
-    pose = {q: v for q, v in out.values.items() if quantity_kind(q, units.get(q)) == "pose"}
-    if not out.converged:
-        return Solution(case.name, "mujoco", pose, status="not_settled",
-                        message=out.verdict() + self_locking_note(results),
-                        diagnostics=diagnostics, units=units)
-    left = left_assembly(float(diagnostics["pose_drift"]), case.linkage.scale)
-    if left:
-        return Solution(case.name, "mujoco", pose, status="not_settled", message=left,
-                        diagnostics=diagnostics, units=units)
-    return Solution(case.name, "mujoco", out.values, diagnostics=diagnostics, units=units)
+    return driven_verdict(case.name, "mujoco", out, diagnostics, units, case.linkage.scale,
+                          lambda: out.verdict() + self_locking_note(results))

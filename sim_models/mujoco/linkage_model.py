@@ -25,6 +25,7 @@ coordinate q whichever way the tree runs, and a generalised force on it is its e
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import mujoco
@@ -124,18 +125,27 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
     return LinkageTree(_oriented(chosen), tuple(j for j in linkage.joints if j in closures))
 
 
-def _path(joints: list[Joint], start: str, goal: str) -> list[str]:
-    """Names of the joints on the path from ``start`` to ``goal`` through ``joints``."""
-    came: dict[str, tuple[str, str] | None] = {start: None}
+def _breadth_first(joints: list[Joint], start: str) -> Iterator[tuple[str, Joint, str]]:
+    """(link, joint, other) for each link ``other`` first reached through ``joint`` from
+    ``link``, breadth-first from ``start`` over ``joints`` in their order."""
+    reached = {start}
     queue = deque([start])
     while queue:
         link = queue.popleft()
         for j in joints:
             if link in j.links:
                 other = j.links[1] if j.links[0] == link else j.links[0]
-                if other not in came:
-                    came[other] = (link, j.name)
+                if other not in reached:
+                    reached.add(other)
                     queue.append(other)
+                    yield link, j, other
+
+
+def _path(joints: list[Joint], start: str, goal: str) -> list[str]:
+    """Names of the joints on the path from ``start`` to ``goal`` through ``joints``."""
+    came: dict[str, tuple[str, str] | None] = {start: None}
+    for link, j, other in _breadth_first(joints, start):
+        came[other] = (link, j.name)
     names: list[str] = []
     step = came.get(goal)
     while step is not None:
@@ -146,19 +156,8 @@ def _path(joints: list[Joint], start: str, goal: str) -> list[str]:
 
 def _oriented(joints: list[Joint]) -> tuple[TreeJoint, ...]:
     """The tree joints breadth-first from the ground, each with its parent and child."""
-    out: list[TreeJoint] = []
-    reached = {GROUND}
-    queue = deque([GROUND])
-    while queue:
-        link = queue.popleft()
-        for j in joints:
-            if link in j.links:
-                other = j.links[1] if j.links[0] == link else j.links[0]
-                if other not in reached:
-                    reached.add(other)
-                    out.append(TreeJoint(j, link, other, 1.0 if j.links[0] == link else -1.0))
-                    queue.append(other)
-    return tuple(out)
+    return tuple(TreeJoint(j, link, other, 1.0 if j.links[0] == link else -1.0)
+                 for link, j, other in _breadth_first(joints, GROUND))
 
 
 # -- inertia ----------------------------------------------------------------------------

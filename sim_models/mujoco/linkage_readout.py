@@ -242,10 +242,6 @@ class RigReadout(RigModel):
                     + (torsion.damping * s.qvel[:, dof] if self.viscous else 0.0))
         return out
 
-    def pose_values(self) -> dict[str, float]:
-        d = self.data
-        return one_state(self._pose_columns(d.qpos[None], d.site_xpos[None]))
-
     def _pose_columns(self, qpos: Array, site_xpos: Array) -> dict[str, Array]:
         plan = self.plan
         # Positions in the file's frame: the model is built about the reference point.

@@ -189,12 +189,6 @@ def rounding_floor(mass: float, extent: float, timestep: float) -> float:
     return ROUNDING_STEPS * mass * float(np.finfo(float).eps) * extent / timestep ** 2
 
 
-def wobble_allowed(size: float, rounding: float) -> float:
-    """The floor rule's allowance for a reading of ``size`` (N), as a fraction of it:
-    :data:`WOBBLE_RTOL`, or the rounding floor ``rounding`` (N) where that is larger."""
-    return max(WOBBLE_RTOL, rounding / size)
-
-
 class SettlingRig(Protocol):
     """What settling needs of a model (:class:`~.linkage_rig.LinkageRig`)."""
 
@@ -386,10 +380,9 @@ def first_stops(history: np.ndarray, readings: np.ndarray, speed: np.ndarray,
     NaN where the pass has fewer: a window reaching back past the pass's first reading
     holds a NaN, and no rule fires on it, as no rule fires before its window is known.
     ``rounding``: the model's rounding floor (N, :func:`rounding_floor`), the floor rule's
-    allowance where it is more than :data:`WOBBLE_RTOL` of a reading
-    (:func:`wobble_allowed`). The floor's spread is only looked at where the rest of its
-    rule holds and no single step in its window is larger than the spread allowed (a
-    spread is at least every step within it).
+    allowance where it is more than :data:`WOBBLE_RTOL` of a reading. The floor's spread
+    is only looked at where the rest of its rule holds and no single step in its window is
+    larger than the spread allowed (a spread is at least every step within it).
     """
     poses, back, m = history.shape
     chunk = readings.shape[1]

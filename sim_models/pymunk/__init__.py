@@ -10,19 +10,10 @@ Nothing here imports pymunk, so that listing the backends stays light: the funct
 
 from __future__ import annotations
 
-from mechcheck.analytic.contract import Backend
-from mechcheck.sim_models.protocol import Simulator
+from mechcheck.sim_models.protocol import held_and_exact
 
-_HERE = "mechcheck.sim_models.pymunk.backend"
-
-BACKENDS = (
-    Backend("pymunk", f"{_HERE}:settle", "settled",
-            "pymunk, held until settled (statics) or driven (dynamics, friction)",
-            sweep=f"{_HERE}:sweep", requires="pymunk"),
-    Backend("pymunk_solve", f"{_HERE}:solve_at_pose", "exact_solve",
-            "pymunk's constraint solver at the fixed analytic pose",
-            sweep=f"{_HERE}:sweep", requires="pymunk"),
-)
-
-SIMULATOR = Simulator("pymunk", BACKENDS, "mechcheck.sim_models.pymunk.stiffness:stiffness_study",
-                      requires="pymunk")
+SIMULATOR = held_and_exact("pymunk", "mechcheck.sim_models.pymunk.backend",
+                           "pymunk, held until settled (statics) or driven (dynamics, friction)",
+                           "pymunk's constraint solver at the fixed analytic pose",
+                           "mechcheck.sim_models.pymunk.stiffness:stiffness_study")
+BACKENDS = SIMULATOR.backends

@@ -44,7 +44,7 @@ from mechcheck.analytic.linkage_kinematics import (
 )
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
-from mechcheck.sim_models.linkage_motion import is_driven
+from mechcheck.sim_models.linkage_motion import has_free_coordinates, is_driven
 from mechcheck.sim_models.pymunk import _fast
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -424,10 +424,6 @@ def free_start(case: Case, drivers: Array | None = None) -> Array:
     values = np.array([[d.value for d in linkage.drivers]]) if drivers is None else drivers
     q, _ = positions(linkage, np.atleast_2d(values))
     return np.asarray(q[0], dtype=float)
-
-
-def has_free_coordinates(case: Case) -> bool:
-    return case.linkage.dof > len(case.linkage.drivers)
 
 
 def unstable(case: Case, backend: str, results: LinkageResults, index: int = 0) -> Solution | None:

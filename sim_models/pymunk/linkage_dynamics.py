@@ -43,13 +43,12 @@ from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.linkage_kinematics import Array, solve_pose
 from mechcheck.analytic.solution import Solution, quantity_kind
 from mechcheck.sim_models.convergence import (
-    LEAD_AGREEMENT_RTOL,
     Convergence,
+    converge,
     disagreement,
-    halve_timestep,
+    driven_verdict,
     inertia_correction,
     left_assembly,
-    lengthen_lead,
     massless_limit,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
@@ -57,15 +56,11 @@ from mechcheck.sim_models.linkage_motion import (
     Motion,
     at_rest_reason,
     driven_motion,
+    has_free_coordinates,
     lead_limit,
     self_locking_note,
 )
-from mechcheck.sim_models.pymunk.linkage import (
-    has_free_coordinates,
-    loop_violations,
-    pose_drifts,
-    pose_table,
-)
+from mechcheck.sim_models.pymunk.linkage import loop_violations, pose_drifts, pose_table
 from mechcheck.sim_models.pymunk.linkage_friction import (
     Diverged,
     JointLoads,
@@ -447,9 +442,7 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
             last[:] = [read_drive(case, motion, steps, dt, iterations)]
             return last[0].values
 
-        out = lengthen_lead(read, limit, DRIVEN.dt, scale, runs, units)
-        if out.lead_disagreement <= LEAD_AGREEMENT_RTOL:
-            out = halve_timestep(read, out, scale, runs, units)
+        out = converge(read, limit, DRIVEN.dt, scale, runs, units)
         out.solver_disagreement = last[0].solver_disagreement
         steps += out.total_steps
         if out.converged:
@@ -473,16 +466,8 @@ def driven_solution(case: Case, results: LinkageResults, out: Convergence, end: 
               fictitious_runs=runs, iterations=iterations,
               fictitious_inertia_correction=end.correction,
               solver_disagreement=end.solver_disagreement)
-    pose = {k: v for k, v in out.values.items() if quantity_kind(k, units.get(k)) == "pose"}
-    if not out.converged:
-        return Solution(case.name, BACKEND, pose, status="not_settled",
-                        message=unconverged(out, end, linkage.scale) + self_locking_note(results),
-                        diagnostics=diagnostics, units=units)
-    left = left_assembly(float(diagnostics["pose_drift"]), linkage.scale)
-    if left:
-        return Solution(case.name, BACKEND, pose, status="not_settled", diagnostics=diagnostics,
-                        units=units, message=left)
-    return Solution(case.name, BACKEND, out.values, diagnostics=diagnostics, units=units)
+    return driven_verdict(case.name, BACKEND, out, diagnostics, units, linkage.scale,
+                          lambda: unconverged(out, end, linkage.scale) + self_locking_note(results))
 
 
 def unconverged(out: Convergence, end: DriveEnd, scale: float) -> str:

@@ -26,11 +26,10 @@ from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import CaseError
-from mechcheck.sim_models.linkage_motion import driven_sweep, is_driven
+from mechcheck.sim_models.linkage_motion import driven_sweep, has_free_coordinates, is_driven
 from mechcheck.sim_models.pymunk.linkage import (
     Outcome,
     free_start,
-    has_free_coordinates,
     hold_without_correction,
     outcome,
     refusal,

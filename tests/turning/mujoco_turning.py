@@ -5,7 +5,7 @@ Two experiments on the four-bar or slider-crank as its linkage (the linkage buil
 actuator and equality forces); the analytic side only seeds the first pose.
 
 - :func:`turn_crank` drives the crank with a **velocity servo of bounded torque** (the
-  servo of :mod:`.locks`) and records θ12, θ13 and θ14 (or s14) every step. A crank that
+  servo of :mod:`.mujoco_locks`) and records θ12, θ13 and θ14 (or s14) every step. A crank that
   can turn (Grashof crank-rocker, double-crank, rotatable slider-crank) completes its
   turns; one that cannot runs into a toggle, where the servo saturates and the crank
   stops: the run is then repeated in the other sense, and the two rest angles are the
@@ -17,7 +17,7 @@ actuator and equality forces); the analytic side only seeds the first pose.
   amplification, −ω4/ω2 for a rigid linkage, growing without bound toward a toggle.
 
 The simulator-independent parts (the run protocol, the result types and the extreme finder)
-are in :mod:`mechcheck.sim_models.turning`, shared with :mod:`mechcheck.sim_models.pymunk.turning`.
+are in :mod:`.protocol`, shared with :mod:`.pymunk_turning`.
 """
 
 from __future__ import annotations
@@ -29,31 +29,25 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mechcheck.analytic.case import Case, Motion, preset_of
-from mechcheck.analytic.presets import Renaming, as_linkage, redrawn
-from mechcheck.sim_models.locks import held_at_drawn
+from mechcheck.analytic.case import Case, preset_of
+from mechcheck.analytic.presets import Renaming, as_linkage
+from mechcheck.sim_models.mujoco.linkage_readout import one_state
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
-from mechcheck.sim_models.mujoco.locks import LinkageServo
 from mechcheck.sim_models.mujoco.model import Settings
-from mechcheck.sim_models.turning import (
+
+from .locks import held_at_drawn
+from .mujoco_locks import LinkageServo
+from .protocol import (
     Amplification,
     Sample,
     TurnResult,
-    amplification_result,
-    branch_sign,
-    output_load,
-    seed_pose,
+    bare,
+    held_against,
+    measure_amplification,
     turn_result,
 )
 
 SIMULATOR = "mujoco"
-
-
-def bare(case: Case, theta12: float | None = None) -> Case:
-    """The case at rest without its loads, masses and friction (the turning and holding
-    experiments apply their own), at ``theta12`` if given."""
-    return redrawn(case, theta12=preset_of(case).theta12 if theta12 is None else theta12, loads=(), masses=(),
-                      friction=None, motion=Motion())
 
 
 class PresetPose:
@@ -65,7 +59,8 @@ class PresetPose:
         self.rig = rig
 
     def read(self) -> tuple[float, float, float]:
-        pose = self.rig.pose_values()
+        d = self.rig.data
+        pose = one_state(self.rig._pose_columns(d.qpos[None], d.site_xpos[None]))
         values = self.renaming.values(pose)
         output = values.get("theta14", values.get("s14", math.nan))
         # θ13 and θ14 unwrapped: the drawn angles moved by the links' rotations.
@@ -78,7 +73,7 @@ class PresetPose:
 
 class MujocoTurner(LinkageServo):
     """The servo-driven MuJoCo model of a four-bar's or slider-crank's crank (a
-    :class:`~mechcheck.sim_models.turning.Turner`): the lock servo on the crank of its
+    :class:`.protocol.Turner`): the lock servo on the crank of its
     linkage, sampled as the preset's θ12, θ13 and θ14 (or s14)."""
 
     def __init__(self, case: Case) -> None:
@@ -130,7 +125,7 @@ def hold_at(case: Case, theta12: float, load: float
             ) -> tuple[tuple[float, float, float], float, bool, int]:
     """Hold the crank at ``theta12`` against ``load`` until settled (the linkage drawn at
     that pose, at rest in it). Returns (pose θ12, θ13, output; T12; settled; steps)."""
-    held = redrawn(bare(case, theta12), loads=(output_load(case, load),))
+    held = held_against(case, theta12, load)
     rig = LinkageRig(as_linkage(held), HOLD_SETTINGS)
     pose = PresetPose(held, rig)
     m, d = rig.model, rig.data
@@ -162,8 +157,4 @@ def amplification(case: Case, theta12_values: ArrayLike, output_load: float = 1.
     equality at each θ12, starting at rest from the analytic pose, and the model is stepped
     until settled; T12 is the equality's force.
     """
-    start = time.perf_counter()
-    thetas = np.atleast_1d(np.asarray(theta12_values, dtype=float))
-    seed_branch = branch_sign(case, *np.array([seed_pose(case, t)[1:] for t in thetas]).T)
-    rows = [hold_at(case, float(t), output_load) for t in thetas]
-    return amplification_result(SIMULATOR, case, output_load, rows, seed_branch, start)
+    return measure_amplification(SIMULATOR, hold_at, case, theta12_values, output_load)

@@ -1,7 +1,7 @@
 """A linkage's driver turned by a servo in MuJoCo, to measure where it locks
-(:mod:`mechcheck.sim_models.locks`): the linkage builder's model with that driver's joint
+(:mod:`.locks`): the linkage builder's model with that driver's joint
 equality switched off, a bounded-torque velocity servo on its joint and every other tree
-joint damped, as the four-bar's turning model (:mod:`.turning`) does for the crank."""
+joint damped, as the four-bar's turning model (:mod:`.mujoco_turning`) does for the crank."""
 
 from __future__ import annotations
 
@@ -11,11 +11,12 @@ from collections.abc import Callable
 import mujoco
 
 from mechcheck.analytic.case import Case
-from mechcheck.sim_models.locks import DriverLocks, drive_both_ways, driver_length
 from mechcheck.sim_models.mujoco.linkage_model import spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import SETTLE_MASS, Settings
-from mechcheck.sim_models.turning import (
+
+from .locks import DriverLocks, drive_both_ways, driver_length
+from .protocol import (
     CRANK_ARMATURE,
     JOINT_DAMPING,
     SERVO_GAIN,
@@ -55,9 +56,9 @@ def servo_customizer(case: Case, joint: str) -> Callable[[mujoco.MjSpec], None]:
 
 def add_servo(spec: mujoco.MjSpec, joint: str, unit: float, length: float = 1.0) -> None:
     """A bounded-torque velocity servo on ``joint`` (gain, bound and armature in units of
-    ``unit`` = m·L², :mod:`mechcheck.sim_models.turning`), integrated implicitly so that
+    ``unit`` = m·L², :mod:`.protocol`), integrated implicitly so that
     its gain −kv·q̇ is not limited by the inertia of a short link. On a slide, ``length``
-    = L (:func:`~mechcheck.sim_models.locks.driver_length`): the same servo per unit of
+    = L (:func:`.locks.driver_length`): the same servo per unit of
     travel / L, its force × L bounded as the torque."""
     inertia = unit / length**2  # kg·m² on a hinge, kg on a slide
     spec.option.integrator = int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
@@ -71,7 +72,7 @@ def add_servo(spec: mujoco.MjSpec, joint: str, unit: float, length: float = 1.0)
 
 class LinkageServo:
     """The servo-driven MuJoCo model of a linkage's driver (a
-    :class:`~mechcheck.sim_models.turning.Turner`; its "θ12" is the driver's angle from the
+    :class:`.protocol.Turner`; its "θ12" is the driver's angle from the
     drawn pose, or a prismatic driver's travel / L, its torque the servo's, or its force × L;
     the other sample fields are not measured)."""
 

@@ -1,7 +1,7 @@
 """A linkage's driver turned by a servo in pymunk, to measure where it locks
-(:mod:`mechcheck.sim_models.locks`): the linkage builder's model with that driver's gear
+(:mod:`.locks`): the linkage builder's model with that driver's gear
 lock removed, a bounded ``SimpleMotor`` in its place and every other joint damped, as the
-four-bar's turning model (:mod:`.turning`) does for the crank.
+four-bar's turning model (:mod:`.pymunk_turning`) does for the crank.
 
 Chipmunk has no linear motor. A prismatic driver's hold (a pivot) becomes its groove and
 a ``PinJoint`` along the axis whose target lies far beyond the travel in the driving
@@ -17,7 +17,6 @@ import pymunk
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_kinematics import solve_pose
-from mechcheck.sim_models.locks import DriverLocks, drive_both_ways, driver_length
 from mechcheck.sim_models.pymunk.forces import torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     GROOVE_REACH,
@@ -26,7 +25,9 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     build_linkage_model,
 )
 from mechcheck.sim_models.pymunk.settings import SolverSettings
-from mechcheck.sim_models.turning import (
+
+from .locks import DriverLocks, drive_both_ways, driver_length
+from .protocol import (
     JOINT_DAMPING,
     SERVO_SPEED,
     TIMESTEP,
@@ -83,7 +84,7 @@ def dampers(model: LinkageModel, driven: str) -> list[pymunk.Constraint]:
 
 class LinkageServo:
     """The servo-driven pymunk model of a linkage's driver (a
-    :class:`~mechcheck.sim_models.turning.Turner`; its "θ12" is the driver's angle from the
+    :class:`.protocol.Turner`; its "θ12" is the driver's angle from the
     drawn pose, unwrapped, or a prismatic driver's travel / L, its torque the motor's, or
     the pin's force × L)."""
 

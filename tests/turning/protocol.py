@@ -3,7 +3,7 @@
 The run protocol (:func:`run_leg`, :func:`turn_result`), the result types
 (:class:`TurnResult`, :class:`Amplification`) and the extreme finder
 (:func:`rocker_extremes`) are simulator-independent, so MuJoCo
-(:mod:`mechcheck.sim_models.mujoco.turning`) and pymunk (:mod:`mechcheck.sim_models.pymunk.turning`)
+(:mod:`.mujoco_turning`) and pymunk (:mod:`.pymunk_turning`)
 are judged by the same rules. Each simulator supplies a :class:`Turner`.
 """
 
@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mechcheck.analytic.case import Case, Load, preset_of
+from mechcheck.analytic.case import Case, Load, Motion, preset_of
 from mechcheck.analytic.kinematics import pose_of
+from mechcheck.analytic.presets import redrawn
 
 Array = NDArray[np.float64]
 Ending = Literal["turned", "jammed", "budget"]
@@ -379,14 +381,18 @@ def seed_pose(case: Case, theta12: float) -> tuple[float, float, float]:
     return theta12, float(p.links[3].angle[0]), float(out)
 
 
-# -- MuJoCo ------------------------------------------------------------------------------------
+#: A simulator's holding run: (case, θ12, load) -> (pose θ12, θ13, output; T12; settled; steps).
+HoldAt = Callable[[Case, float, float], tuple[tuple[float, float, float], float, bool, int]]
 
 
-
-def amplification_result(simulator: str, case: Case, load: float,
-                         rows: list[tuple[tuple[float, float, float], float, bool, int]],
-                         seed_branch: Array, start: float) -> Amplification:
-    """Package per-pose holding runs as an :class:`Amplification`."""
+def measure_amplification(simulator: str, hold_at: HoldAt, case: Case, theta12_values: ArrayLike,
+                          load: float) -> Amplification:
+    """The simulator's holding runs (``hold_at``) at each θ12, packaged as an
+    :class:`Amplification`; each pose's branch is judged against its analytic seed's."""
+    start = time.perf_counter()
+    thetas = np.atleast_1d(np.asarray(theta12_values, dtype=float))
+    seed_branch = branch_sign(case, *np.array([seed_pose(case, t)[1:] for t in thetas]).T)
+    rows = [hold_at(case, float(t), load) for t in thetas]
     poses = np.array([r[0] for r in rows], dtype=float).reshape(-1, 3)
     kept = branch_sign(case, poses[:, 1], poses[:, 2]) == seed_branch
     return Amplification(simulator, case, load, poses[:, 0], poses[:, 1], poses[:, 2],
@@ -394,6 +400,18 @@ def amplification_result(simulator: str, case: Case, load: float,
                          np.array([r[2] for r in rows], dtype=bool), kept,
                          np.array([r[3] for r in rows], dtype=int), time.perf_counter() - start)
 
+
+def bare(case: Case, theta12: float | None = None) -> Case:
+    """The case at rest without its loads, masses and friction (the turning and holding
+    experiments apply their own), at ``theta12`` if given."""
+    return redrawn(case, theta12=preset_of(case).theta12 if theta12 is None else theta12,
+                   loads=(), masses=(), friction=None, motion=Motion())
+
+
+def held_against(case: Case, theta12: float, load: float) -> Case:
+    """The bare case at ``theta12`` with only the holding runs' output load
+    (:func:`output_load`)."""
+    return redrawn(bare(case, theta12), loads=(output_load(case, load),))
 
 
 def output_load(case: Case, load: float) -> Load:

@@ -1,13 +1,13 @@
 """Seed 001's mechanism theory measured in pymunk: turn the crank and see.
 
-The same two experiments as :mod:`mechcheck.sim_models.mujoco.turning`, on the four-bar or
+The same two experiments as :mod:`.mujoco_turning`, on the four-bar or
 slider-crank as its linkage (the linkage builder's model, :mod:`mechcheck.analytic.presets`),
 judged by the same run protocol, result types and extreme finder
-(:mod:`mechcheck.sim_models.turning`):
+(:mod:`.protocol`):
 
 - :func:`turn_crank` drives the crank with a :class:`pymunk.SimpleMotor` of bounded torque
   (``max_force``) in place of the crank's gear lock, every other joint damped (the servo
-  model of :mod:`.locks`);
+  model of :mod:`.pymunk_locks`);
 - :func:`amplification` holds the crank with its own gear lock against a pure torque on
   the rocker (or a force along the slide) and steps until settled; the lock's signed
   accumulated impulse / dt (:mod:`mechcheck.sim_models.pymunk.forces`) is T12.
@@ -21,14 +21,11 @@ from __future__ import annotations
 import math
 import time
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case, preset_of
 from mechcheck.analytic.linkage_kinematics import solve_pose
-from mechcheck.analytic.presets import Renaming, as_linkage, redrawn
-from mechcheck.sim_models.locks import held_at_drawn
-from mechcheck.sim_models.mujoco.turning import bare
+from mechcheck.analytic.presets import Renaming, as_linkage
 from mechcheck.sim_models.pymunk.forces import torque_on_b
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
@@ -36,18 +33,19 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     build_linkage_model,
     damp,
 )
-from mechcheck.sim_models.pymunk.locks import LINK_MASS, LinkageServo, loop_gap
 from mechcheck.sim_models.pymunk.settings import SolverSettings
-from mechcheck.sim_models.turning import (
+
+from .locks import held_at_drawn
+from .protocol import (
     Amplification,
     Sample,
     TurnResult,
-    amplification_result,
-    branch_sign,
-    output_load,
-    seed_pose,
+    bare,
+    held_against,
+    measure_amplification,
     turn_result,
 )
+from .pymunk_locks import LINK_MASS, LinkageServo, loop_gap
 
 SIMULATOR = "pymunk"
 
@@ -70,7 +68,7 @@ def preset_pose(case: Case, renaming: Renaming, model: LinkageModel) -> tuple[fl
 
 class PymunkTurner(LinkageServo):
     """The servo-driven pymunk model of a four-bar's or slider-crank's crank (a
-    :class:`~mechcheck.sim_models.turning.Turner`)."""
+    :class:`.protocol.Turner`)."""
 
     def __init__(self, case: Case) -> None:
         super().__init__(held_at_drawn(as_linkage(bare(case))), "A0")
@@ -126,7 +124,7 @@ def hold_at(case: Case, theta12: float, load: float
             ) -> tuple[tuple[float, float, float], float, bool, int]:
     """Hold the crank at ``theta12`` against ``load`` until settled (the linkage drawn at
     that pose, at rest in it). Returns (pose θ12, θ13, output; T12; settled; steps)."""
-    held = redrawn(bare(case, theta12), loads=(output_load(case, load),))
+    held = held_against(case, theta12, load)
     linkage = as_linkage(held)
     model = build_linkage_model(linkage, HOLD_SETTINGS, solve_pose(linkage.linkage).q[0])
     dt = HOLD_SETTINGS.dt
@@ -159,8 +157,4 @@ def amplification(case: Case, theta12_values: ArrayLike, output_load: float = 1.
     case's own loads, masses and friction are not applied). Each θ12 gets a fresh model held
     there, seeded on the analytic pose at rest, stepped until settled.
     """
-    start = time.perf_counter()
-    thetas = np.atleast_1d(np.asarray(theta12_values, dtype=float))
-    seed_branch = branch_sign(case, *np.array([seed_pose(case, t)[1:] for t in thetas]).T)
-    rows = [hold_at(case, float(t), output_load) for t in thetas]
-    return amplification_result(SIMULATOR, case, output_load, rows, seed_branch, start)
+    return measure_amplification(SIMULATOR, hold_at, case, theta12_values, output_load)

@@ -1,9 +1,9 @@
 """Where a linkage's driver locks, measured by driving it in a simulator (both simulators
-share this protocol; each supplies a :class:`~mechcheck.sim_models.turning.Turner`).
+share this protocol; each supplies a :class:`.protocol.Turner`).
 
 The driver is let go of its lock and turned from the drawn pose by a bounded-torque
 velocity servo, the other drivers held, the passive joints damped, in each sense in turn
-(:func:`mechcheck.sim_models.turning.run_leg`): it either turns a full revolution, or jams
+(:func:`.protocol.run_leg`): it either turns a full revolution, or jams
 at a lock — the servo pushes at its bound and the driver stays still — and the angle it
 rests at is the lock measured. The other drivers are held at the drawn pose, as the
 analytic range holds them. The analytic side gives the range to compare with
@@ -14,7 +14,7 @@ A prismatic driver runs the same protocol in units of the linkage's size
 (:func:`driver_length`): its travel counts as an angle of travel / size and its force as a
 moment of force × size, so the servo's speed, bound, lead, stall and budget keep their
 meaning (pymunk has no linear motor; its servo is a pin whose error correction is capped
-at the servo speed, :mod:`mechcheck.sim_models.pymunk.locks`).
+at the servo speed, :mod:`.pymunk_locks`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from mechcheck.analytic.case import Case
-from mechcheck.sim_models.turning import Ending, Turner, run_leg
+
+from .protocol import Ending, Turner, run_leg
 
 
 @dataclass(frozen=True)
