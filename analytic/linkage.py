@@ -485,9 +485,15 @@ class Linkage:
         return {j.name: j for j in self.joints}
 
     @property
+    def constraint_rows(self) -> int:
+        """What the joints remove: Σ(3 − Sᵢ), each kind's rows."""
+        return sum(j.kind.rows for j in self.joints)
+
+    @property
     def gruebler(self) -> int:
-        """Gruebler–Kutzbach: 3(n − 1) − 2j for n links (ground included) and j joints."""
-        return 3 * (len(self.links) - 1) - 2 * len(self.joints)
+        """Gruebler–Kutzbach: 3(n − 1) − Σ(3 − Sᵢ) for n links (ground included), each
+        joint leaving its Sᵢ freedoms."""
+        return 3 * (len(self.links) - 1) - self.constraint_rows
 
     @cached_property
     def drawn_rank(self) -> int:
@@ -503,7 +509,7 @@ class Linkage:
         motions, where the constraints are independent again. Constraints dependent at every
         pose (a second pin at one point, a triangle of slides) stay dependent there."""
         drawn = self.drawn_rank
-        if drawn == 2 * len(self.joints):
+        if drawn == self.constraint_rows:
             return drawn
         return max([drawn, *(self._rank_near_drawing(seed) for seed in range(PROBES))])
 
@@ -556,7 +562,7 @@ class Linkage:
     def redundant(self) -> bool:
         """The joints' constraints are dependent (over-constrained): the reactions are then
         not unique."""
-        return self.joint_rank < 2 * len(self.joints)
+        return self.joint_rank < self.constraint_rows
 
     @property
     def is_moving(self) -> bool:

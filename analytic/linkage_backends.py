@@ -137,7 +137,7 @@ def _verdict_rules(case: Case, results: LinkageResults) -> list[Rule]:
     if linkage.redundant:
         rules.append((every, "indeterminate", lambda i: (
             f"the joints' constraints are redundant (rank {linkage.joint_rank} < "
-            f"{2 * len(linkage.joints)}): the reactions are not unique")))
+            f"{linkage.constraint_rows}): the reactions are not unique")))
     if linkage.drawn_at_change_point:
         rules.append((every, "singular", lambda i: (
             f"the linkage is drawn on a change point (its joints' constraints are dependent "

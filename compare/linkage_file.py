@@ -44,7 +44,7 @@ class LinkSpec(Strict):
 
 class JointSpec(Strict):
     name: str
-    kind: Literal["revolute", "prismatic"]
+    kind: Literal["revolute", "prismatic", "pin_in_slot"]
     links: Annotated[list[str], Field(min_length=2, max_length=2)]
     at: str
     axis: Pair | None = None

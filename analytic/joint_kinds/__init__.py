@@ -8,11 +8,12 @@ follow the recipe in ``analytic/README.md``.
 from __future__ import annotations
 
 from mechcheck.analytic.joint_kinds.base import JointFrame, JointKind
+from mechcheck.analytic.joint_kinds.pin_in_slot import PIN_IN_SLOT
 from mechcheck.analytic.joint_kinds.prismatic import PRISMATIC
 from mechcheck.analytic.joint_kinds.revolute import REVOLUTE
 
 #: Every kind, by the name a case file gives it.
-KINDS: dict[str, JointKind] = {kind.name: kind for kind in (REVOLUTE, PRISMATIC)}
+KINDS: dict[str, JointKind] = {kind.name: kind for kind in (REVOLUTE, PRISMATIC, PIN_IN_SLOT)}
 
 
 def kind_named(name: str) -> JointKind:
@@ -20,4 +21,4 @@ def kind_named(name: str) -> JointKind:
     return KINDS[name]
 
 
-__all__ = ["KINDS", "PRISMATIC", "REVOLUTE", "JointFrame", "JointKind", "kind_named"]
+__all__ = ["KINDS", "PIN_IN_SLOT", "PRISMATIC", "REVOLUTE", "JointFrame", "JointKind", "kind_named"]

@@ -27,8 +27,9 @@ if TYPE_CHECKING:
     from mechcheck.analytic.linkage_kinematics import LinkagePose
 
 
-def _axis(joint: Joint) -> Array:
-    assert joint.axis is not None   # checked(): every prismatic joint has one
+def slot_axis(joint: Joint) -> Array:
+    """The joint's sliding direction u at the drawn pose, fixed in links[0]."""
+    assert joint.axis is not None   # checked(): every sliding joint has one
     return np.array(joint.axis)
 
 
@@ -44,7 +45,7 @@ class Prismatic(JointKind):
             raise CaseError(f"links[1] ({second.name!r}) must carry point {joint.at!r}",
                             key=f"{key}.at")
         if joint.axis is None:
-            raise CaseError("a prismatic joint needs its sliding direction", key=f"{key}.axis")
+            raise CaseError(f"a {self.name} joint needs its sliding direction", key=f"{key}.axis")
         ax, ay = pair(joint.axis, f"{key}.axis")
         length = math.hypot(ax, ay)
         if length == 0.0:
@@ -54,25 +55,25 @@ class Prismatic(JointKind):
     # -- kinematics ---------------------------------------------------------------------
     def constrain(self, c: Constraints, joint: Joint, row: int) -> None:
         c.angle_lock(row, joint)
-        c.along(row + 1, joint, perp(_axis(joint)))
+        c.along(row + 1, joint, perp(slot_axis(joint)))
 
     def accelerate(self, m: Motion, joint: Joint, out: Array, row: int) -> None:
-        out[:, row + 1] = m.along(joint, perp(_axis(joint)))
+        out[:, row + 1] = m.along(joint, perp(slot_axis(joint)))
 
     def row_lengths(self, size: float) -> tuple[float, ...]:
         return (size, 1.0)
 
     def drive(self, c: Constraints, joint: Joint, row: int) -> None:
-        c.along(row, joint, _axis(joint))
+        c.along(row, joint, slot_axis(joint))
 
     def drive_acceleration(self, m: Motion, joint: Joint) -> Array | None:
-        return m.along(joint, _axis(joint))
+        return m.along(joint, slot_axis(joint))
 
     def coordinate(self, pose: LinkagePose, joint: Joint) -> tuple[Array, Array, Array]:
         i, j = joint.links
         a0 = pose.linkage.points[joint.at]
         phi_i, w_i, a_i = pose.angle(i)
-        u = rotate(phi_i, _axis(joint))
+        u = rotate(phi_i, slot_axis(joint))
         pj, vj, accj = pose.point(j, a0)
         pi, vi, acci = pose.point(i, a0)
         d, dd, ddd = pj - pi, vj - vi, accj - acci
@@ -84,7 +85,7 @@ class Prismatic(JointKind):
     # -- statics --------------------------------------------------------------------------
     def frame(self, pose: LinkagePose, joint: Joint) -> JointFrame:
         point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
-        u = rotate(pose.angle(joint.links[0])[0], _axis(joint))
+        u = rotate(pose.angle(joint.links[0])[0], slot_axis(joint))
         return JointFrame(point, u, perp(u))
 
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
@@ -107,14 +108,18 @@ class Prismatic(JointKind):
         return {f"F_{joint.name}_x": "N", f"F_{joint.name}_y": "N", f"M_{joint.name}": "N*m"}
 
     def reported(self, pose: LinkagePose, joint: Joint, x: Array, along: Array) -> dict[str, Array]:
+        return self.slide_force(pose, joint, x, along) | {f"M_{joint.name}": x[:, 1]}
+
+    def slide_force(self, pose: LinkagePose, joint: Joint, x: Array, along: Array) -> dict[str, Array]:
+        """The force by links[0] on links[1]: the normal reaction x[:, 0] along n, and along
+        u the Coulomb friction ``along`` and the viscous force."""
         frame = self.frame(pose, joint)
         assert frame.u is not None and frame.n is not None
         f = pose.linkage.friction
         if f is not None and f.viscous.get(joint.name, 0.0):
             along = along - f.viscous[joint.name] * self.coordinate(pose, joint)[1]
         force = x[:, 0][:, None] * frame.n + along[:, None] * frame.u
-        return {f"F_{joint.name}_x": force[:, 0], f"F_{joint.name}_y": force[:, 1],
-                f"M_{joint.name}": x[:, 1]}
+        return {f"F_{joint.name}_x": force[:, 0], f"F_{joint.name}_y": force[:, 1]}
 
     # -- friction -------------------------------------------------------------------------
     def coulomb_coefficient(self, friction: JointFriction, joint: Joint) -> float:
