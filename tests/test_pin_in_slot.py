@@ -130,6 +130,17 @@ def test_the_case_file_takes_it_and_refuses_it_without_an_axis(tmp_path: Path) -
     assert str(path) in message and "slotted-lever" in message and "joints[2].axis" in message
 
 
+def test_the_format_reference_example_is_this_case(tmp_path: Path) -> None:
+    """The pin-in-slot example in docs/case-files.md reads and gives the hand solution."""
+    docs = (Path(__file__).parents[1] / "docs" / "case-files.md").read_text(encoding="utf-8")
+    block = docs.split('name = "slotted-lever"', 1)[1].split("```", 1)[0]
+    path = tmp_path / "example.toml"
+    path.write_text('[[case]]\nname = "slotted-lever"' + block)
+    (case,) = mechcheck.load_cases(path)
+    v = mechcheck.solve(case).values
+    assert (v["F_A_x"], v["F_A_y"], v["Q_O2"]) == pytest.approx((-180.0, 60.0, -6.0), rel=RTOL)
+
+
 CASE_FILE = """
 [[case]]
 name = "slotted-lever"
