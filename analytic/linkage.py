@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechcheck.analytic import linalg
-from mechcheck.analytic.joint_kinds import KINDS, JointKind
+from mechcheck.analytic.joint_kinds import KINDS, GearMesh, JointKind
 from mechcheck.analytic.linalg import Batched
 from mechcheck.analytic.linkage_kinematics import (
     constraint_system,
@@ -97,8 +97,10 @@ class Joint:
     """A joint of some kind (:mod:`.joint_kinds`) between ``links[0]`` and ``links[1]`` at
     point ``at``; a kind given by its name (as a case file writes it) is held as its value.
 
-    Prismatic: ``axis`` is the sliding direction at the drawn pose, fixed in ``links[0]``
-    (a unit vector after construction); ``at`` is carried by ``links[1]``.
+    Prismatic and pin-in-slot: ``axis`` is the sliding direction at the drawn pose, fixed
+    in ``links[0]`` (a unit vector after construction); ``at`` is carried by ``links[1]``.
+    Gear: ``mesh`` holds the pair's centres, pitch radii and pressure angle; ``at`` is the
+    first gear's centre.
     """
 
     name: str
@@ -106,6 +108,7 @@ class Joint:
     links: tuple[str, str]
     at: str
     axis: Vec2 | None = None
+    mesh: GearMesh | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.kind, str) and self.kind in KINDS:
@@ -271,7 +274,9 @@ class Linkage:
                 raise CaseError(f"unknown link {name!r}", key=f"{key}.links")
         if joint.at not in self.points:
             raise CaseError(f"unknown point {joint.at!r}", key=f"{key}.at")
-        return joint.kind.checked(joint, links, key)
+        checked = joint.kind.checked(joint, links, key)
+        checked.kind.check_drawing(checked, self.points, key)
+        return checked
 
     def _check_points_joined(self) -> None:
         """Every pair of links carrying one point is joined there, directly or through
@@ -316,6 +321,9 @@ class Linkage:
         # The file's key: a joint that turns is driven by a rotation, one that slides by a
         # displacement; both bounded, as the pose is reached by continuation.
         kind = joint.kind
+        if not kind.drivable:
+            raise CaseError(f"joint {joint.name!r} is a {kind.name}, which cannot be driven: "
+                            "drive one of its links at another joint", key=f"{key}.joint")
         if kind.rotates:
             driver_rotation(d.value, f"{key}.{kind.driver_key}")
         else:
@@ -417,6 +425,9 @@ class Linkage:
                     raise CaseError(f"unknown joint {name!r}", key=f"friction.{table}.{name}")
                 if table == "pin_radius" and not joints[name].kind.pins:
                     raise CaseError("a pin radius belongs to a revolute joint",
+                                    key=f"friction.{table}.{name}")
+                if not joints[name].kind.frictional:
+                    raise CaseError(f"a {joints[name].kind.name} joint has no friction model",
                                     key=f"friction.{table}.{name}")
                 nonnegative(value, f"friction.{table}.{name}")
 

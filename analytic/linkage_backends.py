@@ -31,6 +31,9 @@ from mechcheck.analytic.values import CaseError
 
 COULOMB_REFUSAL = ("the method applies only to linkages without Coulomb friction: friction "
                    "moments depend on the total reactions")
+NONLINEAR_REFUSAL = ("superposition adds the solutions of single loads: a gear's radial tooth "
+                     "force, tan α·|F_t|, follows the size of the total tangential force and "
+                     "does not add")
 
 
 class CoulombRefused(ValueError):
@@ -226,6 +229,8 @@ def superposition_results(case: Case, first: Array | None = None) -> LinkageResu
     if case.has_coulomb_friction:
         raise CoulombRefused(COULOMB_REFUSAL)
     linkage = case.linkage
+    if any(j.kind.nonlinear_coefficient(j) > 0.0 for j in linkage.joints):
+        raise CoulombRefused(NONLINEAR_REFUSAL)
     results = analytic_results(case, first)
     pose = results.pose
     k = coefficient_matrix(pose)
@@ -267,8 +272,8 @@ def _backend(results_of: Callable[[Case], LinkageResults], name: str, method: st
     start = time.perf_counter()
     try:
         results = results_of(case)
-    except CoulombRefused:
-        return Solution(case.name, name, {}, status="not_applicable", message=COULOMB_REFUSAL,
+    except CoulombRefused as refusal:
+        return Solution(case.name, name, {}, status="not_applicable", message=str(refusal),
                         units=quantity_units(case.linkage))
     return solution_from(case, name, results, method=method, elapsed=time.perf_counter() - start,
                          only=only)

@@ -72,24 +72,30 @@ def coefficient_entries(pose: LinkagePose) -> Batched:
 
 @dataclass(frozen=True)
 class CoulombTerm:
-    """One Coulomb friction term: a pin (moment arm μ·r) or a prismatic joint (μ), and the
-    sense of its relative motion per pose (+1, −1, or 0 where the motion reverses)."""
+    """One term of the reactions that follows the size of its joint's unknowns: Coulomb
+    friction at a pin (moment arm μ·r) or a slide (μ), with the sense of its relative
+    motion per pose (+1, −1, or 0 where the motion reverses); or a gear's radial part
+    (tan α; ``friction`` False, its sense unused)."""
 
     joint: Joint
     coefficient: float
     sense: Array
+    friction: bool = True
 
 
 def coulomb_terms(pose: LinkagePose) -> list[CoulombTerm]:
-    """The Coulomb terms, with the senses of the joints' relative motion: from the drivers'
-    velocities, or, for a driver at rest, from its quasi-static ``sense``."""
+    """The nonlinear terms: each gear's radial part, and the Coulomb terms with the senses
+    of the joints' relative motion: from the drivers' velocities, or, for a driver at rest,
+    from its quasi-static ``sense``."""
     linkage = pose.linkage
+    ones = np.ones(pose.q.shape[0])
+    terms = [CoulombTerm(j, j.kind.nonlinear_coefficient(j), ones, friction=False)
+             for j in linkage.joints if j.kind.nonlinear_coefficient(j) > 0.0]
     f = linkage.friction
     if f is None or not linkage.has_coulomb_friction:
-        return []
+        return terms
     senses = np.array([d.velocity if d.velocity else float(d.sense) for d in linkage.drivers])
     moving = solve_pose(linkage, pose.drivers, senses, np.zeros_like(senses))
-    terms = []
     for joint in linkage.joints:
         coefficient = joint.kind.coulomb_coefficient(f, joint)
         if coefficient <= 0.0:
@@ -318,10 +324,12 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     converged = np.ones(x.shape[0], dtype=bool)
     reversing = np.full(x.shape[0], "", dtype=object)
     gain: Callable[[], Array] | None = None
-    if terms:   # Coulomb friction is solved densely (friction linkages are small)
+    if terms:   # nonlinear reactions are solved densely (such linkages are small)
         k = entries.dense()
         x, converged = solve_with_friction(pose, k, b, x, terms)
-        gain = partial(friction_loop_gain, pose, k, x.copy(), terms)
+        friction = [t for t in terms if t.friction]
+        if friction:
+            gain = partial(friction_loop_gain, pose, k, x.copy(), friction)
         for t in terms:
             stops = t.sense == 0.0
             reversing[stops] = np.where(reversing[stops] == "", t.joint.name,

@@ -44,7 +44,7 @@ QUANTITY_ORDER = list(QUANTITY_UNITS)
 
 #: The quantities of a linkage (LINKAGES.md "What comes out"); their units depend on the
 #: joint or spring they name, so a Solution states them (:attr:`Solution.units`).
-LINKAGE_QUANTITY = re.compile(r"F_\w+_[xy]|M_\w+|Q_\w+|S_\w+|[xy]_\w+|phi_\w+|q_\w+")
+LINKAGE_QUANTITY = re.compile(r"F_\w+_[xytr]|M_\w+|Q_\w+|S_\w+|[xy]_\w+|phi_\w+|q_\w+")
 
 
 @functools.lru_cache(maxsize=256)

@@ -17,7 +17,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field
 
 from mechcheck.analytic.case import CaseError, Vec2
-from mechcheck.analytic.joint_kinds import kind_named
+from mechcheck.analytic.joint_kinds import GEAR, GearMesh, kind_named
 from mechcheck.analytic.linkage import (
     Driver,
     Joint,
@@ -44,10 +44,20 @@ class LinkSpec(Strict):
 
 class JointSpec(Strict):
     name: str
-    kind: Literal["revolute", "prismatic", "pin_in_slot"]
+    kind: Literal["revolute", "prismatic", "pin_in_slot", "gear"]
     links: Annotated[list[str], Field(min_length=2, max_length=2)]
-    at: str
+    at: str | None = None
     axis: Pair | None = None
+    #: A gear mesh's: its centres (points of links[0] and links[1]), pitch radii
+    #: (length_unit), pressure angle (deg) and whether it is internal.
+    centres: Annotated[list[str], Field(min_length=2, max_length=2)] | None = None
+    pitch_radii: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+    pressure_angle: float | None = None
+    internal: bool | None = None
+
+
+#: The keys only a gear mesh has.
+GEAR_KEYS = ("centres", "pitch_radii", "pressure_angle", "internal")
 
 
 class DriverSpec(Strict):
@@ -151,8 +161,7 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
         return Linkage(
             points=points,
             links=tuple(Link(link.name, tuple(link.points)) for link in spec.links),
-            joints=tuple(Joint(j.name, kind_named(j.kind), (j.links[0], j.links[1]), j.at,
-                               None if j.axis is None else (j.axis[0], j.axis[1])) for j in spec.joints),
+            joints=tuple(_joint(j, i, scale) for i, j in enumerate(spec.joints)),
             drivers=tuple(_driver(d, i, kinds, scale) for i, d in enumerate(spec.drivers)),
             loads=tuple(PointLoad(ld.link, where(ld.at, f"loads[{i}].at"),
                                   force_vector(ld.force, f"loads[{i}].force"), ld.torque)
@@ -165,6 +174,33 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
                 f.mu, {k: v * scale for k, v in f.pin_radius.items()}, dict(f.joint_mu),
                 dict(f.viscous)),
         )
+
+
+def _joint(j: JointSpec, i: int, scale: float) -> Joint:
+    """A joint table as a Joint: a gear mesh's keys into its GearMesh, the others' ``at``."""
+    key = f"joints[{i}]"
+    kind = kind_named(j.kind)
+    axis = None if j.axis is None else (j.axis[0], j.axis[1])
+    given = [k for k in GEAR_KEYS if getattr(j, k) is not None]
+    if kind is not GEAR:
+        if given:
+            raise CaseError(f"only a gear joint has {given[0]!r}", key=f"{key}.{given[0]}")
+        if j.at is None:
+            raise CaseError(f"a {j.kind} joint needs the point it acts at", key=f"{key}.at")
+        return Joint(j.name, kind, (j.links[0], j.links[1]), j.at, axis)
+    if j.at is not None:
+        raise CaseError("a gear mesh has no 'at': its centres say where its gears turn",
+                        key=f"{key}.at")
+    for needed in ("centres", "pitch_radii"):
+        if getattr(j, needed) is None:
+            raise CaseError("a gear mesh needs it", key=f"{key}.{needed}")
+    assert j.centres is not None and j.pitch_radii is not None
+    radii = tuple(finite(r, f"{key}.pitch_radii", math.inf) * scale for r in j.pitch_radii)
+    angle = finite(20.0 if j.pressure_angle is None else j.pressure_angle,
+                   f"{key}.pressure_angle", 90.0)
+    mesh = GearMesh((j.centres[0], j.centres[1]), (radii[0], radii[1]), math.radians(angle),
+                    bool(j.internal))
+    return Joint(j.name, kind, (j.links[0], j.links[1]), j.centres[0], axis, mesh)
 
 
 def _spring_end(end: list[Any], key: str, where: Any) -> tuple[str, Vec2]:
@@ -182,6 +218,8 @@ def _driver(d: DriverSpec, i: int, kinds: Mapping[str, str], scale: float) -> Dr
     if name is None:
         raise CaseError(f"unknown joint {d.joint!r}", key=f"{key}.joint")
     kind = kind_named(name)
+    if not kind.drivable:   # the engine's refusal, said before the value's key is looked at
+        return Driver(d.joint, 0.0, d.velocity, d.acceleration)
     wanted = kind.driver_key
     other = "displacement" if wanted == "rotation" else "rotation"
     if getattr(d, other) is not None:

@@ -8,12 +8,13 @@ follow the recipe in ``analytic/README.md``.
 from __future__ import annotations
 
 from mechcheck.analytic.joint_kinds.base import JointFrame, JointKind
+from mechcheck.analytic.joint_kinds.gear import GEAR, GearMesh
 from mechcheck.analytic.joint_kinds.pin_in_slot import PIN_IN_SLOT
 from mechcheck.analytic.joint_kinds.prismatic import PRISMATIC
 from mechcheck.analytic.joint_kinds.revolute import REVOLUTE
 
 #: Every kind, by the name a case file gives it.
-KINDS: dict[str, JointKind] = {kind.name: kind for kind in (REVOLUTE, PRISMATIC, PIN_IN_SLOT)}
+KINDS: dict[str, JointKind] = {kind.name: kind for kind in (REVOLUTE, PRISMATIC, PIN_IN_SLOT, GEAR)}
 
 
 def kind_named(name: str) -> JointKind:
@@ -21,4 +22,14 @@ def kind_named(name: str) -> JointKind:
     return KINDS[name]
 
 
-__all__ = ["KINDS", "PIN_IN_SLOT", "PRISMATIC", "REVOLUTE", "JointFrame", "JointKind", "kind_named"]
+__all__ = [
+    "GEAR",
+    "KINDS",
+    "PIN_IN_SLOT",
+    "PRISMATIC",
+    "REVOLUTE",
+    "GearMesh",
+    "JointFrame",
+    "JointKind",
+    "kind_named",
+]

@@ -46,6 +46,10 @@ class JointKind(ABC):
     #: It joins its links at a point both carry (a pin): the friction circle, torsion
     #: springs and points shared by several links go with it.
     pins: ClassVar[bool]
+    #: A driver may prescribe its coordinate.
+    drivable: ClassVar[bool] = True
+    #: It takes Coulomb and viscous friction (``joint_mu``, ``viscous``).
+    frictional: ClassVar[bool] = True
 
     # -- as a value ---------------------------------------------------------------------
     def __eq__(self, other: object) -> bool:
@@ -107,6 +111,12 @@ class JointKind(ABC):
         :class:`~mechcheck.analytic.values.CaseError` naming ``key``'s field at fault.
         ``links`` are the linkage's links by name (the joint's own are known to exist)."""
 
+    def check_drawing(self, joint: Joint, points: Mapping[str, tuple[float, float]],
+                      key: str) -> None:
+        """A CaseError if the drawn points contradict the joint (a gear pair whose centres
+        are not a pitch-circle sum apart); most kinds have nothing to check."""
+        return None
+
     # -- kinematics ---------------------------------------------------------------------
     @abstractmethod
     def constrain(self, c: Constraints, joint: Joint, row: int) -> None:
@@ -161,6 +171,11 @@ class JointKind(ABC):
         along its axis (N,) (zero for a pin)."""
 
     # -- friction -------------------------------------------------------------------------
+    def nonlinear_coefficient(self, joint: Joint) -> float:
+        """The coefficient of a reaction part that follows the size of its unknowns whatever
+        the friction (a gear's radial part, tan α); 0: none. Applied by :meth:`coulomb`."""
+        return 0.0
+
     @abstractmethod
     def coulomb_coefficient(self, friction: JointFriction, joint: Joint) -> float:
         """μ·r (a pin with a radius) or μ (a slide); 0 without Coulomb friction."""
