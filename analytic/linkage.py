@@ -86,10 +86,13 @@ def _force(value: Vec2, key: str) -> Vec2:
 
 @dataclass(frozen=True)
 class Link:
-    """A rigid link and the points it carries."""
+    """A link and the points it carries: rigid, or, given ``axial_stiffness`` (E·A, N), a
+    two-point member that stays straight and stretches by N·L/(E·A) under its axial force
+    (:mod:`.linkage_elastic`)."""
 
     name: str
     points: tuple[str, ...]
+    axial_stiffness: float | None = None
 
 
 @dataclass(frozen=True)
@@ -233,6 +236,8 @@ class Linkage:
             for point in link.points:
                 if point not in self.points:
                     raise CaseError(f"unknown point {point!r}", key=f"links[{i}].points")
+            if link.axial_stiffness is not None:
+                self._check_member(link, f"links[{i}]")
         if GROUND not in names:
             raise CaseError("the fixed link 'ground' must be listed", key="links")
         carried = {p for link in self.links for p in link.points}
@@ -240,6 +245,13 @@ class Linkage:
             if name not in carried:
                 raise CaseError("no link carries this point", key=f"points.{name}")
         self._check_spacing()
+
+    def _check_member(self, link: Link, key: str) -> None:
+        """An elastic member: a moving link between two points, its E·A > 0."""
+        positive(float(link.axial_stiffness or 0.0), f"{key}.axial_stiffness")
+        if link.name == GROUND or len(set(link.points)) != 2:
+            raise CaseError("only a moving link between two points stretches: give it two "
+                            "points, or leave it rigid", key=f"{key}.axial_stiffness")
 
     def _check_spacing(self) -> None:
         """Points of one link are at one place or a link length apart, and the drawing is
@@ -494,6 +506,11 @@ class Linkage:
     @cached_property
     def _joints_by_name(self) -> dict[str, Joint]:
         return {j.name: j for j in self.joints}
+
+    @property
+    def elastic_links(self) -> tuple[Link, ...]:
+        """The members that stretch (:attr:`Link.axial_stiffness`)."""
+        return tuple(link for link in self.links if link.axial_stiffness is not None)
 
     @property
     def constraint_rows(self) -> int:

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import LinearSpring, Linkage
+from mechcheck.analytic.linkage_elastic import largest_strain
 from mechcheck.analytic.linkage_equilibrium import unstable_reason
 from mechcheck.analytic.linkage_forces import (
     LinkageResults,
@@ -54,6 +55,8 @@ def quantity_units(linkage: Linkage) -> dict[str, str]:
         units[f"Q_{driver.joint}"] = linkage.joint(driver.joint).kind.effort_unit
     for spring in linkage.springs:
         units[f"S_{spring.name}"] = "N" if isinstance(spring, LinearSpring) else "N*m"
+    for member in linkage.elastic_links:
+        units[f"N_{member.name}"] = "N"
     return units
 
 
@@ -137,10 +140,13 @@ def _verdict_rules(case: Case, results: LinkageResults) -> list[Rule]:
             "no equilibrium pose of the free coordinates was found from the drawn pose")))
     rules.append((~pose.assembled, "no_solution", lambda i: lock_message(
         linkage, float(pose.locked_at[i]), pose.drivers[i])))
-    if linkage.redundant:
-        rules.append((every, "indeterminate", lambda i: (
+    if results.undecided is not None:
+        rules.append((results.undecided, "indeterminate", lambda i: (
             f"the joints' constraints are redundant (rank {linkage.joint_rank} < "
-            f"{linkage.constraint_rows}): the reactions are not unique")))
+            f"{linkage.constraint_rows}): the reactions are not unique"
+            + (" (their self-stress runs through rigid members only: give those members "
+               "axial_stiffness)" if linkage.elastic_links else
+               "; members with axial_stiffness (E·A) would decide them"))))
     if linkage.drawn_at_change_point:
         rules.append((every, "singular", lambda i: (
             f"the linkage is drawn on a change point (its joints' constraints are dependent "
@@ -176,6 +182,10 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
         "method": method, "condition_number": float(results.condition[index]),
         "dof": linkage.dof, "gruebler": linkage.gruebler, "wall_time_s": elapsed,
     }
+    if linkage.elastic_links:   # how small the displacements the statics neglects are
+        one = slice(index, index + 1)
+        axial = {q: v[one] for q, v in results.values.items() if q.startswith("N_")}
+        diagnostics["max_strain"] = float(largest_strain(results.pose.take(one), axial)[0])
     # Every value is kept: one that is not finite at a pose without a verdict is a failure
     # of the method, which the harness reports as such rather than as a missing row.
     values = {q: float(v[index]) for q, v in results.values.items()}

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from mechcheck.analytic import linalg
 from mechcheck.analytic.linalg import Batched
 from mechcheck.analytic.linkage import Joint, Linkage
+from mechcheck.analytic.linkage_elastic import axial_forces, compatible_forces
 from mechcheck.analytic.linkage_equilibrium import equilibrium_poses
 from mechcheck.analytic.linkage_kinematics import (
     Array,
@@ -215,6 +216,9 @@ class LinkageResults:
     #: With Coulomb friction: the gain of its explicit loop (:func:`friction_loop_gain`),
     #: computed when first asked for (only a simulator's verdict reads it).
     friction_gain_of: Callable[[], Array] | None = None
+    #: Redundant joints: where the reactions are not decided (all poses of a rigid linkage;
+    #: with elastic members, where they do not decide them, :mod:`.linkage_elastic`).
+    undecided: NDArray[np.bool_] | None = None
 
     @cached_property
     def friction_gain(self) -> Array | None:
@@ -238,7 +242,8 @@ class LinkageResults:
                               None if self.stable is None else self.stable[which],
                               None if self.undirected is None else self.undirected[which],
                               None if self.friction_gain_of is None
-                              else lambda: np.asarray(self.friction_gain)[which])
+                              else lambda: np.asarray(self.friction_gain)[which],
+                              None if self.undecided is None else self.undecided[which])
 
     @property
     def singular(self) -> NDArray[np.bool_]:
@@ -336,14 +341,27 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
                                         reversing[stops] + ", " + t.joint.name)
     reversing = reversing.astype(str)
     undirected = undirected_springs(pose)
+    undecided = None
+    extra: dict[str, Array] = {}
+    if linkage.redundant:
+        undecided = np.ones(x.shape[0], dtype=bool)
+        if linkage.elastic_links and not terms:
+            k = entries.dense()
+            x, undecided = compatible_forces(pose, k, b)
+    if linkage.elastic_links:
+        extra = axial_forces(pose, entries.dense(), x)
     withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "") | (undirected != "") \
-        | linkage.redundant | linkage.drawn_at_change_point   # reactions not unique, or no branch
+        | linkage.drawn_at_change_point   # reactions not unique, or no branch
+    if undecided is not None:
+        withheld |= undecided
     x[withheld] = np.nan
+    for name in extra:
+        extra[name][withheld] = np.nan
     if stable is not None:  # an equilibrium not found is no pose to report forces at
         converged = converged & np.isfinite(stable)
-    return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms),
+    return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms) | extra,
                           lambda: cond, ~(cond <= SINGULAR_CONDITION), converged, reversing, stable,
-                          undirected, gain)
+                          undirected, gain, undecided)
 
 
 def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:

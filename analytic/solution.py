@@ -44,7 +44,7 @@ QUANTITY_ORDER = list(QUANTITY_UNITS)
 
 #: The quantities of a linkage (LINKAGES.md "What comes out"); their units depend on the
 #: joint or spring they name, so a Solution states them (:attr:`Solution.units`).
-LINKAGE_QUANTITY = re.compile(r"F_\w+_[xytr]|M_\w+|Q_\w+|S_\w+|[xy]_\w+|phi_\w+|q_\w+")
+LINKAGE_QUANTITY = re.compile(r"F_\w+_[xytr]|M_\w+|N_\w+|Q_\w+|S_\w+|[xy]_\w+|phi_\w+|q_\w+")
 
 
 @functools.lru_cache(maxsize=256)
@@ -66,7 +66,7 @@ def check_quantities(names: tuple[str, ...], with_units: tuple[str, ...]) -> Non
 
 
 #: Order of a linkage's quantities in tables: by family, then by name.
-LINKAGE_FAMILIES = ("Q_", "F_", "M_", "S_", "x_", "y_", "phi_", "q_")
+LINKAGE_FAMILIES = ("Q_", "F_", "M_", "N_", "S_", "x_", "y_", "phi_", "q_")
 
 DEGREES_PER_RADIAN = 57.29577951308232
 

@@ -40,6 +40,8 @@ PointRef = Any
 class LinkSpec(Strict):
     name: str
     points: list[str]
+    #: E·A (N) of a two-point member that stretches.
+    axial_stiffness: float | None = None
 
 
 class JointSpec(Strict):
@@ -160,7 +162,7 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
     with lengths_quoted_in(spec.length_unit):
         return Linkage(
             points=points,
-            links=tuple(Link(link.name, tuple(link.points)) for link in spec.links),
+            links=tuple(Link(link.name, tuple(link.points), link.axial_stiffness) for link in spec.links),
             joints=tuple(_joint(j, i, scale) for i, j in enumerate(spec.joints)),
             drivers=tuple(_driver(d, i, kinds, scale) for i, d in enumerate(spec.drivers)),
             loads=tuple(PointLoad(ld.link, where(ld.at, f"loads[{i}].at"),
