@@ -35,6 +35,7 @@ from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, TorsionSpri
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, link_extent, real_inertial
 from mechcheck.sim_models.mujoco import mjwarnings  # noqa: F401  (MuJoCo warnings into Python before any model)
+from mechcheck.sim_models.mujoco.joint_kinds import builder_of
 from mechcheck.sim_models.mujoco.model import (
     CLOCK_ARMATURE,
     DRIVE_ARMATURE_INERTIA,
@@ -74,10 +75,11 @@ class LinkageTree:
 
 
 def _priority(linkage: Linkage, joint: Joint) -> int:
-    """Order in which joints enter the tree: prismatic joints first (a loop can only be
-    closed at a revolute joint), then driven joints (a joint equality needs a MuJoCo
+    """Order in which joints enter the tree: joints that cannot close a loop first
+    (prismatic joints, pins in slots: a loop can only be closed at a revolute joint,
+    :mod:`.joint_kinds`), then driven joints (a joint equality needs a MuJoCo
     joint), then joints with a torsional spring (joint stiffness), then the rest."""
-    if not joint.kind.pins:
+    if not builder_of(joint).closes_loops:
         return 0
     if any(d.joint == joint.name for d in linkage.drivers):
         return 1
@@ -109,7 +111,7 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
             root[a] = b
             chosen.append(joint)
             continue
-        if not joint.kind.pins:
+        if not builder_of(joint).closes_loops:
             loop = [*_path(chosen, *joint.links), joint.name]
             raise Unbuildable(f"the loop through joints {', '.join(loop)} has no revolute "
                               "joint: the MuJoCo model closes every loop with a connect at a "
@@ -258,7 +260,7 @@ def drive_armature(linkage: Linkage, joint: Joint, settings: Settings) -> float:
     if not settings.drive_armature or not any(d.joint == joint.name for d in linkage.drivers):
         return 0.0
     reference = max((m.mass for m in linkage.masses), default=1.0)
-    lever = linkage.scale**2 if joint.kind.rotates else 1.0
+    lever = linkage.scale**2 if builder_of(joint).coordinate_is_angle(joint) else 1.0
     return DRIVE_ARMATURE_INERTIA * reference * lever
 
 
@@ -292,18 +294,16 @@ def _add_body(parent: mujoco.MjsBody, tree: LinkageTree, linkage: Linkage, t: Tr
         # Only Izz matters for hinges about z; Ixx = Iyy = Izz passes MuJoCo's triangle check.
         inertia=[izz, izz, izz], explicitinertial=True)
     joint = t.joint
-    if joint.kind.rotates:
-        axis = [0.0, 0.0, t.sign]
-        kind = mujoco.mjtJoint.mjJNT_HINGE
-    else:
-        assert joint.axis is not None
-        axis = [t.sign * joint.axis[0], t.sign * joint.axis[1], 0.0]
-        kind = mujoco.mjtJoint.mjJNT_SLIDE
-    stiffness, springref = _torsion(linkage, joint)
-    body.add_joint(name=joint.name, type=kind, axis=axis,
-                   armature=settings.armature + drive_armature(linkage, joint, settings),
-                   stiffness=[stiffness, 0.0, 0.0], springref=springref,
-                   damping=[joint_damping(linkage, joint), 0.0, 0.0])
+    for mj in builder_of(joint).joints(joint, t.sign):
+        if mj.coordinate:  # the joint's driver, springs, dampers and armature act on q
+            stiffness, springref = _torsion(linkage, joint)
+            body.add_joint(name=mj.name, type=mj.type, axis=list(mj.axis),
+                           armature=settings.armature + drive_armature(linkage, joint, settings),
+                           stiffness=[stiffness, 0.0, 0.0], springref=springref,
+                           damping=[joint_damping(linkage, joint), 0.0, 0.0])
+        else:  # a free turn: only the armature every joint has (the exact solve's M)
+            body.add_joint(name=mj.name, type=mj.type, axis=list(mj.axis),
+                           armature=settings.armature)
     return body
 
 
