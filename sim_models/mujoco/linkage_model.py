@@ -111,20 +111,33 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
             root[a] = b
             chosen.append(joint)
             continue
-        if not builder_of(joint).closes_loops:
-            loop = [*_path(chosen, *joint.links), joint.name]
-            raise Unbuildable(f"the loop through joints {', '.join(loop)} has no revolute "
-                              "joint: the MuJoCo model closes every loop with a connect at a "
-                              "revolute joint")
-        # A damper closing a loop is a couple from the joint's rate (LinkageRig.apply_loads);
-        # a driver or a torsional spring needs a MuJoCo joint.
-        if _priority(linkage, joint) == 1 or _torsion(linkage, joint)[0]:
-            what = "driver" if _priority(linkage, joint) == 1 else "torsional spring"
-            raise Unbuildable(f"the {what} at joint {joint.name} is on a joint that closes a "
-                              "loop of prismatic and driven joints: the MuJoCo model holds it "
-                              "only on a tree joint")
+        why = _closure_refusal(linkage, chosen, joint)
+        if why is not None:
+            raise Unbuildable(why)
         closures.append(joint)
     return LinkageTree(_oriented(chosen), tuple(j for j in linkage.joints if j in closures))
+
+
+def _closure_refusal(linkage: Linkage, chosen: list[Joint], joint: Joint) -> str | None:
+    """Why ``joint`` cannot close the loop it makes with the tree joints ``chosen``, or None.
+    Only a joint that carries a force in every direction at a point and no couple closes
+    a loop (a connect); a damper there is a couple from the joint's rate
+    (LinkageRig.apply_loads), but a driver or a torsional spring needs a MuJoCo joint."""
+    if not builder_of(joint).closes_loops:
+        loop = [*_path(chosen, *joint.links), joint.name]
+        return (f"the loop through joints {', '.join(loop)} has no revolute joint: the MuJoCo "
+                "model closes every loop with a connect at a revolute joint")
+    if _priority(linkage, joint) == 1 or _torsion(linkage, joint)[0]:
+        what = "driver" if _priority(linkage, joint) == 1 else "torsional spring"
+        # Joints enter the tree in _priority order: the loop's tree joints cannot close it
+        # or are driven (or carry a torsional spring).
+        names = set(_path(chosen, *joint.links))
+        kinds = sorted({j.kind.name for j in chosen
+                        if j.name in names and not builder_of(j).closes_loops})
+        return (f"the {what} at joint {joint.name} is on a joint that closes a loop of "
+                f"{', '.join(kinds) or 'prismatic'} and driven joints: the MuJoCo model holds it only on "
+                "a tree joint")
+    return None
 
 
 def _breadth_first(joints: list[Joint], start: str) -> Iterator[tuple[str, Joint, str]]:
