@@ -1,10 +1,11 @@
 """Pure builder: any :class:`~mechcheck.analytic.linkage.Linkage` → ``MjSpec`` (issue 12).
 
 The joint graph (links are nodes, joints edges) is cut to a spanning tree rooted at the
-ground (:func:`spanning_tree`). Each link is a body; each tree joint is a hinge or a slide
-of its child body; every joint left out of the tree closes a loop and must be revolute: it
-becomes a ``connect`` equality between two sites at its point (sites, because a
-body-anchored connect takes its second anchor from ``qpos0``). A loop with no revolute
+ground (:func:`spanning_tree`). Each link is a body; each tree joint is the MuJoCo joints
+of its child body that :mod:`.joint_kinds` gives its kind (a hinge, a slide, or for a pin
+in a slot a slide and a hinge); every joint left out of the tree closes a loop and must be
+revolute: it becomes a ``connect`` equality between two sites at its point (sites, because
+a body-anchored connect takes its second anchor from ``qpos0``). A loop with no revolute
 joint cannot be closed that way and is refused (:class:`Unbuildable`).
 
 Frames: every body is built with the orientation of the world and its origin at the point
@@ -12,7 +13,7 @@ of its tree joint in the drawn pose, so ``qpos = 0`` is the drawn pose. A tree j
 axis is +z (hinge) or +u (slide) when its parent is the joint's ``links[0]``, and reversed
 when the tree runs the other way, so that each joint's ``qpos`` is its LINKAGES.md
 coordinate q whichever way the tree runs, and a generalised force on it is its effort
-(a driver's Q, a torsional spring's −S).
+(a driver's Q, a torsional spring's −S); a pin's free turn in its slot is about +z.
 
 - drivers: a joint equality on the driven tree joint (held at ``eq_data[id, 0]``);
 - linear springs: spatial tendons between two sites, with MuJoCo's stiffness and spring
