@@ -8,8 +8,9 @@ LINKAGES.md, from MuJoCo's own state only:
   site is on ``links[1]``;
 - a tree joint's reaction: ``cfrc_int`` of its child body after ``mj_rnePostConstraint``
   (the spatial force of the parent on the child's subtree, moment about the subtree's
-  centre of mass), turned into the force by ``links[0]`` on ``links[1]`` and, for a
-  prismatic joint, its moment about ``at``, less the driver's effort along the axis.
+  centre of mass), turned into the force by ``links[0]`` on ``links[1]``; for a sliding
+  joint (prismatic, pin in a slot: :mod:`.joint_kinds`) with the emulated friction along
+  the axis, less the driver's effort along it, and a prismatic joint's moment about ``at``.
   MuJoCo 4's RNE sees the loads (``xfrc_applied``), the connect forces and the spatial
   tendons' pull on their sites (measured: the springs' reactions agree with the analytic
   ones to 1e-15; a correction for a tendon's pull, needed if it acted only in joint
