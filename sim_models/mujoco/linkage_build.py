@@ -18,9 +18,11 @@ from mechcheck.analytic.linkage import LinearSpring
 from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.mujoco.joint_kinds import MjJoint, builder_of
 from mechcheck.sim_models.mujoco.linkage_model import (
     CLOCK,
     LinkageTree,
+    TreeJoint,
     body_name,
     build_spec,
     closure_sites,
@@ -32,6 +34,16 @@ from mechcheck.sim_models.mujoco.model import STATIC, Settings, place_frames_exa
 from mechcheck.sim_models.mujoco.settle import rounding_floor
 
 Array = NDArray[np.float64]
+
+
+def mj_joint_state(pose: LinkagePose, t: TreeJoint, mj: MjJoint) -> tuple[Array, Array, Array]:
+    """qpos, qvel, qacc of one MuJoCo joint of tree joint ``t`` at an analytic pose: the
+    joint's coordinate, or a free turn's rotation of the child relative to the parent."""
+    if mj.coordinate:
+        return pose.joint_coordinate(t.joint)
+    child, parent = pose.angle(t.child), pose.angle(t.parent)
+    turn = [(c - p) / mj.turn for c, p in zip(child, parent, strict=True)]
+    return turn[0], turn[1], turn[2]
 
 
 class RigModel:
@@ -86,6 +98,9 @@ class RigModel:
                                    for link in linkage.moving_links}
         self.dof = {t.joint.name: int(m.jnt_dofadr[self._id(obj.mjOBJ_JOINT, t.joint.name)])
                     for t in self.tree.tree}
+        #: Each tree joint's MuJoCo joints (:mod:`.joint_kinds`) with their dof addresses:
+        #: its coordinate's (``dof``) and, for a pin in a slot, its free turn's.
+        self.mj_joints = {t.joint.name: self._joint_dofs(t) for t in self.tree.tree}
         self.hinge = np.array([m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE
                                for j in range(m.njnt)])
         self.springs = [s for s in linkage.springs if isinstance(s, LinearSpring)]
@@ -98,6 +113,11 @@ class RigModel:
                            for j in self.tree.closures}
         self.point_sites = {p: self._id(obj.mjOBJ_SITE, f"point_{p}") for p in linkage.points}
 
+    def _joint_dofs(self, t: TreeJoint) -> tuple[tuple[MjJoint, int], ...]:
+        """The MuJoCo joints of tree joint ``t``, each with its dof address."""
+        return tuple((mj, int(self.model.jnt_dofadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, mj.name)]))
+                     for mj in builder_of(t.joint).joints(t.joint, t.sign))
+
     def _rotations(self) -> Array:
         """Each moving link's rotation as the signed sum of the hinges on its path from the
         ground (slides do not turn): phi = rotation @ qpos."""
@@ -105,8 +125,9 @@ class RigModel:
         for k, link in enumerate(self.moving_links):
             while link != GROUND:
                 t = self.tree.parent_joint(link)
-                if t.joint.kind.rotates:
-                    rotation[k, self.dof[t.joint.name]] = t.sign
+                for mj, dof in self.mj_joints[t.joint.name]:
+                    if mj.turn:
+                        rotation[k, dof] = mj.turn
                 link = t.parent
         return rotation
 
@@ -118,8 +139,9 @@ class RigModel:
         self.drive_rows = {j: rows for j, e in self.drive_eq.items()
                            if (rows := self.equality_rows(e)).size}
         self.efc_scale = np.ones(self.nefc)
-        for joint, rows in self.drive_rows.items():
-            if self.linkage.joint(joint).kind.rotates:
+        for name, rows in self.drive_rows.items():
+            joint = self.linkage.joint(name)
+            if builder_of(joint).coordinate_is_angle(joint):
                 self.efc_scale[rows] = 1.0 / self.scale  # torques as forces, for the stop rule
         self.drive_dofs = np.array([self.dof[j] for j in self.drive_rows], dtype=int)
         self.drive_first_rows = np.array([rows[0] for rows in self.drive_rows.values()],
@@ -160,8 +182,9 @@ class RigModel:
         n = pose.q.shape[0]
         out = [np.zeros((n, self.model.nq)) for _ in range(3)]
         for t in self.tree.tree:
-            for array, value in zip(out, pose.joint_coordinate(t.joint), strict=True):
-                array[:, self.dof[t.joint.name]] = value
+            for mj, dof in self.mj_joints[t.joint.name]:
+                for array, value in zip(out, mj_joint_state(pose, t, mj), strict=True):
+                    array[:, dof] = value
         return out[0], out[1], out[2]
 
     def set_state(self, qpos: Array, qvel: Array) -> None:

@@ -66,6 +66,7 @@ from mechcheck.sim_models.linkage_motion import (
     lead_limit,
     self_locking_note,
 )
+from mechcheck.sim_models.mujoco.joint_kinds import builder_of
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
 from mechcheck.sim_models.mujoco.linkage_model import INERTIA_FLOOR_FRACTION, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
@@ -87,11 +88,12 @@ FINAL_FRICTION_PASSES = 5
 
 
 def turns(case: Case, link: str) -> bool:
-    """True when a link can rotate: a revolute joint lies on its path to the ground."""
+    """True when a link can rotate: a joint that turns (a revolute joint, a pin in a slot)
+    lies on its path to the ground."""
     tree = spanning_tree(case.linkage)
     while link != GROUND:
         t = tree.parent_joint(link)
-        if t.joint.kind.rotates:
+        if builder_of(t.joint).turns(t.joint):
             return True
         link = t.parent
     return False

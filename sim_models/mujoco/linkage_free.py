@@ -69,9 +69,11 @@ class FreeLinkageRig(LinkageRig):
 
 
 def free_joints(rig: LinkageRig) -> np.ndarray:
-    """The dof addresses of the tree joints no driver holds."""
+    """The dof addresses of the tree joints no driver holds (a pin in a slot's turn is
+    never held)."""
     held = set(rig.drive_rows)
-    return np.array([dof for j, dof in rig.dof.items() if j not in held], dtype=int)
+    return np.array([dof for j, joints in rig.mj_joints.items() for mj, dof in joints
+                     if not (mj.coordinate and j in held)], dtype=int)
 
 
 def generalised_loads(rig: LinkageRig, qpos: Array) -> Array:

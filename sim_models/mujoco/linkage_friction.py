@@ -7,7 +7,7 @@ load through ``xfrc_applied``, its magnitude from the reactions MuJoCo reports
 
 - a revolute joint with a pin radius r: the couple −μ·r·|F|·sign(q̇) on links[1] and its
   opposite on links[0] (the friction circle);
-- a prismatic joint: the force −μ·|N|·sign(q̇) along its axis through ``at`` on links[1],
+- a prismatic joint or a pin in a slot: the force −μ·|N|·sign(q̇) along its axis through ``at`` on links[1],
   its opposite on links[0] at the same point; N is the reaction's normal component. This
   force is part of the joint's reported reaction (:attr:`LinkageRig.sliding`).
 
@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from mechcheck.analytic.values import GROUND
+from mechcheck.sim_models.mujoco.joint_kinds import builder_of
 from mechcheck.sim_models.mujoco.linkage_rig import Array, LinkageRig
 from mechcheck.sim_models.mujoco.rig import cross_z
 
@@ -33,7 +34,7 @@ def magnitude(values: dict[str, float], name: str) -> float:
 
 def friction_loads(rig: LinkageRig, values: dict[str, float],
                    senses: dict[str, float]) -> tuple[Array, dict[str, float]]:
-    """(xfrc per body, force along each prismatic joint's axis) of every Coulomb term at
+    """(xfrc per body, force along each sliding joint's axis) of every Coulomb term at
     the reactions ``values``, opposing the joints' senses of motion ``senses`` (q̇ or its
     sign)."""
     linkage = rig.linkage
@@ -46,7 +47,7 @@ def friction_loads(rig: LinkageRig, values: dict[str, float],
     for joint in linkage.joints:
         sign = float(np.sign(senses[joint.name]))
         i, j = joint.links
-        if joint.kind.pins:
+        if not builder_of(joint).sliding_friction:
             moment = -f.coefficient(joint.name) * f.pin_radius.get(joint.name, 0.0) \
                 * magnitude(values, f"F_{joint.name}") * sign
             for link, share in ((j, 1.0), (i, -1.0)):

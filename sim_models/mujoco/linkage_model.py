@@ -1,10 +1,11 @@
 """Pure builder: any :class:`~mechcheck.analytic.linkage.Linkage` → ``MjSpec`` (issue 12).
 
 The joint graph (links are nodes, joints edges) is cut to a spanning tree rooted at the
-ground (:func:`spanning_tree`). Each link is a body; each tree joint is a hinge or a slide
-of its child body; every joint left out of the tree closes a loop and must be revolute: it
-becomes a ``connect`` equality between two sites at its point (sites, because a
-body-anchored connect takes its second anchor from ``qpos0``). A loop with no revolute
+ground (:func:`spanning_tree`). Each link is a body; each tree joint is the MuJoCo joints
+of its child body that :mod:`.joint_kinds` gives its kind (a hinge, a slide, or for a pin
+in a slot a slide and a hinge); every joint left out of the tree closes a loop and must be
+revolute: it becomes a ``connect`` equality between two sites at its point (sites, because
+a body-anchored connect takes its second anchor from ``qpos0``). A loop with no revolute
 joint cannot be closed that way and is refused (:class:`Unbuildable`).
 
 Frames: every body is built with the orientation of the world and its origin at the point
@@ -12,7 +13,7 @@ of its tree joint in the drawn pose, so ``qpos = 0`` is the drawn pose. A tree j
 axis is +z (hinge) or +u (slide) when its parent is the joint's ``links[0]``, and reversed
 when the tree runs the other way, so that each joint's ``qpos`` is its LINKAGES.md
 coordinate q whichever way the tree runs, and a generalised force on it is its effort
-(a driver's Q, a torsional spring's −S).
+(a driver's Q, a torsional spring's −S); a pin's free turn in its slot is about +z.
 
 - drivers: a joint equality on the driven tree joint (held at ``eq_data[id, 0]``);
 - linear springs: spatial tendons between two sites, with MuJoCo's stiffness and spring
@@ -35,6 +36,7 @@ from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, TorsionSpri
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, link_extent, real_inertial
 from mechcheck.sim_models.mujoco import mjwarnings  # noqa: F401  (MuJoCo warnings into Python before any model)
+from mechcheck.sim_models.mujoco.joint_kinds import builder_of
 from mechcheck.sim_models.mujoco.model import (
     CLOCK_ARMATURE,
     DRIVE_ARMATURE_INERTIA,
@@ -74,10 +76,11 @@ class LinkageTree:
 
 
 def _priority(linkage: Linkage, joint: Joint) -> int:
-    """Order in which joints enter the tree: prismatic joints first (a loop can only be
-    closed at a revolute joint), then driven joints (a joint equality needs a MuJoCo
+    """Order in which joints enter the tree: joints that cannot close a loop first
+    (prismatic joints, pins in slots: a loop can only be closed at a revolute joint,
+    :mod:`.joint_kinds`), then driven joints (a joint equality needs a MuJoCo
     joint), then joints with a torsional spring (joint stiffness), then the rest."""
-    if not joint.kind.pins:
+    if not builder_of(joint).closes_loops:
         return 0
     if any(d.joint == joint.name for d in linkage.drivers):
         return 1
@@ -109,20 +112,33 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
             root[a] = b
             chosen.append(joint)
             continue
-        if not joint.kind.pins:
-            loop = [*_path(chosen, *joint.links), joint.name]
-            raise Unbuildable(f"the loop through joints {', '.join(loop)} has no revolute "
-                              "joint: the MuJoCo model closes every loop with a connect at a "
-                              "revolute joint")
-        # A damper closing a loop is a couple from the joint's rate (LinkageRig.apply_loads);
-        # a driver or a torsional spring needs a MuJoCo joint.
-        if _priority(linkage, joint) == 1 or _torsion(linkage, joint)[0]:
-            what = "driver" if _priority(linkage, joint) == 1 else "torsional spring"
-            raise Unbuildable(f"the {what} at joint {joint.name} is on a joint that closes a "
-                              "loop of prismatic and driven joints: the MuJoCo model holds it "
-                              "only on a tree joint")
+        why = _closure_refusal(linkage, chosen, joint)
+        if why is not None:
+            raise Unbuildable(why)
         closures.append(joint)
     return LinkageTree(_oriented(chosen), tuple(j for j in linkage.joints if j in closures))
+
+
+def _closure_refusal(linkage: Linkage, chosen: list[Joint], joint: Joint) -> str | None:
+    """Why ``joint`` cannot close the loop it makes with the tree joints ``chosen``, or None.
+    Only a joint that carries a force in every direction at a point and no couple closes
+    a loop (a connect); a damper there is a couple from the joint's rate
+    (LinkageRig.apply_loads), but a driver or a torsional spring needs a MuJoCo joint."""
+    if not builder_of(joint).closes_loops:
+        loop = [*_path(chosen, *joint.links), joint.name]
+        return (f"the loop through joints {', '.join(loop)} has no revolute joint: the MuJoCo "
+                "model closes every loop with a connect at a revolute joint")
+    if _priority(linkage, joint) == 1 or _torsion(linkage, joint)[0]:
+        what = "driver" if _priority(linkage, joint) == 1 else "torsional spring"
+        # Joints enter the tree in _priority order: the loop's tree joints cannot close it
+        # or are driven (or carry a torsional spring).
+        names = set(_path(chosen, *joint.links))
+        kinds = sorted({j.kind.name for j in chosen
+                        if j.name in names and not builder_of(j).closes_loops})
+        return (f"the {what} at joint {joint.name} is on a joint that closes a loop of "
+                f"{', '.join(kinds) or 'prismatic'} and driven joints: the MuJoCo model holds it only on "
+                "a tree joint")
+    return None
 
 
 def _breadth_first(joints: list[Joint], start: str) -> Iterator[tuple[str, Joint, str]]:
@@ -258,7 +274,7 @@ def drive_armature(linkage: Linkage, joint: Joint, settings: Settings) -> float:
     if not settings.drive_armature or not any(d.joint == joint.name for d in linkage.drivers):
         return 0.0
     reference = max((m.mass for m in linkage.masses), default=1.0)
-    lever = linkage.scale**2 if joint.kind.rotates else 1.0
+    lever = linkage.scale**2 if builder_of(joint).coordinate_is_angle(joint) else 1.0
     return DRIVE_ARMATURE_INERTIA * reference * lever
 
 
@@ -292,18 +308,16 @@ def _add_body(parent: mujoco.MjsBody, tree: LinkageTree, linkage: Linkage, t: Tr
         # Only Izz matters for hinges about z; Ixx = Iyy = Izz passes MuJoCo's triangle check.
         inertia=[izz, izz, izz], explicitinertial=True)
     joint = t.joint
-    if joint.kind.rotates:
-        axis = [0.0, 0.0, t.sign]
-        kind = mujoco.mjtJoint.mjJNT_HINGE
-    else:
-        assert joint.axis is not None
-        axis = [t.sign * joint.axis[0], t.sign * joint.axis[1], 0.0]
-        kind = mujoco.mjtJoint.mjJNT_SLIDE
-    stiffness, springref = _torsion(linkage, joint)
-    body.add_joint(name=joint.name, type=kind, axis=axis,
-                   armature=settings.armature + drive_armature(linkage, joint, settings),
-                   stiffness=[stiffness, 0.0, 0.0], springref=springref,
-                   damping=[joint_damping(linkage, joint), 0.0, 0.0])
+    for mj in builder_of(joint).joints(joint, t.sign):
+        if mj.coordinate:  # the joint's driver, springs, dampers and armature act on q
+            stiffness, springref = _torsion(linkage, joint)
+            body.add_joint(name=mj.name, type=mj.type, axis=list(mj.axis),
+                           armature=settings.armature + drive_armature(linkage, joint, settings),
+                           stiffness=[stiffness, 0.0, 0.0], springref=springref,
+                           damping=[joint_damping(linkage, joint), 0.0, 0.0])
+        else:  # a free turn: only the armature every joint has (the exact solve's M)
+            body.add_joint(name=mj.name, type=mj.type, axis=list(mj.axis),
+                           armature=settings.armature)
     return body
 
 

@@ -8,8 +8,9 @@ LINKAGES.md, from MuJoCo's own state only:
   site is on ``links[1]``;
 - a tree joint's reaction: ``cfrc_int`` of its child body after ``mj_rnePostConstraint``
   (the spatial force of the parent on the child's subtree, moment about the subtree's
-  centre of mass), turned into the force by ``links[0]`` on ``links[1]`` and, for a
-  prismatic joint, its moment about ``at``, less the driver's effort along the axis.
+  centre of mass), turned into the force by ``links[0]`` on ``links[1]``; for a sliding
+  joint (prismatic, pin in a slot: :mod:`.joint_kinds`) with the emulated friction along
+  the axis, less the driver's effort along it, and a prismatic joint's moment about ``at``.
   MuJoCo 4's RNE sees the loads (``xfrc_applied``), the connect forces and the spatial
   tendons' pull on their sites (measured: the springs' reactions agree with the analytic
   ones to 1e-15; a correction for a tendon's pull, needed if it acted only in joint
@@ -32,6 +33,7 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Joint, TorsionSpring
+from mechcheck.sim_models.mujoco.joint_kinds import builder_of
 from mechcheck.sim_models.mujoco.linkage_build import RigModel
 from mechcheck.sim_models.mujoco.model import STATIC, Settings
 from mechcheck.sim_models.mujoco.rig import cross_z, rows_times
@@ -168,22 +170,25 @@ class RigReadout(RigModel):
 
     def _slide_reaction(self, s: Snapshot, joint: Joint,
                         effort: Array | None) -> dict[str, Array]:
-        """A prismatic tree joint's reaction: force and moment about ``at``, by links[0] on
-        links[1] (the tree joint's sign)."""
+        """A sliding tree joint's reaction (a prismatic joint, a pin in a slot): the force
+        and, if its kind has a couple, the moment about ``at``, by links[0] on links[1]
+        (the tree joint's sign)."""
         name = joint.name
         t = self.tree_joints[name]
         child = self.body[t.child]
-        point = self._point_on(s.xpos, s.xmat, joint.links[1], self.linkage.points[joint.at])
-        # cfrc_int's moment is about the centre of mass of the body's kinematic tree.
         f = s.cfrc_int[:, child, 3:5]
-        c = s.subtree_com[:, self.model.body_rootid[child], :2]
-        moment = t.sign * (s.cfrc_int[:, child, 2] + cross_z(c - point, f))
         u = self._axis_of(s.xmat, joint)
         # The driver's effort is reported as Q, not in F; emulated friction along the axis
         # is applied as a load, but it is part of the joint's reaction.
         along = self.sliding.get(name, 0.0) - (0.0 if effort is None else effort)
-        f = t.sign * f + np.asarray(along)[..., None] * u
-        return {f"M_{name}": moment, f"F_{name}_x": f[:, 0], f"F_{name}_y": f[:, 1]}
+        out = {f"F_{name}_x": t.sign * f[:, 0] + along * u[:, 0],
+               f"F_{name}_y": t.sign * f[:, 1] + along * u[:, 1]}
+        if builder_of(joint).couple:
+            point = self._point_on(s.xpos, s.xmat, joint.links[1], self.linkage.points[joint.at])
+            # cfrc_int's moment is about the centre of mass of the body's kinematic tree.
+            c = s.subtree_com[:, self.model.body_rootid[child], :2]
+            out[f"M_{name}"] = t.sign * (s.cfrc_int[:, child, 2] + cross_z(c - point, f))
+        return out
 
     def _derived_fields(self) -> set[str]:
         """What :meth:`values` reads of ``data`` besides qpos, qvel, qacc and the constraint
@@ -257,8 +262,7 @@ def quantity_order(rig: RigModel) -> tuple[str, ...]:
     linkage = rig.linkage
     order = [f"Q_{j}" for j in rig.drive_rows]
     for joint in linkage.joints:
-        order += ([f"M_{joint.name}"] if not joint.kind.pins else []) \
-            + [f"F_{joint.name}_x", f"F_{joint.name}_y"]
+        order += builder_of(joint).reaction_names(joint)
     order += [f"S_{spring.name}" for spring in linkage.springs]
     order += [f"{axis}_{p}" for p in rig.point_sites for axis in "xy"]
     order += [f"phi_{link}" for link in linkage.moving_links]
@@ -286,7 +290,7 @@ def joint_coordinate_rows(rig: RigModel) -> Array:
 def read_plan(rig: RigModel) -> ReadPlan:
     """Where each quantity of ``rig``'s read-out is in MuJoCo's arrays."""
     drivers = list(rig.drive_rows)
-    pins = [t for t in rig.tree.tree if t.joint.kind.pins]
+    pins = [t for t in rig.tree.tree if not builder_of(t.joint).slide_readout]
     loops = list(rig.loop_rows)
     return ReadPlan(
         order=quantity_order(rig),
@@ -299,7 +303,7 @@ def read_plan(rig: RigModel) -> ReadPlan:
         pin_signs=np.array([float(t.sign) for t in pins]),
         loop_names=tuple(f"F_{j}_{a}" for j in loops for a in "xy"),
         loop_rows=np.array([rig.loop_rows[j][k] for j in loops for k in (0, 1)], dtype=int),
-        slides=tuple(t.joint for t in rig.tree.tree if not t.joint.kind.pins),
+        slides=tuple(t.joint for t in rig.tree.tree if builder_of(t.joint).slide_readout),
         point_names=tuple(f"{a}_{p}" for p in rig.point_sites for a in "xy"),
         point_sites=np.array(list(rig.point_sites.values()), dtype=int),
         joint_names=tuple(f"q_{j.name}" for j in rig.linkage.joints),
