@@ -154,3 +154,66 @@ def test_the_truss_tip_member_force_by_the_method_of_joints() -> None:
     values = mechcheck.solve(case_of("truss")).values
     got = np.array([values["F_N6_46_56_x"], values["F_N6_46_56_y"]])
     assert np.all(np.abs(got - expected) <= RTOL * abs(t56)), (got, expected)
+
+
+# -- `mechcheck theory catalogue` ------------------------------------------------------------
+#: The seed's printed S of every row, and where the command takes each row's mobility from.
+CATALOGUE_ROWS = {
+    "slider-crank": (1, "file cases/linkages/seed_e2_slider_crank.toml"),
+    "four-bar": (1, "file cases/linkages/seed_e1_fourbar.toml"),
+    "shaper (kurs)": (1, "file cases/catalogue/shaper.toml"),
+    "five-bar": (2, "file cases/linkages/five_bar_two_drivers.toml"),
+    "seven-link": (2, "file cases/catalogue/seven_link.toml"),
+    "garage door": (1, "file cases/catalogue/garage_door.toml"),
+    "wave-maker": (2, "table, spatial"),
+    "wave-maker, one S keyed": (1, "table, spatial"),
+    "gear pair": (1, "table"),
+    "excavator bucket": (1, "file cases/catalogue/excavator_bucket.toml"),
+    "mixed": (2, "table"),
+    "self-closing hinge": (1, "table, spatial"),
+    "truss": (0, "file cases/catalogue/truss.toml"),
+    "over-constrained": (-1, "table"),
+}
+
+
+def mobility_lines(output: str) -> dict[str, str]:
+    """The command's mobility lines by row name (the name fills columns 10–36)."""
+    return {line[10:36].strip(): line for line in output.splitlines()
+            if line.startswith("mobility  ")}
+
+
+def test_the_catalogue_command_takes_planar_rows_from_their_files() -> None:
+    """Every row with its source; a row with a file shows S by Gruebler–Kutzbach and by the
+    rank of J, both the printed S; a table row, S from the table's counts; exit 0."""
+    from typer.testing import CliRunner
+
+    from mechcheck.cli import app
+
+    result = CliRunner().invoke(app, ["theory", "catalogue"])
+    assert result.exit_code == 0, result.output
+    lines = mobility_lines(result.output)
+    assert set(lines) == set(CATALOGUE_ROWS)
+    for name, (printed, source) in CATALOGUE_ROWS.items():
+        line = lines[name]
+        assert line.endswith(f"(printed {printed:2d})  {source}"), line
+        if source.startswith("file"):
+            assert f"S = {printed:2d} Gruebler, {printed:2d} rank J " in line, line
+        else:
+            assert f"S = {printed:2d} " in line and "rank" not in line, line
+
+
+def test_the_catalogue_command_fails_on_a_file_that_is_not_the_row(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A row whose file has other links or joints (the garage door's file for the truss's
+    row: 6 links, 7 R, S = 1) disagrees: the line says what the file has, exit 1."""
+    from typer.testing import CliRunner
+
+    from mechcheck import theory_cli
+    from mechcheck.cli import app
+
+    files = {**theory_cli.CATALOGUE_FILES, "truss": "catalogue/garage_door.toml"}
+    monkeypatch.setattr(theory_cli, "CATALOGUE_FILES", files)
+    result = CliRunner().invoke(app, ["theory", "catalogue"])
+    assert result.exit_code == 1
+    line = mobility_lines(result.output)["truss"]
+    assert "S =  1 Gruebler,  1 rank J (printed  0)" in line and "(which has u=6, 7R)" in line
