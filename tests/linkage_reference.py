@@ -16,7 +16,9 @@ Systems*, ch. 3, 11):
   with the constraint forces Q_c = −Φ_qᵀλ each multiplier *is* the contract's
   reaction, the force BY links[0] ON links[1]:
   revolute Φ = p_a − p_b (λ = F); prismatic Φ = (n_a·(p_a − p_b), φ_a − φ_b)
-  (λ = (N, M): a force N·n_a at ``at`` and a couple M on links[1]).
+  (λ = (N, M): a force N·n_a at ``at`` and a couple M on links[1]); pin in a slot
+  (seed 001's Cs: ``at`` of links[1] slides along the slot fixed in links[0] and turns
+  in it) Φ = n_a·(p_a − p_b), one row (λ = N: a force N·n_a at ``at``, no couple).
   A driver is Φ = s·value − q_joint (λ = Q, the effort on links[1]).
 * Positions: pseudo-arclength continuation of Φ(q, s) = 0 from the drawn pose (s = 0)
   to s = 1, all drivers moving together. A turning point in s is a lock
@@ -134,12 +136,22 @@ class Attachment:
 
 @dataclass(frozen=True)
 class Joint:
-    """A revolute or prismatic joint between links a = links[0] and b = links[1].
+    """A revolute, prismatic or pin-in-slot joint between links a = links[0] and b = links[1].
 
     ``on_a`` and ``on_b`` are the joint point ``at`` fixed to each link (on a it is the
     point of a that coincides with ``at`` at the drawn pose). ``axis`` is the unit
-    sliding direction at the drawn pose (prismatic only).
+    sliding direction at the drawn pose (prismatic and pin in a slot only).
     """
+
+    @property
+    def rows(self) -> int:
+        """Constraint rows: 2 (revolute, prismatic), 1 (pin in a slot: it turns freely)."""
+        return 1 if self.kind == "pin_in_slot" else 2
+
+    @property
+    def slides(self) -> bool:
+        """Whether the joint's coordinate is a travel along an axis fixed in links[0]."""
+        return self.kind != "revolute"
 
     name: str
     kind: str
@@ -382,15 +394,15 @@ def _read_joint(case: dict[str, Any], k: int, jt: dict[str, Any], points: dict[s
             raise _fail(case, f"{key}.at", "both links of a revolute joint must carry its point")
         if "axis" in jt:
             raise _fail(case, f"{key}.axis", "a revolute joint has no axis")
-    elif kind == "prismatic":
+    elif kind in ("prismatic", "pin_in_slot"):
         if b not in carriers[at]:
-            raise _fail(case, f"{key}.at", "links[1] of a prismatic joint must carry its point")
+            raise _fail(case, f"{key}.at", f"links[1] of a {kind} joint must carry its point")
         axis = _pair(case, f"{key}.axis", jt.get("axis"))
         if np.linalg.norm(axis) == 0.0:
             raise _fail(case, f"{key}.axis", "zero axis")
         axis = axis / np.linalg.norm(axis)
     else:
-        raise _fail(case, f"{key}.kind", f"expected revolute or prismatic, got {kind!r}")
+        raise _fail(case, f"{key}.kind", f"expected revolute, prismatic or pin_in_slot, got {kind!r}")
 
     def fixed_to(link: int) -> Attachment:
         return Attachment(link, points[at] if link == GROUND else points[at] - centres[link])
@@ -634,21 +646,36 @@ def joint_rate(lk: Linkage, q: Vector, qd: Vector, joint: Joint) -> float:
 
 
 # -- constraints Φ(q, s), Φ_q and γ ---------------------------------------------------
+def joint_offsets(lk: Linkage) -> list[int]:
+    """The first constraint row of each joint (joints have 1 or 2 rows)."""
+    starts, row = [], 0
+    for j in lk.joints:
+        starts.append(row)
+        row += j.rows
+    return starts
+
+
+def joint_row_count(lk: Linkage) -> int:
+    """Rows of all joints: the drivers' rows follow them."""
+    return sum(j.rows for j in lk.joints)
+
+
 def constraint_count(lk: Linkage) -> int:
-    return 2 * len(lk.joints) + len(lk.drivers)
+    return joint_row_count(lk) + len(lk.drivers)
 
 
 def constraints(lk: Linkage, q: Vector, s: float) -> Vector:
-    """Φ: per joint 2 rows "links[0] minus links[1]", then per driver s·value − q_joint."""
+    """Φ: per joint its rows "links[0] minus links[1]", then per driver s·value − q_joint."""
     out = np.zeros(constraint_count(lk))
-    for k, j in enumerate(lk.joints):
+    for r, j in zip(joint_offsets(lk), lk.joints, strict=True):
         if j.kind == "revolute":
-            out[2 * k:2 * k + 2] = point(q, j.on_a) - point(q, j.on_b)
-        else:
-            _, n, d = slide_frame(q, j)
-            out[2 * k] = -(n @ d)
-            out[2 * k + 1] = link_position(q, j.a)[1] - link_position(q, j.b)[1]
-    base = 2 * len(lk.joints)
+            out[r:r + 2] = point(q, j.on_a) - point(q, j.on_b)
+            continue
+        _, n, d = slide_frame(q, j)
+        out[r] = -(n @ d)
+        if j.kind == "prismatic":  # a pin in a slot turns freely: no second row
+            out[r + 1] = link_position(q, j.a)[1] - link_position(q, j.b)[1]
+    base = joint_row_count(lk)
     for k, drv in enumerate(lk.drivers):
         out[base + k] = s * drv.value - joint_coordinate(q, lk.joints[drv.joint])
     return out
@@ -657,19 +684,22 @@ def constraints(lk: Linkage, q: Vector, s: float) -> Vector:
 def jacobian(lk: Linkage, q: Vector) -> Matrix:
     """Φ_q. Prismatic normal row: −n·(P_b − P_a) + (u·d) e_φa, since ∂n/∂φ_a = −u."""
     jac = np.zeros((constraint_count(lk), lk.n))
-    for k, j in enumerate(lk.joints):
+    for r, j in zip(joint_offsets(lk), lk.joints, strict=True):
         pa, pb = point_jacobian(lk, q, j.on_a), point_jacobian(lk, q, j.on_b)
         if j.kind == "revolute":
-            jac[2 * k:2 * k + 2] = pa - pb
+            jac[r:r + 2] = pa - pb
             continue
         u, n, d = slide_frame(q, j)
-        jac[2 * k] = -(n @ (pb - pa))
+        jac[r] = -(n @ (pb - pa))
         if j.a != GROUND:
-            jac[2 * k, 3 * j.a + 2] += u @ d
-            jac[2 * k + 1, 3 * j.a + 2] = 1.0
+            jac[r, 3 * j.a + 2] += u @ d
+        if j.kind == "pin_in_slot":
+            continue
+        if j.a != GROUND:
+            jac[r + 1, 3 * j.a + 2] = 1.0
         if j.b != GROUND:
-            jac[2 * k + 1, 3 * j.b + 2] = -1.0
-    base = 2 * len(lk.joints)
+            jac[r + 1, 3 * j.b + 2] = -1.0
+    base = joint_row_count(lk)
     for k, drv in enumerate(lk.drivers):
         jac[base + k] = -joint_coordinate_row(lk, q, lk.joints[drv.joint])
     return jac
@@ -678,7 +708,7 @@ def jacobian(lk: Linkage, q: Vector) -> Matrix:
 def driver_column(lk: Linkage) -> Vector:
     """Φ_s: only driver rows depend on the path parameter s."""
     out = np.zeros(constraint_count(lk))
-    out[2 * len(lk.joints):] = [d.value for d in lk.drivers]
+    out[joint_row_count(lk):] = [d.value for d in lk.drivers]
     return out
 
 
@@ -690,20 +720,20 @@ def gamma(lk: Linkage, q: Vector, qd: Vector) -> Vector:
     driver row γ = −θ̈ − φ̇_a²(u·d) + 2φ̇_a(n·ḋ) + u·(d̈ quadratic).
     """
     out = np.zeros(constraint_count(lk))
-    for k, j in enumerate(lk.joints):
+    for r, j in zip(joint_offsets(lk), lk.joints, strict=True):
         quad_d = point_quadratic(q, qd, j.on_b) - point_quadratic(q, qd, j.on_a)
         if j.kind == "revolute":
-            out[2 * k:2 * k + 2] = quad_d  # Φ = p_a − p_b: γ = −(quad_a − quad_b)
+            out[r:r + 2] = quad_d  # Φ = p_a − p_b: γ = −(quad_a − quad_b)
             continue
         u, n, d = slide_frame(q, j)
         d_dot = point_velocity(q, qd, j.on_b) - point_velocity(q, qd, j.on_a)
         w_a = link_rate(qd, j.a)[1]
-        out[2 * k] = -(w_a**2) * (n @ d) - 2.0 * w_a * (u @ d_dot) + n @ quad_d
-    base = 2 * len(lk.joints)
+        out[r] = -(w_a**2) * (n @ d) - 2.0 * w_a * (u @ d_dot) + n @ quad_d
+    base = joint_row_count(lk)
     for k, drv in enumerate(lk.drivers):
         j = lk.joints[drv.joint]
         out[base + k] = -drv.acceleration
-        if j.kind == "prismatic":
+        if j.slides:
             quad_d = point_quadratic(q, qd, j.on_b) - point_quadratic(q, qd, j.on_a)
             u, n, d = slide_frame(q, j)
             d_dot = point_velocity(q, qd, j.on_b) - point_velocity(q, qd, j.on_a)
@@ -715,13 +745,13 @@ def gamma(lk: Linkage, q: Vector, qd: Vector) -> Vector:
 def row_scale(lk: Linkage) -> Vector:
     """Divides rows of lengths by the drawing size so that Φ is dimensionless."""
     rows = np.ones(constraint_count(lk))
-    for k, j in enumerate(lk.joints):
-        rows[2 * k] = 1.0 / lk.size
+    for r, j in zip(joint_offsets(lk), lk.joints, strict=True):
+        rows[r] = 1.0 / lk.size
         if j.kind == "revolute":
-            rows[2 * k + 1] = 1.0 / lk.size
-    base = 2 * len(lk.joints)
+            rows[r + 1] = 1.0 / lk.size
+    base = joint_row_count(lk)
     for k, drv in enumerate(lk.drivers):
-        if lk.joints[drv.joint].kind == "prismatic":
+        if lk.joints[drv.joint].slides:
             rows[base + k] = 1.0 / lk.size
     return rows
 
@@ -750,13 +780,14 @@ class Mobility:
 
 
 def mobility(lk: Linkage) -> Mobility:
-    """Gruebler 3(n − 1) − 2j; DOF 3(n − 1) − rank J of the joint rows at the drawn pose.
+    """Gruebler 3(n − 1) − Σ(3 − Sᵢ) (a row per constraint: 2 for R and P, 1 for a pin in a
+    slot); DOF 3(n − 1) − rank J of the joint rows at the drawn pose.
 
     The joints of a redundancy are those with weight in a left null vector of J. The
     solver drops dependent rows, chosen greedily in file order, to keep a full-rank set.
     """
     q0 = drawn_pose(lk)
-    nj = 2 * len(lk.joints)
+    nj = joint_row_count(lk)
     full = jacobian(lk, q0) * row_scale(lk)[:, None] * lk.column_scale()[None, :]
     joint_rows = full[:nj]
     u, sv, _ = np.linalg.svd(joint_rows) if nj else (np.zeros((0, 0)), np.zeros(0), None)
@@ -764,8 +795,8 @@ def mobility(lk: Linkage) -> Mobility:
     rank = int(np.sum(sv > tol))
     redundant: list[str] = []
     for vec in u[:, rank:].T if nj else []:
-        for k, j in enumerate(lk.joints):
-            if np.max(np.abs(vec[2 * k:2 * k + 2])) > 1e-6 and j.name not in redundant:
+        for r, j in zip(joint_offsets(lk), lk.joints, strict=True):
+            if np.max(np.abs(vec[r:r + j.rows])) > 1e-6 and j.name not in redundant:
                 redundant.append(j.name)
     keep = np.ones(constraint_count(lk))
     chosen: list[Vector] = []
@@ -775,7 +806,7 @@ def mobility(lk: Linkage) -> Mobility:
             chosen.append(joint_rows[r])
         else:
             keep[r] = 0.0
-    return Mobility(3 * len(lk.link_names) - len(lk.joints) * 2, lk.n - rank, rank, redundant, keep)
+    return Mobility(lk.n - nj, lk.n - rank, rank, redundant, keep)
 
 
 def drawn_pose(lk: Linkage) -> Vector:
@@ -888,7 +919,7 @@ def trace_drivers(lk: Linkage, rows: Vector) -> Path:
     scaled by the largest driver travel so that one unit of w_s is one such unit.
     """
     q0 = drawn_pose(lk)
-    travel = [abs(d.value) / (lk.size if lk.joints[d.joint].kind == "prismatic" else 1.0)
+    travel = [abs(d.value) / (lk.size if lk.joints[d.joint].slides else 1.0)
               for d in lk.drivers]
     span = max(travel, default=0.0)
     if span == 0.0:
@@ -981,7 +1012,7 @@ def velocities(lk: Linkage, q: Vector, rows: Vector, rates: Vector) -> Vector:
     """q̇ from Φ_q q̇ = −Φ_t; only the drivers depend on time, Φ_t = θ̇."""
     keep = rows.astype(bool)
     rhs = np.zeros(constraint_count(lk))
-    rhs[2 * len(lk.joints):] = -rates
+    rhs[joint_row_count(lk):] = -rates
     return np.asarray(np.linalg.solve(jacobian(lk, q)[keep], rhs[keep]))
 
 
@@ -1081,20 +1112,22 @@ def coulomb_forces(lk: Linkage, q: Vector, lam: Vector, senses: Vector) -> tuple
     """
     out = np.zeros(lk.n)
     d_out = np.zeros((lk.n, lam.size))
+    offsets = joint_offsets(lk)
     for k, (j, fr) in enumerate(zip(lk.joints, lk.friction, strict=True)):
         if fr.coulomb == 0.0 or senses[k] == 0.0:
             continue
         unit = np.zeros(lk.n)
         add_joint_action(unit, q, j, -fr.coulomb * senses[k])
+        r = offsets[k]
         if j.kind == "revolute":
-            f = lam[2 * k:2 * k + 2]
+            f = lam[r:r + 2]
             mag = float(np.hypot(*f))
             out += unit * mag
             if mag > 0.0:
-                d_out[:, 2 * k:2 * k + 2] += np.outer(unit, f / mag)
+                d_out[:, r:r + 2] += np.outer(unit, f / mag)
         else:
-            out += unit * abs(float(lam[2 * k]))
-            d_out[:, 2 * k] += unit * sign(float(lam[2 * k]))
+            out += unit * abs(float(lam[r]))
+            d_out[:, r] += unit * sign(float(lam[r]))
     return out, d_out
 
 
@@ -1205,7 +1238,7 @@ def free_equilibrium(lk: Linkage, rows: Vector) -> tuple[str, Vector, Vector, st
     q = drawn_pose(lk)
     lam, *_ = np.linalg.lstsq(jacobian(lk, q)[keep].T, applied_forces(lk, q, np.zeros(lk.n)),
                               rcond=None)
-    travel = [abs(d.value) / (lk.size if lk.joints[d.joint].kind == "prismatic" else 1.0)
+    travel = [abs(d.value) / (lk.size if lk.joints[d.joint].slides else 1.0)
               for d in lk.drivers]
     n_steps = max(1, math.ceil(max(travel, default=0.0) / 0.05))
     s, ds, steps = 0.0, 1.0 / n_steps, 0
@@ -1272,16 +1305,19 @@ def force_values(lk: Linkage, q: Vector, qd: Vector, lam: Vector) -> dict[str, f
     senses = np.zeros(len(lk.joints))
     if lk.has_coulomb:
         senses, _ = coulomb_senses(lk, q, np.ones(constraint_count(lk)))
+    offsets = joint_offsets(lk)
     for k, (j, fr) in enumerate(zip(lk.joints, lk.friction, strict=True)):
+        r = offsets[k]
         if j.kind == "revolute":
-            out[f"F_{j.name}_x"], out[f"F_{j.name}_y"] = lam[2 * k:2 * k + 2]
+            out[f"F_{j.name}_x"], out[f"F_{j.name}_y"] = lam[r:r + 2]
             continue
         u, n, _ = slide_frame(q, j)
-        along = (-fr.coulomb * senses[k] * abs(float(lam[2 * k]))
+        along = (-fr.coulomb * senses[k] * abs(float(lam[r]))
                  - fr.viscous * joint_rate(lk, q, qd, j))
-        out[f"F_{j.name}_x"], out[f"F_{j.name}_y"] = lam[2 * k] * n + along * u
-        out[f"M_{j.name}"] = float(lam[2 * k + 1])
-    base = 2 * len(lk.joints)
+        out[f"F_{j.name}_x"], out[f"F_{j.name}_y"] = lam[r] * n + along * u
+        if j.kind == "prismatic":  # a pin in a slot carries no couple
+            out[f"M_{j.name}"] = float(lam[r + 1])
+    base = joint_row_count(lk)
     for k, d in enumerate(lk.drivers):
         out[f"Q_{lk.joints[d.joint].name}"] = float(lam[base + k])
     for name, value in spring_values(lk, q, qd).items():
