@@ -126,16 +126,17 @@ def describe(case: Case) -> list[str]:
 def describe_linkage(case: Case) -> list[str]:
     """A linkage's links, joints, mobility (formula and rank), each driver's reachable range
     with its lock positions, and, for one driver, the mechanical advantage at the pose."""
+    from collections import Counter
+
     from mechcheck.analytic import theory
-    from mechcheck.analytic.joint_kinds import KINDS
 
     linkage = case.linkage
-    kinds = ", ".join(f"{sum(1 for j in linkage.joints if j.kind is kind)} {name}"
-                      for name, kind in KINDS.items())
+    counts = Counter(j.kind.name for j in linkage.joints)
+    kinds = ", ".join(f"{n} {name}" for name, n in counts.items())
     lines = [f"{case.name} (linkage)",
              f"  links: {len(linkage.links)} ({', '.join(link.name for link in linkage.links)})",
              f"  joints: {len(linkage.joints)} ({kinds})",
-             f"  mobility: Gruebler–Kutzbach 3(n − 1) − 2j = {linkage.gruebler}; by the rank of "
+             f"  mobility: Gruebler–Kutzbach 3(n − 1) − Σ(3 − Sᵢ) = {linkage.gruebler}; by the rank of "
              f"the constraint Jacobian at the drawn pose: {linkage.dof}"
              + ("" if linkage.gruebler == linkage.dof else
                 " (they differ: redundant constraints or a singular drawing)"),

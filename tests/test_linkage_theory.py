@@ -74,8 +74,8 @@ def test_theory_case_prints_mobility_ranges_and_mechanical_advantage() -> None:
     result = CliRunner().invoke(app, ["theory", "case", str(path)])
     assert result.exit_code == 0, result.output
     out = result.output
-    assert "links: 6" in out and "joints: 7 (7 revolute, 0 prismatic)" in out
-    assert "Gruebler–Kutzbach 3(n − 1) − 2j = 1" in out and "drawn pose: 1" in out
+    assert "links: 6" in out and "joints: 7 (7 revolute)" in out
+    assert "Gruebler–Kutzbach 3(n − 1) − Σ(3 − Sᵢ) = 1" in out and "drawn pose: 1" in out
     assert "driver O2:" in out and "mechanical advantage (load on output): 100 N" in out
     q = solve(load_cases(path)[0]).values["Q_O2"]  # the load is the case's only force
     assert f"{100 / abs(q):.6g}" in out
