@@ -212,6 +212,7 @@ class Slide(JointBuilder):
 BUILDERS: dict[str, JointBuilder] = {
     "revolute": Pin(),
     "prismatic": Slide(locks_turning=True),
+    "pin_in_slot": Slide(locks_turning=False),
 }
 
 
