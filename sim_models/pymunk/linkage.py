@@ -32,7 +32,7 @@ from operator import add, mul
 import numpy as np
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage import Joint, Linkage
+from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.linkage_forces import LinkageResults, pose_quantities
 from mechcheck.analytic.linkage_kinematics import (
@@ -46,6 +46,7 @@ from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.linkage_motion import has_free_coordinates, is_driven
 from mechcheck.sim_models.pymunk import _fast
+from mechcheck.sim_models.pymunk.joint_kinds import axis_now as axis_now
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
     build_linkage_model,
@@ -53,7 +54,6 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     place,
     stage,
 )
-from mechcheck.sim_models.pymunk.readout import turned
 from mechcheck.sim_models.pymunk.settings import (
     LINKAGE_SETTLE,
     LINKAGE_SOLVE,
@@ -80,12 +80,6 @@ DRIFT_EFFECT = 1.0e-6
 
 
 # -- reading the model ------------------------------------------------------------------
-
-def axis_now(model: LinkageModel, joint: Joint) -> tuple[float, float]:
-    """A prismatic joint's sliding direction at the current pose (fixed in links[0])."""
-    assert joint.axis is not None
-    return turned(joint.axis, model.body(joint.links[0]).angle)
-
 
 def pose_table(linkage: Linkage, q: Array) -> dict[str, Array]:
     """x_, y_, phi_ and q_ of simulated poses q (M, 3n), as the analytic backends compute

@@ -7,9 +7,11 @@ velocity integration, one value per joint acting on ``links[1]`` and its opposit
 ``links[0]``:
 
 - a revolute joint: the couple −μ·r·|F|·sign(q̇) − c·q̇ (friction circle and viscous);
-- a prismatic joint: the force −μ·|N|·sign(q̇) − c·q̇ along the axis through ``at``,
-  N the reaction's normal component. This force is part of the joint's reported reaction
-  (:func:`with_sliding`), as in MuJoCo's linkage model.
+- a sliding joint (prismatic, pin in a slot): the force −μ·|N|·sign(q̇) − c·q̇ along
+  the axis through ``at``, N the reaction's normal component. This force is part of the
+  joint's reported reaction (:func:`with_sliding`), as in MuJoCo's linkage model.
+
+What each kind's rate, Coulomb term and load are: :mod:`.joint_kinds`.
 
 q̇ is the joint's relative rate measured on the bodies. The loads belong to the step
 they act in; how they are made consistent with that step's own reactions (a prediction,
@@ -23,7 +25,7 @@ import math
 import pymunk
 
 from mechcheck.analytic.linkage import Joint
-from mechcheck.sim_models.pymunk.linkage import axis_now
+from mechcheck.sim_models.pymunk.joint_kinds import builder
 from mechcheck.sim_models.pymunk.linkage_model import LinkageModel
 from mechcheck.sim_models.pymunk.readout import Values
 
@@ -38,20 +40,14 @@ def sign(x: float) -> float:
 
 
 #: Per joint, the friction acting on links[1]: a couple (N·m, revolute) or a force along
-#: the axis (N, prismatic); links[0] takes the opposite.
+#: the axis (N, a sliding joint); links[0] takes the opposite.
 JointLoads = dict[str, float]
 
 
 def joint_rate(model: LinkageModel, joint: Joint) -> float:
     """q̇ of a joint from the bodies' velocities: ω_b − ω_a, or the speed of ``at`` on
-    links[1] relative to links[0] along the axis."""
-    a, b = (model.body(link) for link in joint.links)
-    if joint.kind.rotates:
-        return float(b.angular_velocity - a.angular_velocity)
-    point = b.local_to_world(model.linkage.points[joint.at])
-    relative = b.velocity_at_world_point(point) - a.velocity_at_world_point(point)
-    ux, uy = axis_now(model, joint)
-    return float(relative.x * ux + relative.y * uy)
+    links[1] relative to links[0] along the axis (:mod:`.joint_kinds`)."""
+    return builder(joint).rate(model, joint)
 
 
 def joint_rates(model: LinkageModel) -> dict[str, float]:
@@ -61,7 +57,7 @@ def joint_rates(model: LinkageModel) -> dict[str, float]:
 
 def friction_loads(model: LinkageModel, state: Values, viscous: bool = True) -> JointLoads:
     """The friction of every joint at ``state`` (reactions ``F_<joint>_x/y`` and rates
-    ``qdot_<joint>``; a prismatic joint's axis at the model's pose); ``viscous=False``
+    ``qdot_<joint>``; a sliding joint's axis at the model's pose); ``viscous=False``
     leaves out the viscous terms (a quasi-static run, whose analytic motion has no speed)."""
     linkage = model.linkage
     f = linkage.friction
@@ -71,13 +67,7 @@ def friction_loads(model: LinkageModel, state: Values, viscous: bool = True) -> 
     for joint in linkage.joints:
         name = joint.name
         rate = state[f"qdot_{name}"]
-        fx, fy = state[f"F_{name}_x"], state[f"F_{name}_y"]
-        if joint.kind.pins:
-            arm = f.coefficient(name) * f.pin_radius.get(name, 0.0)
-            coulomb = arm * math.hypot(fx, fy)
-        else:
-            ux, uy = axis_now(model, joint)
-            coulomb = f.coefficient(name) * abs(-fx * uy + fy * ux)
+        coulomb = builder(joint).coulomb(model, joint, f, state[f"F_{name}_x"], state[f"F_{name}_y"])
         damping = f.viscous.get(name, 0.0) if viscous else 0.0
         value = -coulomb * sign(rate) - damping * rate
         if value:
@@ -96,22 +86,17 @@ def apply_joint_friction(model: LinkageModel, link: str, body: pymunk.Body,
         if value is None or link not in joint.links:
             continue
         share = 1.0 if joint.links[1] == link else -1.0
-        if joint.kind.pins:
-            body.torque += share * value
-            continue
-        ux, uy = axis_now(model, joint)
-        point = model.body(joint.links[1]).local_to_world(linkage.points[joint.at])
-        body.apply_force_at_world_point((share * value * ux, share * value * uy), point)
+        builder(joint).apply_friction(model, joint, body, share * value)
 
 
 def with_sliding(model: LinkageModel, values: Values, loads: JointLoads) -> Values:
-    """The reactions with each prismatic joint's friction force added to its F (the force
+    """The reactions with each sliding joint's friction force added to its F (the force
     by links[0] on links[1] includes it)."""
     out = dict(values)
     for joint in model.linkage.joints:
         value = loads.get(joint.name)
-        if value is not None and not joint.kind.pins:
-            ux, uy = axis_now(model, joint)
-            out[f"F_{joint.name}_x"] += value * ux
-            out[f"F_{joint.name}_y"] += value * uy
+        force = builder(joint).sliding(model, joint, value) if value is not None else None
+        if force is not None:
+            out[f"F_{joint.name}_x"] += force[0]
+            out[f"F_{joint.name}_y"] += force[1]
     return out

@@ -9,19 +9,9 @@ unchanged, and the ground is the space's static body (its frame is the world).
 
 Joints are pymunk's own constraints, body a = ``links[0]``, body b = ``links[1]``,
 so the impulse a constraint accumulates on body b is the force *by* links[0]
-*on* links[1] (LINKAGES.md):
-
-- revolute: a :class:`pymunk.PivotJoint` at the joint's point;
-- prismatic: a :class:`pymunk.GrooveJoint` on links[0] along the axis through
-  ``at`` (its impulse is the normal reaction N·n at ``at``) plus a
-  :class:`pymunk.GearJoint` (ratio 1, phase 0) locking the relative rotation
-  (its torque is M);
-- a driver on a revolute joint: a GearJoint with phase = the driver's value,
-  a two-way lock whose torque is Q;
-- a driver on a prismatic joint: the groove is replaced by a PivotJoint between
-  ``at`` on links[1] and the point ``at`` + value·axis of links[0], which holds
-  the slide where the driver puts it; its impulse along the axis is Q, across
-  it the reaction N·n (the gear still gives M).
+*on* links[1] (LINKAGES.md). Which constraints each kind of joint is, how a
+driver's lock holds it and where its reaction is read: :mod:`.joint_kinds`, the
+one place that knows joint kinds.
 
 Springs are pymunk's own: a :class:`pymunk.DampedSpring` between the two ends
 (rest length L0) and a :class:`pymunk.DampedRotarySpring` per torsional spring.
@@ -52,6 +42,7 @@ from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, real_inertial
 from mechcheck.sim_models.pymunk import _fast
 from mechcheck.sim_models.pymunk._fast import Bodies, Cell, Plan, impulse_cells
+from mechcheck.sim_models.pymunk.joint_kinds import GROOVE_REACH as GROOVE_REACH, along as along, builder
 from mechcheck.sim_models.pymunk.loads import LoadTerms, apply_forces
 from mechcheck.sim_models.pymunk.readout import HeldSlide, Readout
 from mechcheck.sim_models.pymunk.settings import SolverSettings
@@ -59,9 +50,6 @@ from mechcheck.sim_models.pymunk.settings import SolverSettings
 Vec = tuple[float, float]
 Spring = pymunk.DampedSpring | pymunk.DampedRotarySpring
 
-#: A groove reaches this many linkage sizes either side of its point, so its end stops
-#: never engage within any pose the linkage can reach.
-GROOVE_REACH = 100.0
 #: Smallest radius of gyration of a fictitious body, as a fraction of the linkage's
 #: size: a link carrying one point (a slider) still needs a finite moment of inertia.
 MIN_RADIUS = 0.25
@@ -83,9 +71,10 @@ MOMENT_FLOOR = 0.1
 class LinkageModel:
     """A built pymunk linkage and a handle on every constraint that carries a force.
 
-    ``pins`` (revolute joints), ``grooves`` (free prismatic joints), ``held`` (driven
-    prismatic joints: a pivot), ``locks`` (the prismatic joints' angle locks),
-    ``drives`` (driven revolute joints), ``springs``; ``radius`` per body for speeds.
+    ``pins`` (revolute joints), ``grooves`` (free sliding joints: prismatic, pin in a
+    slot), ``held`` (driven sliding joints: a pivot), ``locks`` (the prismatic joints'
+    angle locks), ``drives`` (driven revolute joints), ``springs``; ``radius`` per body
+    for speeds; which joint goes in which table is :mod:`.joint_kinds`'.
     For loops that read or write every step: ``scale`` (the linkage's, which
     :attr:`Linkage.scale` computes anew each time), ``radii`` (``radius`` as an array), ``bulk``
     (the bodies in bulk), ``loads`` (the loads' force and torque per body) and ``readout``
@@ -210,40 +199,18 @@ def has_fictitious_inertia(linkage: Linkage, quasi_static: bool = False) -> bool
     return False
 
 
-def along(joint: Joint, point: Vec, distance: float) -> Vec:
-    """The point ``distance`` along a prismatic joint's drawn axis from ``point``."""
-    assert joint.axis is not None
-    return point[0] + distance * joint.axis[0], point[1] + distance * joint.axis[1]
-
-
 def move_lock(model: LinkageModel, joint: Joint, value: float) -> None:
     """Move a driven joint's lock to ``value`` (rad or m from the drawn pose): a gear's
-    phase, or a held slide's anchor."""
-    if joint.kind.rotates:
-        model.drives[joint.name].phase = value
-    else:
-        model.held[joint.name].anchor_a = along(joint, model.linkage.points[joint.at], value)
+    phase, or a held slide's anchor (:mod:`.joint_kinds`)."""
+    builder(joint).move_lock(model, joint, value)
 
 
 def make_joints(model: LinkageModel) -> None:
     """Every joint's constraints, and each driver's lock, added to the model's tables."""
     linkage = model.linkage
     driven = {d.joint: d.value for d in linkage.drivers}
-    reach = GROOVE_REACH * linkage.scale
     for joint in linkage.joints:
-        a, b = (model.body(link) for link in joint.links)
-        at = linkage.points[joint.at]
-        if joint.kind.pins:
-            model.pins[joint.name] = pymunk.PivotJoint(a, b, at, at)
-            if joint.name in driven:
-                model.drives[joint.name] = pymunk.GearJoint(a, b, driven[joint.name], 1.0)
-            continue
-        model.locks[joint.name] = pymunk.GearJoint(a, b, 0.0, 1.0)
-        if joint.name in driven:
-            model.held[joint.name] = pymunk.PivotJoint(a, b, along(joint, at, driven[joint.name]), at)
-        else:
-            model.grooves[joint.name] = pymunk.GrooveJoint(
-                a, b, along(joint, at, -reach), along(joint, at, reach), at)
+        builder(joint).build(model, joint, driven.get(joint.name))
 
 
 def make_springs(model: LinkageModel) -> None:
@@ -310,11 +277,7 @@ def reaction_names(model: LinkageModel) -> list[str]:
     drives and springs; a held slide's Q_ comes before its F_."""
     names = []
     for joint in model.linkage.joints:
-        if joint.kind.pins:
-            names += [f"F_{joint.name}_x", f"F_{joint.name}_y"]
-        else:
-            held = [f"Q_{joint.name}"] if joint.name in model.held else []
-            names += [*held, f"F_{joint.name}_x", f"F_{joint.name}_y", f"M_{joint.name}"]
+        names += builder(joint).reaction_names(joint, joint.name in model.held)
     return names + [f"Q_{name}" for name in model.drives] + [f"S_{name}" for name in model.springs]
 
 
@@ -322,20 +285,18 @@ def compile_readout(model: LinkageModel) -> Readout:
     """Which accumulated impulse is which quantity (:class:`~.readout.Readout`).
 
     A constraint's impulse on its body b is the force by ``links[0]`` on ``links[1]``
-    (the module docstring): pins' and grooves' F, locks' M, drives' Q, a held slide's
-    pivot F + Q; a spring's S is the negative of its signed impulse.
+    (the module docstring): each joint's F as its kind reads it (:mod:`.joint_kinds`: a
+    pin's or groove's impulse, a held slide's pivot F + Q), locks' M, drives' Q; a
+    spring's S is the negative of its signed impulse.
     """
     linkage = model.linkage
     forces: list[tuple[str, Cell]] = []
-    held = []
+    held: list[HeldSlide] = []
     for joint in linkage.joints:
-        name = joint.name
-        if name in model.held and joint.axis is not None:
-            x, y = impulse_cells(model.held[name])
-            held.append(HeldSlide(name, (x, y), model.body(joint.links[0]), joint.axis))
-        else:
-            pin = model.pins[name] if joint.kind.pins else model.grooves[name]
-            forces += zip((f"F_{name}_x", f"F_{name}_y"), impulse_cells(pin), strict=True)
+        cells, slide = builder(joint).reaction(model, joint)
+        forces += cells
+        if slide is not None:
+            held.append(slide)
     couples = [(f"M_{name}", impulse_cells(lock)[0]) for name, lock in model.locks.items()]
     couples += [(f"Q_{name}", impulse_cells(gear)[0]) for name, gear in model.drives.items()]
     units = quantity_units(linkage)

@@ -37,10 +37,10 @@ def along_and_across(fx: float, fy: float, axis: tuple[float, float]) -> tuple[f
 
 @dataclass(frozen=True)
 class HeldSlide:
-    """A driven prismatic joint, held by a pivot (impulse ``cells``) whose force at ``at``
-    splits into the driver's effort Q along the axis and the reaction F across it
-    (LINKAGES.md: F excludes any driver effort); ``body`` is links[0], ``axis`` the slide's
-    direction in it."""
+    """A driven sliding joint (prismatic, or a pin in a slot), held by a pivot (impulse
+    ``cells``) whose force at ``at`` splits into the driver's effort Q along the axis and
+    the reaction F across it (LINKAGES.md: F excludes any driver effort); ``body`` is
+    links[0], ``axis`` the slide's direction in it."""
 
     name: str
     cells: tuple[Cell, Cell]
