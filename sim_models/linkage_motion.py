@@ -3,13 +3,13 @@ value, velocity and acceleration over time, and how far back a lead-in may start
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage import Joint
+from mechcheck.analytic.linkage import Joint, Linkage
 from mechcheck.analytic.linkage_backends import analytic_results, verdict
 from mechcheck.analytic.linkage_forces import LinkageResults, solve_linkage
 from mechcheck.analytic.linkage_kinematics import Array, solve_pose
@@ -33,6 +33,23 @@ class Motion:
                 self.velocity + self.acceleration * t, np.broadcast_to(self.acceleration,
                                                                         (t.shape[0],
                                                                          self.value.size)))
+
+
+def unmodelled(linkage: Linkage, built: Collection[str], simulator: str) -> str | None:
+    """What of ``linkage`` a simulator with joint builds for the kinds ``built`` has no
+    counterpart for, or None: a kind of joint without a build, or members whose stretch
+    decides a redundant linkage's forces (a simulator's bodies are rigid)."""
+    missing = [j for j in linkage.joints if j.kind.name not in built]
+    if missing:
+        j = missing[0]
+        return (f"joint {j.name} is a {j.kind.name}, which the {simulator} model does not build: "
+                "its forces are checked by the analytic backends only")
+    if linkage.redundant and linkage.elastic_links:
+        return ("the forces of this redundant linkage follow its members' stretch "
+                f"(axial_stiffness of {', '.join(m.name for m in linkage.elastic_links)}), and "
+                f"the {simulator} model's bodies are rigid: they are checked by the analytic "
+                "backend only")
+    return None
 
 
 def prescribed_motion(case: Case) -> Motion:

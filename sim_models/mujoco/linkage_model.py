@@ -35,6 +35,7 @@ import numpy as np
 from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, link_extent, real_inertial
+from mechcheck.sim_models.linkage_motion import unmodelled
 from mechcheck.sim_models.mujoco import mjwarnings  # noqa: F401  (MuJoCo warnings into Python before any model)
 from mechcheck.sim_models.mujoco.joint_kinds import BUILDS, builder_of
 from mechcheck.sim_models.mujoco.model import (
@@ -95,7 +96,7 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
     Raises :class:`Unbuildable` for a loop without a revolute joint, and for a driver or a
     torsional spring on a joint that must close a loop (a damper there is emulated).
     """
-    why = unmodelled(linkage)
+    why = unmodelled(linkage, BUILDS, "MuJoCo")
     if why is not None:
         raise Unbuildable(why)
     order = sorted(linkage.joints, key=lambda j: _priority(linkage, j))
@@ -120,22 +121,6 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
             raise Unbuildable(why)
         closures.append(joint)
     return LinkageTree(_oriented(chosen), tuple(j for j in linkage.joints if j in closures))
-
-
-def unmodelled(linkage: Linkage) -> str | None:
-    """What of ``linkage`` this model has no counterpart for, or None: a kind of joint
-    without a build (:data:`.joint_kinds.BUILDS`), or members whose stretch decides a
-    redundant linkage's forces (every body here is rigid)."""
-    missing = [j for j in linkage.joints if j.kind.name not in BUILDS]
-    if missing:
-        j = missing[0]
-        return (f"joint {j.name} is a {j.kind.name}, which the MuJoCo model does not build: its "
-                "forces are checked by the analytic backends only")
-    if linkage.redundant and linkage.elastic_links:
-        return ("the forces of this redundant linkage follow its members' stretch "
-                f"(axial_stiffness of {', '.join(m.name for m in linkage.elastic_links)}), and "
-                "the MuJoCo model's bodies are rigid: they are checked by the analytic backend only")
-    return None
 
 
 def _closure_refusal(linkage: Linkage, chosen: list[Joint], joint: Joint) -> str | None:

@@ -14,13 +14,24 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage_backends import analytic_results
+from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.linkage_motion import gated_sweep, is_driven
+from mechcheck.sim_models.linkage_motion import gated_sweep, is_driven, unmodelled
 from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, linkage_sweep
+from mechcheck.sim_models.pymunk.joint_kinds import BUILDERS
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
+
+
+def refused(case: Case, backend: str) -> Solution | None:
+    """``not_applicable`` for what the pymunk model has no counterpart for
+    (:func:`~mechcheck.sim_models.linkage_motion.unmodelled`), else None."""
+    why = unmodelled(case.linkage, BUILDERS, "pymunk")
+    if why is None:
+        return None
+    return Solution(case.name, backend, {}, status="not_applicable", message=why,
+                    units=quantity_units(case.linkage))
 
 
 def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
@@ -28,6 +39,9 @@ def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
     (:func:`mechcheck.sim_models.pymunk.linkage.settle`), or driven along its prescribed motion
     when it moves or has Coulomb friction
     (:func:`mechcheck.sim_models.pymunk.linkage_dynamics.drive_linkage`)."""
+    no = refused(case, "pymunk")
+    if no is not None:
+        return no
     if is_driven(case):
         return linkage_dynamics.drive_linkage(case, analytic_results(case))
     return linkage.settle(case, settings or LINKAGE_SETTLE)
@@ -36,7 +50,8 @@ def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
 def solve_at_pose(case: Case, settings: SolverSettings | None = None) -> Solution:
     """The ``pymunk_solve`` backend: pymunk's constraint solver at the analytic pose
     (:func:`mechcheck.sim_models.pymunk.linkage.solve_at_pose`)."""
-    return linkage.solve_at_pose(case, settings or LINKAGE_SOLVE)
+    no = refused(case, "pymunk_solve")
+    return no if no is not None else linkage.solve_at_pose(case, settings or LINKAGE_SOLVE)
 
 
 def sweep(case: Case, grid: ArrayLike, backend: str = "pymunk") -> list[Solution]:
@@ -45,5 +60,8 @@ def sweep(case: Case, grid: ArrayLike, backend: str = "pymunk") -> list[Solution
     pose gate (:func:`~mechcheck.sim_models.linkage_motion.gated_sweep`)."""
     if backend not in linkage_sweep.BACKENDS:
         raise ValueError(f"backend must be one of {linkage_sweep.BACKENDS}, got {backend!r}")
+    no = refused(case, backend)
+    if no is not None:
+        return [no for _ in np.atleast_1d(np.asarray(grid, dtype=float))]
     return gated_sweep(case, np.asarray(grid, dtype=float), backend,
                        lambda values, results: linkage_sweep.sweep(case, values, backend, results))
