@@ -42,6 +42,9 @@ CLOSURE_RTOL = 1e-13
 NEWTON_ITERATIONS = 25
 #: Bisection steps on s when locating where a linkage locks: 2⁻⁴⁰ of the driver's travel.
 LOCK_BISECTIONS = 40
+#: A step Newton does not close is tried in halves down to 2⁻⁸ of it before it counts as a
+#: lock: a gear train's last gear may turn tens of times faster than its driver.
+HALVINGS = 8
 
 
 @dataclass(frozen=True)
@@ -288,6 +291,10 @@ def _walked_positions(linkage: Linkage, value: Array) -> tuple[Array, Array]:
             continue
         before = np.minimum(np.floor(np.abs(value[inside]) / size).astype(np.intp), len(anchors) - 1)
         trial, ok = _newton(linkage, anchors[before], value[inside, None])
+        for i in np.flatnonzero(~ok):
+            anchor = math.copysign(before[i] * size, float(value[inside[i]]))
+            trial[i:i + 1], ok[i:i + 1] = _in_halves(linkage, anchors[before[i]][None, :], anchor,
+                                                    value[inside[i], None][None, :])
         q[inside[ok]] = trial[ok]
         if not ok.all():    # between the last anchor and a lock: where exactly, per pose
             bad = inside[~ok]
@@ -307,11 +314,33 @@ def _walk(linkage: Linkage, start: Array, side: float, size: float,
         target = np.array([[side * min(k * size, travel)]])
         trial, ok = _newton(linkage, anchors[-1][None, :], target)
         if not ok[0]:
+            trial, ok = _in_halves(linkage, anchors[-1][None, :], side * (k - 1) * size, target)
+        if not ok[0]:
             fraction = _lock_fraction(linkage, anchors[-1][None, :], target,
                                       np.array([(k - 1) * size / abs(target[0, 0])]), np.ones(1))
             return np.array(anchors), float(fraction[0]) * abs(target[0, 0])
         anchors.append(trial[0])
     return np.array(anchors), math.inf
+
+
+def _in_halves(linkage: Linkage, q: Array, start: float, target: Array,
+               depth: int = HALVINGS) -> tuple[Array, NDArray[np.bool_]]:
+    """Newton from q (one pose, its driver at ``start``) to ``target`` (1, 1) through halves
+    of the step where one step does not converge: a link that turns many times faster than
+    the driver (the last gear of a train) leaves Newton's reach within a driver step that
+    suits every other linkage. Not converged after ``depth`` halvings: a lock."""
+    if depth == 0:
+        return q, np.zeros(1, dtype=bool)
+    mid = np.array([[0.5 * (start + float(target[0, 0]))]])
+    halfway, ok = _newton(linkage, q, mid)
+    if not ok[0]:
+        halfway, ok = _in_halves(linkage, q, start, mid, depth - 1)
+        if not ok[0]:
+            return q, ok
+    trial, ok = _newton(linkage, halfway, target)
+    if ok[0]:
+        return trial, ok
+    return _in_halves(linkage, halfway, float(mid[0, 0]), target, depth - 1)
 
 
 def _lock_fraction(linkage: Linkage, q: Array, values: Array, lo: float | Array,
