@@ -251,12 +251,14 @@ class RigModel:
 
     # -- how settled ------------------------------------------------------------------
     def loop_violation(self) -> float:
-        """Largest gap of a loop-closing joint, metres."""
+        """Largest gap of a loop-closing joint (a gear mesh's: its tendon's stretch along
+        the line of action), metres."""
         return float(self.loop_gaps(self.data.efc_pos[None])[0])
 
     def loop_gaps(self, efc_pos: Array) -> Array:
         """(N,): :meth:`loop_violation` of N states' ``efc_pos``."""
         gaps = [np.sqrt((efc_pos[:, rows] ** 2).sum(axis=1)) for rows in self.loop_rows.values()]
+        gaps += [np.abs(efc_pos[:, row]) for row in self.mesh_rows]
         return np.max(gaps, axis=0) if gaps else np.zeros(efc_pos.shape[0])
 
     def joint_velocity(self) -> float:
