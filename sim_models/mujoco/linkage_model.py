@@ -6,7 +6,10 @@ of its child body that :mod:`.joint_kinds` gives its kind (a hinge, a slide, or 
 in a slot a slide and a hinge); every joint left out of the tree closes a loop and must be
 revolute: it becomes a ``connect`` equality between two sites at its point (sites, because
 a body-anchored connect takes its second anchor from ``qpos0``). A loop with no revolute
-joint cannot be closed that way and is refused (:class:`Unbuildable`).
+joint cannot be closed that way and is refused (:class:`Unbuildable`). A gear mesh never
+enters the tree: it closes the loop through its gears' bearings as a tendon on its line of
+action held by a tendon equality (:mod:`.linkage_mesh`); a gear held by meshes alone is
+refused.
 
 Frames: every body is built with the orientation of the world and its origin at the point
 of its tree joint in the drawn pose, so ``qpos = 0`` is the drawn pose. A tree joint's
@@ -144,8 +147,9 @@ def _unborne(linkage: Linkage, tree: LinkageTree) -> str | None:
 
 def unmodelled(linkage: Linkage) -> str | None:
     """What of ``linkage`` this model has no counterpart for, or None: a kind of joint
-    without a build (:data:`.joint_kinds.BUILDS`), or members whose stretch decides a
-    redundant linkage's forces (every body here is rigid)."""
+    without a build (:data:`.joint_kinds.BUILDS`; every kind has one), or members whose
+    stretch decides a redundant linkage's forces (every body here is rigid). A gear held by
+    meshes alone is refused by :func:`spanning_tree`."""
     missing = [j for j in linkage.joints if j.kind.name not in BUILDS]
     if missing:
         j = missing[0]
