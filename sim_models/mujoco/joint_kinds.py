@@ -7,7 +7,9 @@ A tree joint becomes one or more MuJoCo joints of its child body (:class:`MjJoin
 the order MuJoCo applies them). The one named after the joint carries its coordinate q
 (``qpos`` = q whichever way the tree runs), so drivers' equalities, dampers, torsional
 springs and armature go on it; a pin in a slot adds a hinge for its free turn. A joint
-that may close a loop becomes a ``connect`` at its point (:mod:`.linkage_model`).
+that may close a loop becomes a ``connect`` at its point (:mod:`.linkage_model`). A gear
+mesh is never a tree joint: it always closes the loop through its gears' bearings, as a
+tendon on its line of action held at constant length (:mod:`.linkage_mesh`).
 
 To add a kind: one :class:`KindBuild` in :data:`BUILDS` (see ``README.md``).
 """
@@ -19,7 +21,7 @@ from dataclasses import dataclass
 
 import mujoco
 
-from mechcheck.analytic.joint_kinds import PIN_IN_SLOT, PRISMATIC, REVOLUTE, JointKind
+from mechcheck.analytic.joint_kinds import GEAR, PIN_IN_SLOT, PRISMATIC, REVOLUTE, JointKind
 from mechcheck.analytic.linkage import Joint
 
 HINGE = mujoco.mjtJoint.mjJNT_HINGE
@@ -71,6 +73,10 @@ def _slide_and_turn(joint: Joint, sign: float) -> tuple[MjJoint, ...]:
     return (slide, turn) if sign > 0.0 else (turn, slide)
 
 
+def _never_in_the_tree(joint: Joint, sign: float) -> tuple[MjJoint, ...]:
+    raise AssertionError(f"joint {joint.name} closes its loop: it has no MuJoCo joint")
+
+
 @dataclass(frozen=True)
 class KindBuild:
     """How MuJoCo builds one kind of joint and reads its reaction.
@@ -85,6 +91,9 @@ class KindBuild:
     - ``sliding_friction``: its Coulomb friction is μ·|N| along its axis, else the
       friction circle's couple μ·r·|F|.
     - ``joints``: its MuJoCo joints on the child body, given the tree's sign.
+    - ``meshes``: it is a gear mesh: never a tree joint, it closes its loop as a tendon on
+      the line of action (:mod:`.linkage_mesh`) and reports the tooth force's tangential
+      and radial parts besides its x, y.
     """
 
     kind: JointKind
@@ -93,11 +102,13 @@ class KindBuild:
     couple: bool
     sliding_friction: bool
     joints: Callable[[Joint, float], tuple[MjJoint, ...]]
+    meshes: bool = False
 
     def reaction_names(self, joint: Joint) -> list[str]:
         """Its reaction quantities, in the read-out's order."""
         force = [f"F_{joint.name}_x", f"F_{joint.name}_y"]
-        return ([f"M_{joint.name}"] if self.couple else []) + force
+        parts = [f"F_{joint.name}_t", f"F_{joint.name}_r"] if self.meshes else []
+        return ([f"M_{joint.name}"] if self.couple else []) + force + parts
 
     def coordinate_is_angle(self, joint: Joint) -> bool:
         """Its coordinate (and a driver's target, a damper's rate) is an angle."""
@@ -116,6 +127,8 @@ BUILDS: dict[str, KindBuild] = {b.kind.name: b for b in (
               sliding_friction=True, joints=_slide),
     KindBuild(PIN_IN_SLOT, closes_loops=False, slide_readout=True, couple=False,
               sliding_friction=True, joints=_slide_and_turn),
+    KindBuild(GEAR, closes_loops=False, slide_readout=False, couple=False,
+              sliding_friction=False, joints=_never_in_the_tree, meshes=True),
 )}
 
 

@@ -45,6 +45,7 @@ from mechcheck.sim_models.mujoco.linkage_friction import (
     clear_friction,
     friction_change,
 )
+from mechcheck.sim_models.mujoco.linkage_mesh import pushing
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
 from mechcheck.sim_models.mujoco.model import EXACT
@@ -97,10 +98,14 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
         return drive_linkage(case, results)
     if has_free_coordinates(case):
         return settle_free(case, results)
-    rig = rig or LinkageRig(case)
-    qpos = seed(rig, rig.joint_states(results.pose)[0][0], driver_values(case))
-    result = settle_refined(rig, qpos)
-    return settled_solution(rig, qpos, result, time.perf_counter() - start)
+    held = rig or LinkageRig(case)
+
+    def run() -> Solution:
+        qpos = seed(held, held.joint_states(results.pose)[0][0], driver_values(case))
+        result = settle_refined(held, qpos)
+        return settled_solution(held, qpos, result, time.perf_counter() - start)
+
+    return pushing([held.meshes], run, lambda solution: solution.values)
 
 
 def seed(rig: LinkageRig, qpos: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -157,11 +162,15 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
     why = unbuildable(case)
     if why is not None:
         return refused(case, "mujoco_solve", why)
-    rig = rig or exact_linkage_rig(case)
+    exact = rig or exact_linkage_rig(case)
     results = results if results is not None else analytic_results(case)
-    states = rig.joint_states(results.pose)
-    return exact_solution(case, rig, tuple(a[index] for a in states),
-                          results.pose.drivers[index], start, senses_at(results, index))
+    states = exact.joint_states(results.pose)
+
+    def run() -> Solution:
+        return exact_solution(case, exact, tuple(a[index] for a in states),
+                              results.pose.drivers[index], start, senses_at(results, index))
+
+    return pushing([exact.meshes], run, lambda solution: solution.values)
 
 
 def senses_at(results: LinkageResults, index: int) -> dict[str, float]:
@@ -366,6 +375,8 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
         return [refused(case, backend, why)] * len(first)
     if results is None:
         results = analytic_results(case, np.asarray(first, dtype=float))
+    if spanning_tree(case.linkage).meshes:
+        return pose_by_pose(case, backend, results)
     if backend == "mujoco":
         return settled_sweep(case, first, results, continuation)
     if not coulomb_terms(results.pose):  # buildable (checked above), nothing to iterate
@@ -380,6 +391,28 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
         out.append(exact_solution(case, rig, tuple(a[i] for a in states), targets[i], start,
                                   senses_at(results, i)))
     return out
+
+
+def pose_by_pose(case: Case, backend: str, results: LinkageResults) -> list[Solution]:
+    """Either backend at each pose of ``results`` with one model, one pose at a time: a gear
+    mesh's tendon is put on its line of action from the model's state before every forward
+    pass (:mod:`.linkage_mesh`), which the batched sweeps do not do."""
+    if backend == "mujoco":
+        return [held_at(case, LinkageRig(case), results, i) for i in range(len(results.pose.q))]
+    exact = exact_linkage_rig(case)
+    return [solve_linkage_at_pose(case, exact, results, i) for i in range(len(results.pose.q))]
+
+
+def held_at(case: Case, rig: LinkageRig, results: LinkageResults, index: int) -> Solution:
+    """Settled statics at pose ``index`` of ``results``, its drivers held there."""
+    start = time.perf_counter()
+    pose = rig.joint_states(results.pose)[0][index]
+
+    def run() -> Solution:
+        qpos = seed(rig, pose, results.pose.drivers[index])
+        return settled_solution(rig, qpos, settle_refined(rig, qpos), time.perf_counter() - start)
+
+    return pushing([rig.meshes], run, lambda solution: solution.values)
 
 
 def settled_sweep(case: Case, first: np.ndarray, results: LinkageResults,

@@ -14,11 +14,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage import LinearSpring
+from mechcheck.analytic.linkage import Joint, LinearSpring
 from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.mujoco.joint_kinds import MjJoint, builder_of
+from mechcheck.sim_models.mujoco.linkage_mesh import MeshLine, mesh_of, site_names, tendon_name
 from mechcheck.sim_models.mujoco.linkage_model import (
     CLOCK,
     LinkageTree,
@@ -27,6 +28,7 @@ from mechcheck.sim_models.mujoco.linkage_model import (
     build_spec,
     closure_sites,
     joint_damping,
+    local,
     origin_of,
     spanning_tree,
 )
@@ -112,6 +114,21 @@ class RigModel:
         self.loop_sites = {j.name: tuple(self._id(obj.mjOBJ_SITE, s) for s in closure_sites(j))
                            for j in self.tree.closures}
         self.point_sites = {p: self._id(obj.mjOBJ_SITE, f"point_{p}") for p in linkage.points}
+        self.meshes = [self._mesh_line(j) for j in self.tree.meshes]
+
+    def _mesh_line(self, joint: Joint) -> MeshLine:
+        """A gear mesh's tendon, equality, sites and the gears' bodies and centres."""
+        obj = mujoco.mjtObj
+        links = joint.links
+        centres = tuple(np.array([*local(self.tree, self.linkage, link, self.linkage.points[c])])
+                        for link, c in zip(links, mesh_of(joint).centres, strict=True))
+        ca, cb = (self.linkage.points[c] for c in mesh_of(joint).centres)
+        return MeshLine(joint, self._id(obj.mjOBJ_EQUALITY, tendon_name(joint)),
+                        self._id(obj.mjOBJ_TENDON, tendon_name(joint)),
+                        (self._id(obj.mjOBJ_SITE, site_names(joint)[0]),
+                         self._id(obj.mjOBJ_SITE, site_names(joint)[1])),
+                        (self.body[links[0]], self.body[links[1]]), (centres[0], centres[1]),
+                        np.subtract(cb, ca))
 
     def _joint_dofs(self, t: TreeJoint) -> tuple[tuple[MjJoint, int], ...]:
         """The MuJoCo joints of tree joint ``t``, each with its dof address."""
@@ -135,6 +152,8 @@ class RigModel:
         """Each equality's constraint rows (after a forward pass), the drivers' among them,
         and what scales their torques to forces."""
         self.loop_rows = {j: self.equality_rows(e) for j, e in self.loop_eq.items()}
+        self.mesh_rows = np.array([self.equality_rows(mesh.equality)[0] for mesh in self.meshes],
+                                  dtype=int)
         # A switched-off driver (a servo model, ``customize``) has no constraint rows.
         self.drive_rows = {j: rows for j, e in self.drive_eq.items()
                            if (rows := self.equality_rows(e)).size}
@@ -188,8 +207,18 @@ class RigModel:
         return out[0], out[1], out[2]
 
     def set_state(self, qpos: Array, qvel: Array) -> None:
+        """Put the model in a state (a seed): the gear meshes are held where they are."""
         self.data.qpos[:] = qpos
         self.data.qvel[:] = qvel
+        if self.meshes:
+            mujoco.mj_kinematics(self.model, self.data)
+            self.aim_meshes(hold=True)
+
+    def aim_meshes(self, hold: bool = False) -> None:
+        """Every gear mesh's tendon on its current line of action (after MuJoCo's
+        kinematics; :meth:`.linkage_mesh.MeshLine.aim`)."""
+        for mesh in self.meshes:
+            mesh.aim(self.model, self.data, hold)
 
     def joint_rates(self, qvel: Array) -> dict[str, float]:
         """Every joint's coordinate rate q̇ (LINKAGES.md) from joint velocities."""
@@ -222,12 +251,14 @@ class RigModel:
 
     # -- how settled ------------------------------------------------------------------
     def loop_violation(self) -> float:
-        """Largest gap of a loop-closing joint, metres."""
+        """Largest gap of a loop-closing joint (a gear mesh's: its tendon's stretch along
+        the line of action), metres."""
         return float(self.loop_gaps(self.data.efc_pos[None])[0])
 
     def loop_gaps(self, efc_pos: Array) -> Array:
         """(N,): :meth:`loop_violation` of N states' ``efc_pos``."""
         gaps = [np.sqrt((efc_pos[:, rows] ** 2).sum(axis=1)) for rows in self.loop_rows.values()]
+        gaps += [np.abs(efc_pos[:, row]) for row in self.mesh_rows]
         return np.max(gaps, axis=0) if gaps else np.zeros(efc_pos.shape[0])
 
     def joint_velocity(self) -> float:

@@ -68,6 +68,7 @@ from mechcheck.sim_models.linkage_motion import (
 )
 from mechcheck.sim_models.mujoco.joint_kinds import builder_of
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
+from mechcheck.sim_models.mujoco.linkage_mesh import pushing
 from mechcheck.sim_models.mujoco.linkage_model import INERTIA_FLOOR_FRACTION, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.sim_models.mujoco.model import Settings
@@ -236,7 +237,9 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
     units = rigs.base.units
 
     def read(steps: int, dt: float) -> dict[str, float]:
-        return read_drive(rigs, motion, steps, dt, friction)
+        # A gear mesh's tendon on the side of its line of action where it pushes.
+        return pushing([rig.meshes for rig in rigs.members],
+                       lambda: read_drive(rigs, motion, steps, dt, friction), lambda v: v)
 
     limit = lead_limit(case, motion, float(results.condition[0]))
     out = converge(read, limit, rigs.base.settings.timestep, rigs.base.scale, rigs.runs, units)

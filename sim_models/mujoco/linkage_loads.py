@@ -91,11 +91,30 @@ class RigLoads(RigModel):
                             incidence)
 
     def apply_loads(self) -> None:
-        """xfrc_applied from the current pose (:meth:`wrenches`), and the carried forces."""
+        """xfrc_applied from the current pose (:meth:`wrenches`), and the carried forces;
+        first the gear meshes' tendons back on their lines of action (after MuJoCo's
+        kinematics, which every caller has just run)."""
         d = self.data
+        if self.meshes:
+            self.aim_meshes()
         d.xfrc_applied[:] = self.wrenches(d.site_xpos[None], d.xipos[None], d.qvel[None])[0]
         if self.carried.any():
             self.apply_carried()
+            self.apply_carried_meshes()
+
+    def apply_carried_meshes(self) -> None:
+        """Each gear mesh's carried tendon force as its pair: along the tendon on gear b's
+        site, opposite on gear a's (where :meth:`aim_meshes` has just put them)."""
+        m, d = self.model, self.data
+        for mesh, row in zip(self.meshes, self.mesh_rows, strict=True):
+            ends = [d.xpos[b] + d.xmat[b].reshape(3, 3) @ m.site_pos[s]
+                    for s, b in zip(mesh.sites, mesh.bodies, strict=True)]
+            u = (ends[1] - ends[0]) / np.linalg.norm(ends[1] - ends[0])
+            for end, body, sign in zip(ends, mesh.bodies, (-1.0, 1.0), strict=True):
+                if body:
+                    force = sign * self.carried[row] * u
+                    d.xfrc_applied[body, 0:3] += force
+                    d.xfrc_applied[body, 5] += float(cross_z((end - d.xipos[body])[None], force[None])[0])
 
     def wrenches(self, site_xpos: Array, xipos: Array, qvel: Array) -> Array:
         """(N, nbody, 6): the xfrc_applied of N states: the loads

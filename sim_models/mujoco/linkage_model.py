@@ -6,7 +6,10 @@ of its child body that :mod:`.joint_kinds` gives its kind (a hinge, a slide, or 
 in a slot a slide and a hinge); every joint left out of the tree closes a loop and must be
 revolute: it becomes a ``connect`` equality between two sites at its point (sites, because
 a body-anchored connect takes its second anchor from ``qpos0``). A loop with no revolute
-joint cannot be closed that way and is refused (:class:`Unbuildable`).
+joint cannot be closed that way and is refused (:class:`Unbuildable`). A gear mesh never
+enters the tree: it closes the loop through its gears' bearings as a tendon on its line of
+action held by a tendon equality (:mod:`.linkage_mesh`); a gear held by meshes alone is
+refused.
 
 Frames: every body is built with the orientation of the world and its origin at the point
 of its tree joint in the drawn pose, so ``qpos = 0`` is the drawn pose. A tree joint's
@@ -38,6 +41,7 @@ from mechcheck.sim_models.inertia import Inertial, link_extent, real_inertial
 from mechcheck.sim_models.linkage_motion import unmodelled
 from mechcheck.sim_models.mujoco import mjwarnings  # noqa: F401  (MuJoCo warnings into Python before any model)
 from mechcheck.sim_models.mujoco.joint_kinds import BUILDS, builder_of
+from mechcheck.sim_models.mujoco.linkage_mesh import drawn_sites, site_names, tendon_name
 from mechcheck.sim_models.mujoco.model import (
     CLOCK_ARMATURE,
     DRIVE_ARMATURE_INERTIA,
@@ -70,6 +74,8 @@ class LinkageTree:
 
     tree: tuple[TreeJoint, ...]
     closures: tuple[Joint, ...]
+    #: Gear meshes: each closes its loop as a tendon on its line of action (:mod:`.linkage_mesh`).
+    meshes: tuple[Joint, ...] = ()
 
     def parent_joint(self, link: str) -> TreeJoint:
         return next(t for t in self.tree if t.child == link)
@@ -99,7 +105,9 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
     why = unmodelled(linkage, BUILDS, "MuJoCo")
     if why is not None:
         raise Unbuildable(why)
-    order = sorted(linkage.joints, key=lambda j: _priority(linkage, j))
+    meshes = tuple(j for j in linkage.joints if builder_of(j).meshes)
+    order = sorted((j for j in linkage.joints if j not in meshes),
+                   key=lambda j: _priority(linkage, j))
     root = {link.name: link.name for link in linkage.links}
 
     def find(n: str) -> str:
@@ -120,7 +128,22 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
         if why is not None:
             raise Unbuildable(why)
         closures.append(joint)
-    return LinkageTree(_oriented(chosen), tuple(j for j in linkage.joints if j in closures))
+    tree = LinkageTree(_oriented(chosen), tuple(j for j in linkage.joints if j in closures), meshes)
+    why = _unborne(linkage, tree)
+    if why is not None:
+        raise Unbuildable(why)
+    return tree
+
+
+def _unborne(linkage: Linkage, tree: LinkageTree) -> str | None:
+    """Why a link is not in the tree: it hangs on gear meshes alone (a mesh is never a tree
+    joint: it closes the loop through the bearings that carry its gears)."""
+    reached = {GROUND} | {t.child for t in tree.tree}
+    loose = [link for link in linkage.moving_links if link not in reached]
+    if not loose:
+        return None
+    return (f"link {loose[0]} is held by gear meshes alone: the MuJoCo model carries every gear "
+            "on a joint of its own (a bearing) and closes the loop through it with the mesh")
 
 
 def _closure_refusal(linkage: Linkage, chosen: list[Joint], joint: Joint) -> str | None:
@@ -242,6 +265,8 @@ def build_spec(name: str, linkage: Linkage, settings: Settings = STATIC) -> mujo
     _add_load_sites(bodies, tree, linkage)
     for joint in tree.closures:
         _add_closure(spec, bodies, tree, linkage, joint, settings)
+    for joint in tree.meshes:
+        _add_mesh(spec, bodies, tree, linkage, joint, settings)
     for spring in linkage.springs:
         _add_spring(spec, bodies, tree, linkage, spring)
     if settings.clock:
@@ -380,6 +405,19 @@ def _add_closure(spec: mujoco.MjSpec, bodies: dict[str, mujoco.MjsBody], tree: L
         bodies[link].add_site(name=site, pos=local(tree, linkage, link, p))
     spec.add_equality(name=f"loop_{joint.name}", type=mujoco.mjtEq.mjEQ_CONNECT,
                       objtype=mujoco.mjtObj.mjOBJ_SITE, name1=first, name2=second,
+                      solref=list(settings.solref), solimp=list(settings.solimp))
+
+
+def _add_mesh(spec: mujoco.MjSpec, bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+              linkage: Linkage, joint: Joint, settings: Settings) -> None:
+    """A gear mesh: a straight tendon from a site on gear a to one on gear b along the line
+    of action, held at its length by a tendon equality (:mod:`.linkage_mesh`)."""
+    tendon = spec.add_tendon(name=tendon_name(joint))
+    for site, link, p in zip(site_names(joint), joint.links, drawn_sites(linkage, joint), strict=True):
+        bodies[link].add_site(name=site, pos=local(tree, linkage, link, p))
+        tendon.wrap_site(site)
+    spec.add_equality(name=tendon_name(joint), type=mujoco.mjtEq.mjEQ_TENDON,
+                      objtype=mujoco.mjtObj.mjOBJ_TENDON, name1=tendon_name(joint),
                       solref=list(settings.solref), solimp=list(settings.solimp))
 
 

@@ -147,7 +147,23 @@ class RigReadout(RigModel):
         out = self._efforts_and_reactions(s)
         out.update(self._springs(s))
         out.update(self._pose_columns(s.qpos, s.site_xpos))
+        out.update(self._mesh_columns(s))
         return {name: out[name] for name in self.plan.order}
+
+    def _mesh_columns(self, s: Snapshot) -> dict[str, Array]:
+        """Each gear mesh's tooth force (its tendon equality's force along its sites) and
+        rolled arc (:meth:`.linkage_mesh.MeshLine.readings`)."""
+        out: dict[str, Array] = {}
+        if not self.meshes:
+            return out
+        forces = s.efc_force[:, self.mesh_rows]
+        index = {link: k for k, link in enumerate(self.moving_links)}
+        for k, mesh in enumerate(self.meshes):
+            gear_a = mesh.joint.links[0]
+            phi_a = (rows_times(s.qpos, self.rotation[index[gear_a]][None])[:, 0]
+                     if gear_a in index else np.zeros(len(s.qpos)))
+            out.update(mesh.readings(forces[:, k], s.site_xpos, s.xpos, s.xmat, phi_a))
+        return out
 
     def reactions(self) -> dict[str, float]:
         """The drivers' efforts and the joints' reactions alone from the current data (after
@@ -198,6 +214,7 @@ class RigReadout(RigModel):
         fields = {"cfrc_int"} if plan.pin_names or plan.slides else set()
         fields |= {"site_xpos"} if plan.point_names else set()
         fields |= {"xpos", "xmat", "subtree_com"} if plan.slides else set()
+        fields |= {"site_xpos", "xpos", "xmat"} if self.meshes else set()
         return fields | ({"ten_length", "ten_velocity"} if self.springs else set())
 
     def point_on(self, link: str, drawn: tuple[float, float]) -> Array:
