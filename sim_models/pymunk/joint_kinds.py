@@ -4,7 +4,7 @@ one place that maps a joint kind (:mod:`mechcheck.analytic.joint_kinds`) to pymu
 Body a = ``links[0]``, body b = ``links[1]``, so the impulse a constraint accumulates on
 body b is the force *by* links[0] *on* links[1] (LINKAGES.md). Each builder puts its
 constraints in the :class:`~.linkage_model.LinkageModel`'s tables (``pins``, ``grooves``,
-``held``, ``locks``, ``drives``): the tables, not the builders, fix the order in which the
+``held``, ``locks``, ``drives``, ``meshes``): the tables, not the builders, fix the order in which the
 space solves them, so a kind added here leaves every other linkage's numbers unchanged.
 
 - revolute (:class:`Pin`): a :class:`pymunk.PivotJoint` at the joint's point; a driver on
