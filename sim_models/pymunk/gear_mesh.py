@@ -29,9 +29,10 @@ does. Its impulse is a scalar along its direction, applied at the anchors, so th
 force reaches both centres' bearings (and a carrier) as the teeth exert it. (A groove
 would do the same with its normal along w, but Chipmunk solves a groove as a 2-D pivot and
 then drops the part along the groove, which converges to the constraint only where the
-relative velocity along the groove is zero; it over-corrected the rolled arc's drift by
-2.6×, a growing oscillation in a driven run.) Chipmunk fixes the anchors in their bodies
-and the pitch point moves through both as they turn, so the pre-solve callback (which
+relative velocity along the groove is zero: measured on the external pair, it corrects
+the rolled arc's drift 2.6× over in a step, an oscillation that grows.) Chipmunk fixes
+the anchors in their bodies and the pitch point moves through both as they turn, so the
+pre-solve callback (which
 Chipmunk calls after it has moved the bodies and before it solves) lays the pin along
 the line of action through the pitch point of the pose the step solves at, every step:
 the constraint is exact at every step's pose, in the Python and in the compiled loop
