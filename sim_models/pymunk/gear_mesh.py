@@ -32,9 +32,9 @@ then drops the part along the groove, which converges to the constraint only whe
 relative velocity along the groove is zero: measured on the external pair, it corrects
 the rolled arc's drift 2.6× over in a step, an oscillation that grows.) Chipmunk fixes
 the anchors in their bodies and the pitch point moves through both as they turn, so the
-pre-solve callback (which
-Chipmunk calls after it has moved the bodies and before it solves) lays the pin along
-the line of action through the pitch point of the pose the step solves at, every step:
+pre-solve callback (which Chipmunk calls after it has moved the bodies and before it
+solves) lays the pin along the line of action through the pitch point of the pose the
+step solves at, every step:
 the constraint is exact at every step's pose, in the Python and in the compiled loop
 alike (the callback runs inside ``cpSpaceStep``). The flank s is the sign of F_t in the
 pin's own last impulse (measured; s = +1 before the first); where the torque reverses,
