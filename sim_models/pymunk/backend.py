@@ -18,7 +18,7 @@ from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import gated_sweep, is_driven, unmodelled
 from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, linkage_sweep
-from mechcheck.sim_models.pymunk.joint_kinds import BUILDERS
+from mechcheck.sim_models.pymunk.joint_kinds import BUILDERS, builder
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
@@ -27,11 +27,21 @@ __all__ = ["settle", "solve_at_pose", "sweep"]
 def refused(case: Case, backend: str) -> Solution | None:
     """``not_applicable`` for what the pymunk model has no counterpart for
     (:func:`~mechcheck.sim_models.linkage_motion.unmodelled`), else None."""
-    why = unmodelled(case.linkage, BUILDERS, "pymunk")
+    why = unmodelled(case.linkage, BUILDERS, "pymunk") or built_inexactly(case)
     if why is None:
         return None
     return Solution(case.name, backend, {}, status="not_applicable", message=why,
                     units=quantity_units(case.linkage))
+
+
+def built_inexactly(case: Case) -> str | None:
+    """Why a joint's build would not be exact in this linkage (its builder's refusal), or
+    None."""
+    for joint in case.linkage.joints:
+        why = builder(joint).refusal(case.linkage, joint)
+        if why is not None:
+            return why
+    return None
 
 
 def settle(case: Case, settings: SolverSettings | None = None) -> Solution:

@@ -4,7 +4,7 @@ one place that maps a joint kind (:mod:`mechcheck.analytic.joint_kinds`) to pymu
 Body a = ``links[0]``, body b = ``links[1]``, so the impulse a constraint accumulates on
 body b is the force *by* links[0] *on* links[1] (LINKAGES.md). Each builder puts its
 constraints in the :class:`~.linkage_model.LinkageModel`'s tables (``pins``, ``grooves``,
-``held``, ``locks``, ``drives``): the tables, not the builders, fix the order in which the
+``held``, ``locks``, ``drives``, ``meshes``): the tables, not the builders, fix the order in which the
 space solves them, so a kind added here leaves every other linkage's numbers unchanged.
 
 - revolute (:class:`Pin`): a :class:`pymunk.PivotJoint` at the joint's point; a driver on
@@ -18,6 +18,12 @@ space solves them, so a kind added here leaves every other linkage's numbers unc
 - a driver on a slide: the groove is replaced by a PivotJoint between ``at`` on links[1]
   and the point ``at`` + value·axis of links[0], which holds the slide where the driver
   puts it; its impulse along the axis is Q, across it the reaction N·n.
+
+- gear (:class:`Mesh`): the tooth contact, a :class:`pymunk.PinJoint` laid along the
+  line of action through the pitch point before every solve (:mod:`.gear_mesh`); its
+  impulse is the whole tooth force F, read along t (F_t) and the separating direction
+  (F_r). A mesh takes no driver and no friction; it is refused where the rest of the
+  linkage does not hold its centre distance.
 
 A slide's friction is a force along its axis through ``at``, and part of its reported
 force F (as in the analytic engine). To add a kind: one builder in :data:`BUILDERS`, under
@@ -33,8 +39,9 @@ from typing import TYPE_CHECKING
 
 import pymunk
 
-from mechcheck.analytic.linkage import Joint, JointFriction
+from mechcheck.analytic.linkage import Joint, JointFriction, Linkage
 from mechcheck.sim_models.pymunk._fast import Cell, impulse_cells
+from mechcheck.sim_models.pymunk.gear_mesh import ToothContact, centre_distance_held
 from mechcheck.sim_models.pymunk.readout import HeldSlide, turned
 
 if TYPE_CHECKING:
@@ -107,6 +114,10 @@ class JointBuilder(ABC):
     @abstractmethod
     def sliding(self, model: LinkageModel, joint: Joint, value: float) -> Vec | None:
         """The friction ``value`` as a force that is part of its reported F, or None."""
+
+    def refusal(self, linkage: Linkage, joint: Joint) -> str | None:
+        """Why this joint of ``linkage`` cannot be built exactly, or None (the default)."""
+        return None
 
 
 class Pin(JointBuilder):
@@ -208,11 +219,55 @@ class Slide(JointBuilder):
         return value * ux, value * uy
 
 
+class Mesh(JointBuilder):
+    """A gear mesh: its tooth contact (:class:`~.gear_mesh.ToothContact`), whose groove's
+    impulse is the whole tooth force by links[0] on links[1]."""
+
+    def build(self, model: LinkageModel, joint: Joint, driven: float | None) -> None:
+        assert driven is None, "a gear mesh is never driven (Linkage refuses it)"
+        a, b = joint_bodies(model, joint)
+        model.meshes[joint.name] = ToothContact.build(joint, model.linkage, a, b)
+
+    def move_lock(self, model: LinkageModel, joint: Joint, value: float) -> None:
+        raise AssertionError("a gear mesh is never driven (Linkage refuses it)")
+
+    def reaction_names(self, joint: Joint, held: bool) -> list[str]:
+        return [f"F_{joint.name}_{part}" for part in ("x", "y", "t", "r")]
+
+    def reaction(self, model: LinkageModel, joint: Joint) -> tuple[ForceCells, HeldSlide | None]:
+        # The pin's scalar impulse along the line of action is what a run compares and warm
+        # starts; it is no reported quantity (F_x, F_y, F_t, F_r are the Readout's meshes').
+        return [(f"F_{joint.name}_w", model.meshes[joint.name].cells[0])], None
+
+    def rate(self, model: LinkageModel, joint: Joint) -> float:
+        return model.meshes[joint.name].rate()
+
+    def coulomb(self, model: LinkageModel, joint: Joint, friction: JointFriction,
+                fx: float, fy: float) -> float:
+        return 0.0   # a mesh has no friction model (the analytic engine's coefficient is 0)
+
+    def apply_friction(self, model: LinkageModel, joint: Joint, body: pymunk.Body,
+                       load: float) -> None:
+        raise AssertionError("a gear mesh has no friction (its Coulomb term is 0)")
+
+    def sliding(self, model: LinkageModel, joint: Joint, value: float) -> Vec | None:
+        return None
+
+    def refusal(self, linkage: Linkage, joint: Joint) -> str | None:
+        if centre_distance_held(linkage, joint):
+            return None
+        return (f"joint {joint.name} is a gear whose centre distance the rest of the linkage "
+                "does not hold: the pymunk model's tooth contact acts along the line of action, "
+                "which is the rolling constraint only where a frame or a carrier holds the "
+                "centres apart; its forces are checked by the analytic backends only")
+
+
 #: Every kind pymunk builds, by the name a case file gives it (``JointKind.name``).
 BUILDERS: dict[str, JointBuilder] = {
     "revolute": Pin(),
     "prismatic": Slide(locks_turning=True),
     "pin_in_slot": Slide(locks_turning=False),
+    "gear": Mesh(),
 }
 
 

@@ -42,6 +42,7 @@ from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, real_inertial
 from mechcheck.sim_models.pymunk import _fast
 from mechcheck.sim_models.pymunk._fast import Bodies, Cell, Plan, impulse_cells
+from mechcheck.sim_models.pymunk.gear_mesh import ToothContact
 from mechcheck.sim_models.pymunk.joint_kinds import GROOVE_REACH as GROOVE_REACH, along as along, builder
 from mechcheck.sim_models.pymunk.loads import LoadTerms, apply_forces
 from mechcheck.sim_models.pymunk.readout import HeldSlide, Readout
@@ -92,6 +93,7 @@ class LinkageModel:
     drives: dict[str, pymunk.GearJoint]
     springs: dict[str, Spring]
     radius: dict[str, float]
+    meshes: dict[str, ToothContact] = field(default_factory=dict)
     scale: float = field(init=False)
     radii: np.ndarray = field(init=False)
     bulk: Bodies = field(init=False)
@@ -108,7 +110,8 @@ class LinkageModel:
 
     def constraints(self) -> list[pymunk.Constraint]:
         return [*self.pins.values(), *self.grooves.values(), *self.held.values(),
-                *self.locks.values(), *self.drives.values(), *self.springs.values()]
+                *self.locks.values(), *self.drives.values(), *self.springs.values(),
+                *(mesh.pin for mesh in self.meshes.values())]
 
     @cached_property
     def plan(self) -> Plan:
@@ -303,7 +306,7 @@ def compile_readout(model: LinkageModel) -> Readout:
     springs = tuple((f"S_{name}", spring, units.get(f"S_{name}") == "N*m")
                     for name, spring in model.springs.items())
     return Readout(tuple(reaction_names(model)), model.settings.dt, linkage.scale, tuple(forces),
-                   tuple(couples), springs, tuple(held))
+                   tuple(couples), springs, tuple(held), tuple(model.meshes.values()))
 
 
 def place(model: LinkageModel, q: Array) -> None:

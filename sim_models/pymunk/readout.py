@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Protocol
 
 import pymunk
 
@@ -53,12 +54,20 @@ class HeldSlide:
         return along_and_across(x / dt, y / dt, turned(self.axis, self.body.angle))
 
 
+class MeshReading(Protocol):
+    """A gear mesh's tooth force and its parts (:class:`.gear_mesh.ToothContact`)."""
+
+    def reactions(self, dt: float) -> dict[str, float]: ...
+
+
 @dataclass(frozen=True)
 class Readout:
     """A model's reactions: ``forces`` (impulse cells of F components), ``couples`` (of M
     and Q of gears), ``springs`` (each with whether it is torsional), ``held`` slides,
-    reported as the quantities ``names`` (in this order) of a step of ``dt``;
-    ``length`` is what a couple is divided by to compare it with a force."""
+    ``meshes`` (gear meshes: their tooth force, read from a pin's impulse along its
+    direction, and its parts; the impulse itself is among ``forces``), reported as the
+    quantities ``names`` (in this order) of a step of ``dt``; ``length`` is what a couple is
+    divided by to compare it with a force."""
 
     names: tuple[str, ...]
     dt: float
@@ -67,6 +76,7 @@ class Readout:
     couples: tuple[tuple[str, Cell], ...]
     springs: tuple[tuple[str, pymunk.Constraint, bool], ...]
     held: tuple[HeldSlide, ...]
+    meshes: tuple[MeshReading, ...] = ()
 
     @cached_property
     def _cells(self) -> tuple[tuple[Cell, ...], tuple[Cell, ...]]:
@@ -113,4 +123,6 @@ class Readout:
         for slide in self.held:
             q, fx, fy = slide.split(self.dt)
             table |= {f"Q_{slide.name}": q, f"F_{slide.name}_x": fx, f"F_{slide.name}_y": fy}
+        for mesh in self.meshes:
+            table |= mesh.reactions(self.dt)
         return {name: table[name] for name in self.names}

@@ -6,6 +6,7 @@ use this package's names below, never its modules.
 
 from mechcheck.sim_models.pymunk._fast.bulk import Bodies
 from mechcheck.sim_models.pymunk._fast.compiled import Plan, available, plan, run
-from mechcheck.sim_models.pymunk._fast.layout import Cell, impulse_cells, read, write
+from mechcheck.sim_models.pymunk._fast.layout import Cell, direction_cells, impulse_cells, read, write
 
-__all__ = ["Bodies", "Cell", "Plan", "available", "impulse_cells", "plan", "read", "run", "write"]
+__all__ = ["Bodies", "Cell", "Plan", "available", "direction_cells", "impulse_cells", "plan", "read",
+           "run", "write"]

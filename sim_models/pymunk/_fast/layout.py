@@ -26,6 +26,8 @@ CONSTRAINT_SIZE = 104
 PIVOT_FIELDS = {"anchorA": 104, "anchorB": 120, "jAcc": 200}
 GROOVE_FIELDS = {"grv_a": 120, "grv_b": 136, "anchorB": 152, "jAcc": 256}
 GEAR_FIELDS = {"phase": 104, "ratio": 112, "jAcc": 144}
+#: A pin joint's impulse is a scalar along its direction n (set by the step's pre-step).
+PIN_FIELDS = {"anchorA": 104, "anchorB": 120, "dist": 136, "n": 176, "jAcc": 200}
 MOTOR_FIELDS = {"rate": 104, "jAcc": 120}
 #: Springs: anchors (or rest angle), rest length, stiffness, damping, the force function,
 #: then working fields; jAcc is what ``Constraint.impulse`` returns, signed.
@@ -71,8 +73,8 @@ Cell = tuple[object, int]
 
 
 def impulse_cells(constraint: pymunk.Constraint) -> list[Cell]:
-    """Where the constraint's jAcc lives: two cells (pivot, groove) or one (gear, motor,
-    spring).
+    """Where the constraint's jAcc lives: two cells (pivot, groove) or one (gear, pin,
+    motor, spring).
 
     A cell points into the constraint's C struct and stays valid while the constraint
     exists; reading it costs one cffi index, which is what a loop reading every step needs.
@@ -82,6 +84,7 @@ def impulse_cells(constraint: pymunk.Constraint) -> list[Cell]:
     for kind, fields, size in ((pymunk.PivotJoint, PIVOT_FIELDS, 2),
                                (pymunk.GrooveJoint, GROOVE_FIELDS, 2),
                                (pymunk.GearJoint, GEAR_FIELDS, 1),
+                               (pymunk.PinJoint, PIN_FIELDS, 1),
                                (pymunk.SimpleMotor, MOTOR_FIELDS, 1),
                                (pymunk.DampedSpring, DAMPED_SPRING_FIELDS, 1),
                                (pymunk.DampedRotarySpring, ROTARY_SPRING_FIELDS, 1)):
@@ -89,6 +92,15 @@ def impulse_cells(constraint: pymunk.Constraint) -> list[Cell]:
             d, k = _doubles(constraint), fields["jAcc"] // _DOUBLE
             return [(d, k + i) for i in range(size)]
     raise TypeError(f"no impulse layout known for {type(constraint).__name__}")
+
+
+def direction_cells(pin: pymunk.PinJoint) -> list[Cell]:
+    """Where a pin joint's unit direction n (anchor a → anchor b) of its last step lives:
+    its impulse on body b is jAcc·n."""
+    if not _checked:
+        check_layout()
+    d, k = _doubles(pin), PIN_FIELDS["n"] // _DOUBLE
+    return [(d, k), (d, k + 1)]
 
 
 def read(cells: Iterable[Cell]) -> list[float]:
@@ -199,8 +211,22 @@ def _probe_space() -> tuple[pymunk.Space, list[pymunk.Constraint]]:
     link = pymunk.PivotJoint(crank, slider, (0.6, -0.25), (0.0, 0.0))
     spring = pymunk.DampedSpring(crank, slider, (0.0, 0.0), (0.1, 0.0), 0.45, 35.0, 0.5)
     rotary = pymunk.DampedRotarySpring(crank, slider, 0.2, 4.5, 0.25)
-    space.add(crank, slider, pivot, gear, groove, motor, link, spring, rotary)
-    return space, [pivot, gear, groove, motor, link, spring, rotary]
+    pin = pymunk.PinJoint(crank, slider, (0.05, -0.1), (0.2, 0.03))
+    pin.distance = 0.61  # not the drawn distance: a pin joint that pulls
+    space.add(crank, slider, pivot, gear, groove, motor, link, spring, rotary, pin)
+    return space, [pivot, gear, groove, motor, link, spring, rotary, pin]
+
+
+def _check_pin_direction(pin: pymunk.PinJoint) -> None:
+    """n after a step (bodies not moved since): the unit vector between the anchors."""
+    a = pin.a.local_to_world(pin.anchor_a)
+    b = pin.b.local_to_world(pin.anchor_b)
+    size = math.hypot(b.x - a.x, b.y - a.y)
+    nx, ny = read_vect(pin, PIN_FIELDS["n"])
+    # Chipmunk's n is computed from the centre of gravity, not the transform: equal to rounding.
+    if abs(nx - (b.x - a.x) / size) > 1e-9 or abs(ny - (b.y - a.y) / size) > 1e-9:
+        raise LayoutError(f"layout probe: PinJoint.n reads ({nx}, {ny}), its anchors give "
+                          f"({(b.x - a.x) / size}, {(b.y - a.y) / size})")
 
 
 def check_layout() -> None:
@@ -209,8 +235,8 @@ def check_layout() -> None:
     Runs once per process (the first force read calls it).
     """
     global _checked
-    space, (pivot, gear, groove, motor, link, spring, rotary) = _probe_space()
-    for c in (pivot, gear, groove, motor, link, spring, rotary):
+    space, (pivot, gear, groove, motor, link, spring, rotary, pin) = _probe_space()
+    for c in (pivot, gear, groove, motor, link, spring, rotary, pin):
         _check_base(c)
     _check_fields(pivot, PIVOT_FIELDS, {"anchorA": lambda: pivot.anchor_a,
                                         "anchorB": lambda: pivot.anchor_b})
@@ -218,6 +244,9 @@ def check_layout() -> None:
                                           "grv_b": lambda: groove.groove_b,
                                           "anchorB": lambda: groove.anchor_b})
     _check_fields(gear, GEAR_FIELDS, {"phase": lambda: gear.phase, "ratio": lambda: gear.ratio})
+    _check_fields(pin, PIN_FIELDS, {"anchorA": lambda: pin.anchor_a,
+                                    "anchorB": lambda: pin.anchor_b,
+                                    "dist": lambda: pin.distance})
     _check_fields(motor, MOTOR_FIELDS, {"rate": lambda: motor.rate})
     _check_fields(spring, DAMPED_SPRING_FIELDS, {"restLength": lambda: spring.rest_length,
                                                  "stiffness": lambda: spring.stiffness,
@@ -239,7 +268,10 @@ def check_layout() -> None:
         if c.impulse <= 0.0:
             raise LayoutError(f"layout probe: {type(c).__name__} carried no impulse")
         _expect(f"{type(c).__name__}.|jAcc|", math.hypot(jx, jy), c.impulse)
-    for c, offset in ((gear, GEAR_FIELDS["jAcc"]), (motor, MOTOR_FIELDS["jAcc"])):
+    assert isinstance(pin, pymunk.PinJoint)
+    _check_pin_direction(pin)
+    for c, offset in ((gear, GEAR_FIELDS["jAcc"]), (motor, MOTOR_FIELDS["jAcc"]),
+                      (pin, PIN_FIELDS["jAcc"])):
         if c.impulse <= 0.0:
             raise LayoutError(f"layout probe: {type(c).__name__} carried no impulse")
         _expect(f"{type(c).__name__}.|jAcc|", abs(read_double(c, offset)), c.impulse)
