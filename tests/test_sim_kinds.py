@@ -1,43 +1,47 @@
 """What a simulator has no model of is refused by name, never guessed: a kind of joint it
-does not build (the gear mesh, where it has no build), and a redundant linkage whose forces
-its members' stretch decides (the simulators' bodies are rigid). Each backend says
-``not_applicable`` with the reason, at one pose and along a sweep, and the run passes."""
+does not build (a kind the engine knows and no simulator has an entry for: how a new kind
+lands in the engine first), and a redundant linkage whose forces its members' stretch
+decides (the simulators' bodies are rigid). Each backend says ``not_applicable`` with the
+reason, at one pose and along a sweep."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import mechcheck
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.joint_kinds import GEAR
+from mechcheck.analytic.joint_kinds import PIN_IN_SLOT
+from mechcheck.analytic.joint_kinds.pin_in_slot import PinInSlot
 
 from .test_elastic import bars
-from .test_gear import pair
+from .test_pin_in_slot import slotted_lever
 
 SIMULATORS = ["mujoco", "mujoco_solve", "pymunk", "pymunk_solve"]
 
 
-def builds_gears(backend: str) -> bool:
-    """Whether the backend's simulator has a build for the gear mesh."""
-    if backend.startswith("mujoco"):
-        from mechcheck.sim_models.mujoco.joint_kinds import BUILDS
-        return GEAR.name in BUILDS
-    from mechcheck.sim_models.pymunk.joint_kinds import BUILDERS
-    return GEAR.name in BUILDERS
+class Unbuilt(PinInSlot):
+    """A kind the engine solves (a pin in a slot's equations) under a name no simulator
+    has an entry for."""
+
+    name = "unbuilt_slot"
 
 
 @pytest.mark.parametrize("backend", SIMULATORS)
 def test_a_kind_without_a_build_is_refused_by_name(backend: str) -> None:
-    """A gear pair where the simulator builds no gear: not_applicable naming the joint."""
-    if builds_gears(backend):
-        pytest.skip(f"{backend} builds gear meshes (tests/test_*_gear.py)")
-    case = Case("pair", pair(10.0))
+    """A kind without a simulator entry: not_applicable naming the joint and the kind, and
+    the analytic backend still solves it."""
+    lever = slotted_lever()
+    joints = tuple(replace(j, kind=Unbuilt()) if j.kind == PIN_IN_SLOT else j
+                   for j in lever.joints)
+    case = Case("lever", replace(lever, joints=joints))
+    assert mechcheck.solve(case).status == "ok"
     solution = mechcheck.solve(case, backend)
     assert solution.status == "not_applicable"
-    assert "joint mesh is a gear" in solution.message and "analytic" in solution.message
+    assert "joint A is a unbuilt_slot" in solution.message and "analytic" in solution.message
     swept = mechcheck.backends.get(backend).sweeper()(case, np.radians([0.0, 20.0]), backend)
     assert [s.status for s in swept] == ["not_applicable", "not_applicable"]
 
