@@ -48,6 +48,16 @@ def pair(torque: float, *, internal: bool = False, rotation: float = 0.5) -> Lin
         loads=(PointLoad("wheel", (distance, 0.0), (0.0, 0.0), torque),))
 
 
+def pair_by_hand(torque: float) -> dict[str, float]:
+    """The external pair's hand solution (see the test below): the wheel about Pb gives
+    F_t = T/rb, the pinion about Pa Q = T·ra/rb, the radial part tan 20°·|F_t| along +e."""
+    f_t = torque / 0.10
+    radial = TAN20 * abs(f_t)
+    return {"F_mesh_t": f_t, "F_mesh_r": radial, "F_mesh_x": radial, "F_mesh_y": f_t,
+            "F_Pb_x": -radial, "F_Pb_y": -f_t, "F_Pa_x": radial, "F_Pa_y": f_t,
+            "Q_Pa": torque * 0.05 / 0.10}
+
+
 @pytest.mark.parametrize("torque", [10.0, -10.0])
 def test_an_external_pair_has_the_hand_solution(torque: float) -> None:
     """e = +x (Pa→Pb), t = +y, pitch point P = Pa + ra·e. The wheel about Pb: the tooth
@@ -55,12 +65,7 @@ def test_an_external_pair_has_the_hand_solution(torque: float) -> None:
     pinion about Pa: Q − ra·F_t = 0, Q = T·ra/rb; the radial part tan20°·|F_t| pushes the
     wheel along +e whatever the sign of T; each bearing carries the tooth force back."""
     v = values(pair(torque))
-    f_t = torque / 0.10
-    radial = TAN20 * abs(f_t)
-    expected = {"F_mesh_t": f_t, "F_mesh_r": radial, "F_mesh_x": radial, "F_mesh_y": f_t,
-                "F_Pb_x": -radial, "F_Pb_y": -f_t, "F_Pa_x": radial, "F_Pa_y": f_t,
-                "Q_Pa": torque * 0.05 / 0.10}
-    for q, want in expected.items():
+    for q, want in pair_by_hand(torque).items():
         assert v[q] == pytest.approx(want, rel=RTOL, abs=RTOL * 100.0), q
     # The wheel turns the other way, by the ratio of the radii.
     assert v["phi_wheel"] == pytest.approx(-0.5 * 0.05 / 0.10, rel=1e-12)

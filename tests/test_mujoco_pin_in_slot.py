@@ -34,7 +34,7 @@ from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
 from .harness import solver
-from .test_pin_in_slot import slotted_lever
+from .test_pin_in_slot import quick_return, slotted_lever
 
 settle = solver(_mujoco.settle, "mujoco")
 solve_at_pose = solver(_mujoco.solve_at_pose, "mujoco_solve")
@@ -192,29 +192,6 @@ def test_a_driver_on_the_slot_moving() -> None:
 
 
 # -- a larger linkage ----------------------------------------------------------------------
-
-def quick_return(rotation: float = 0.3, velocity: float = 0.0) -> Linkage:
-    """A quick-return: the crank's pin A slides in the lever O4-B, whose tip drives the ram
-    C through the rod B-C; the ram slides on the ground against a 200 N cutting force;
-    masses and gravity. Two loops: the lever's (closed at O4) and the ram's (at C)."""
-    points = {"O2": (0.0, 0.3), "A": (0.1, 0.3), "O4": (0.0, 0.0), "B": (0.2, 0.6),
-              "C": (0.5, 0.65)}
-    return Linkage(
-        points=points,
-        links=(Link("ground", ("O2", "O4")), Link("crank", ("O2", "A")),
-               Link("lever", ("O4", "B")), Link("rod", ("B", "C")), Link("ram", ("C",))),
-        joints=(Joint("O2", REVOLUTE, ("ground", "crank"), "O2"),
-                Joint("O4", REVOLUTE, ("ground", "lever"), "O4"),
-                Joint("A", PIN_IN_SLOT, ("lever", "crank"), "A", (0.2, 0.6)),
-                Joint("B", REVOLUTE, ("lever", "rod"), "B"),
-                Joint("C", REVOLUTE, ("rod", "ram"), "C"),
-                Joint("ram", PRISMATIC, ("ground", "ram"), "C", (1.0, 0.0))),
-        drivers=(Driver("O2", rotation, velocity),),
-        loads=(PointLoad("ram", points["C"], (-200.0, 0.0)),),
-        masses=(*MASSES, LinkMass("rod", 1.0, (0.35, 0.625), 0.008),
-                LinkMass("ram", 3.0, (0.5, 0.65), 0.0)),
-        gravity=(0.0, -9.81))
-
 
 @pytest.mark.parametrize("backend", [settle, solve_at_pose], ids=["settled", "exact"])
 def test_a_quick_return_held(backend: Callable[..., Solution]) -> None:

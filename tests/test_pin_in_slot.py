@@ -16,7 +16,16 @@ import pytest
 import mechcheck
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.joint_kinds import PIN_IN_SLOT, PRISMATIC, REVOLUTE
-from mechcheck.analytic.linkage import Driver, Joint, JointFriction, Link, Linkage, PointLoad
+from mechcheck.analytic.linkage import (
+    Driver,
+    Joint,
+    JointFriction,
+    LinearSpring,
+    Link,
+    Linkage,
+    LinkMass,
+    PointLoad,
+)
 from mechcheck.analytic.linkage_forces import solve_linkage
 from mechcheck.tolerance import rule
 
@@ -40,6 +49,32 @@ def slotted_lever(*, rotation: float = 0.0, velocity: float = 0.0,
         drivers=(Driver("O2", rotation, velocity, 0.0, sense),),
         loads=(PointLoad("lever", POINTS["B"], (-100.0, 0.0)),),
         friction=friction)
+
+
+def quick_return(rotation: float = 0.4, velocity: float = 0.0,
+                 springs: tuple[LinearSpring, ...] = ()) -> Linkage:
+    """A quick-return (shaper) mechanism: the crank O2-A turns about O2 = (0, 0.3); its pin A
+    slides in the slot of the lever O4-B (pivot O4 = (0, 0), slot along O4→B); the rod B-C
+    drives the ram C along a horizontal slide against a 200 N cutting force; every moving
+    link has a mass, under gravity. The pin in the slot closes the loop O2-A-O4."""
+    points = {"O2": (0.0, 0.3), "A": (0.1, 0.3), "O4": (0.0, 0.0), "B": (0.2, 0.6),
+              "C": (0.5, 0.65)}
+    return Linkage(
+        points=points,
+        links=(Link("ground", ("O2", "O4")), Link("crank", ("O2", "A")),
+               Link("lever", ("O4", "B")), Link("rod", ("B", "C")), Link("ram", ("C",))),
+        joints=(Joint("O2", REVOLUTE, ("ground", "crank"), "O2"),
+                Joint("O4", REVOLUTE, ("ground", "lever"), "O4"),
+                Joint("A", PIN_IN_SLOT, ("lever", "crank"), "A", (0.2, 0.6)),
+                Joint("B", REVOLUTE, ("lever", "rod"), "B"),
+                Joint("C", REVOLUTE, ("rod", "ram"), "C"),
+                Joint("slide", PRISMATIC, ("ground", "ram"), "C", (1.0, 0.0))),
+        drivers=(Driver("O2", rotation, velocity),),
+        loads=(PointLoad("ram", points["C"], (-200.0, 0.0)),),
+        masses=(LinkMass("crank", 1.0, (0.05, 0.3), 1e-3), LinkMass("lever", 3.0, (0.1, 0.3), 0.04),
+                LinkMass("rod", 1.0, (0.35, 0.625), 8e-3), LinkMass("ram", 2.0, (0.5, 0.65), 1e-3)),
+        gravity=(0.0, -9.81),
+        springs=springs)
 
 
 def with_block(linkage: Linkage) -> Linkage:

@@ -18,12 +18,13 @@ import pytest
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.joint_kinds import GEAR, PRISMATIC, REVOLUTE, GearMesh
 from mechcheck.analytic.linkage import Driver, Joint, Link, Linkage, LinkMass, PointLoad
-from mechcheck.sim_models.pymunk import _fast, backend as pm, linkage as pl
+from mechcheck.sim_models.pymunk import backend as pm, linkage as pl
 from mechcheck.sim_models.pymunk.joint_kinds import BUILDERS
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
 from .test_gear import TAN20, pair, planetary
+from .test_pymunk_pin_in_slot import assert_compiled_is_python
 
 BACKENDS = {"pymunk": pm.settle, "pymunk_solve": pm.solve_at_pose}
 OMEGA = 4.0
@@ -155,16 +156,7 @@ def test_the_compiled_loop_reads_the_mesh_as_python_does(linkage: Linkage, backe
                                                          monkeypatch: pytest.MonkeyPatch) -> None:
     """The pin is re-laid by a callback inside Chipmunk's step, which both loops call, and
     its impulse is read from the same cell: the same steps and forces, bit for bit."""
-    pytest.importorskip("numba")
-    run = getattr(pl, backend)
-    case = case_of("compiled", linkage)
-    assert _fast.available()
-    fast = run(case)
-    monkeypatch.setattr(_fast, "available", lambda: False)
-    slow = run(case)
-    assert fast.status == slow.status == "ok"
-    assert fast.diagnostics["steps"] == slow.diagnostics["steps"]
-    assert fast.values == slow.values
+    assert_compiled_is_python(getattr(pl, backend), case_of("compiled", linkage), monkeypatch)
 
 
 def sliding_wheel() -> Linkage:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ast
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
@@ -17,25 +18,22 @@ import pytest
 
 from mechcheck import backends
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.joint_kinds import KINDS, PIN_IN_SLOT, PRISMATIC, REVOLUTE
+from mechcheck.analytic.joint_kinds import KINDS, PIN_IN_SLOT
 from mechcheck.analytic.linkage import (
     Driver,
-    Joint,
     JointFriction,
     LinearSpring,
-    Link,
     Linkage,
-    LinkMass,
-    PointLoad,
     TorsionSpring,
 )
 from mechcheck.analytic.linkage_backends import solve
+from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.pymunk import _fast, backend as pm, linkage as pl
 from mechcheck.sim_models.pymunk.joint_kinds import BUILDERS
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
-from .test_pin_in_slot import slotted_lever
+from .test_pin_in_slot import quick_return, slotted_lever
 
 BACKENDS = {"pymunk": pm.settle, "pymunk_solve": pm.solve_at_pose}
 #: The tolerance family each is judged by (held statics settled, the exact solve).
@@ -48,32 +46,6 @@ OMEGA = 4.0
 
 def case_of(name: str, linkage: Linkage) -> Case:
     return Case(name=name, geometry=linkage)
-
-
-def quick_return(rotation: float = ROTATION, velocity: float = 0.0,
-                 springs: tuple[LinearSpring, ...] = ()) -> Linkage:
-    """A quick-return (shaper) mechanism: the crank O2-A turns about O2 = (0, 0.3); its pin A
-    slides in the slot of the lever O4-B (pivot O4 = (0, 0), slot along O4→B); the rod B-C
-    drives the ram C along a horizontal slide against a 200 N cutting force; every moving
-    link has a mass, under gravity. The pin in the slot closes the loop O2-A-O4."""
-    points = {"O2": (0.0, 0.3), "A": (0.1, 0.3), "O4": (0.0, 0.0), "B": (0.2, 0.6),
-              "C": (0.5, 0.65)}
-    return Linkage(
-        points=points,
-        links=(Link("ground", ("O2", "O4")), Link("crank", ("O2", "A")),
-               Link("lever", ("O4", "B")), Link("rod", ("B", "C")), Link("ram", ("C",))),
-        joints=(Joint("O2", REVOLUTE, ("ground", "crank"), "O2"),
-                Joint("O4", REVOLUTE, ("ground", "lever"), "O4"),
-                Joint("A", PIN_IN_SLOT, ("lever", "crank"), "A", (0.2, 0.6)),
-                Joint("B", REVOLUTE, ("lever", "rod"), "B"),
-                Joint("C", REVOLUTE, ("rod", "ram"), "C"),
-                Joint("slide", PRISMATIC, ("ground", "ram"), "C", (1.0, 0.0))),
-        drivers=(Driver("O2", rotation, velocity),),
-        loads=(PointLoad("ram", points["C"], (-200.0, 0.0)),),
-        masses=(LinkMass("crank", 1.0, (0.05, 0.3), 1e-3), LinkMass("lever", 3.0, (0.1, 0.3), 0.04),
-                LinkMass("rod", 1.0, (0.35, 0.625), 8e-3), LinkMass("ram", 2.0, (0.5, 0.65), 1e-3)),
-        gravity=(0.0, -9.81),
-        springs=springs)
 
 
 def slot_driven(value: float = 0.0, velocity: float = 0.0) -> Linkage:
@@ -261,9 +233,14 @@ def test_the_compiled_loop_reads_the_slot_as_python_does(linkage: Linkage, backe
                                                          monkeypatch: pytest.MonkeyPatch) -> None:
     """The compiled loop reads the groove's (and a held slot's) impulse cells the Python
     loop reads: the same steps and the same forces, bit for bit."""
+    assert_compiled_is_python(getattr(pl, backend), case_of("compiled", linkage), monkeypatch)
+
+
+def assert_compiled_is_python(run: Callable[[Case], Solution], case: Case,
+                              monkeypatch: pytest.MonkeyPatch) -> None:
+    """``run`` (a pymunk backend) gives the same steps and values, bit for bit, with the
+    compiled loop and with the Python loop."""
     pytest.importorskip("numba")
-    run = getattr(pl, backend)
-    case = case_of("compiled", linkage)
     assert _fast.available()
     fast = run(case)
     monkeypatch.setattr(_fast, "available", lambda: False)
