@@ -189,12 +189,12 @@ CATALOGUE_ROWS = {
     "garage door": (1, "file cases/catalogue/garage_door.toml"),
     "wave-maker": (2, "table, spatial"),
     "wave-maker, one S keyed": (1, "table, spatial"),
-    "gear pair": (1, "table"),
+    "gear pair": (1, "file cases/catalogue/gear_pair.toml"),
     "excavator bucket": (1, "file cases/catalogue/excavator_bucket.toml"),
-    "mixed": (2, "table"),
+    "mixed": (2, "file cases/catalogue/mixed.toml"),
     "self-closing hinge": (1, "table, spatial"),
     "truss": (0, "file cases/catalogue/truss.toml"),
-    "over-constrained": (-1, "table"),
+    "over-constrained": (-1, "file cases/catalogue/over_constrained.toml"),
 }
 
 
@@ -205,8 +205,10 @@ def mobility_lines(output: str) -> dict[str, str]:
 
 
 def test_the_catalogue_command_takes_planar_rows_from_their_files() -> None:
-    """Every row with its source; a row with a file shows S by Gruebler–Kutzbach and by the
-    rank of J, both the printed S; a table row, S from the table's counts; exit 0."""
+    """Every row with its source; a row with a file shows S by Gruebler–Kutzbach, the
+    printed S, and by the rank of J: the printed S for a mechanism, and for the structure
+    of S = −1 no freedom and one redundant row; a table row, S from the table's counts;
+    exit 0."""
     from typer.testing import CliRunner
 
     from mechcheck.cli import app
@@ -218,7 +220,9 @@ def test_the_catalogue_command_takes_planar_rows_from_their_files() -> None:
     for name, (printed, source) in CATALOGUE_ROWS.items():
         line = lines[name]
         assert line.endswith(f"(printed {printed:2d})  {source}"), line
-        if source.startswith("file"):
+        if source.startswith("file") and printed < 0:
+            assert f"S = {printed:2d} Gruebler,  0 rank J, {-printed} redundant " in line, line
+        elif source.startswith("file"):
             assert f"S = {printed:2d} Gruebler, {printed:2d} rank J " in line, line
         else:
             assert f"S = {printed:2d} " in line and "rank" not in line, line

@@ -235,8 +235,8 @@ def test_the_over_constrained_file_is_the_drawing_of_the_displacement_method() -
         assert links[name]["axial_stiffness"] == pytest.approx(E_STEEL * area * 1e-6, rel=1e-15)
     assert {m["link"]: m["mass"] for m in table["masses"]} == {k: v[3] for k, v in BARS.items()}
     for m in table["masses"]:   # each bar's weight at its middle
-        i, j = BARS[m["link"]][:2]
-        assert m["com"] == [0.5 * (a + b) for a, b in zip(table["points"][i], table["points"][j])]
+        ends = (table["points"][end] for end in BARS[m["link"]][:2])
+        assert m["com"] == [0.5 * (a + b) for a, b in zip(*ends, strict=True)]
     (load,) = table["loads"]
     assert (load["at"], load["force"]) == ("D", {"x": 0.0, "y": -10000.0})
     assert "drivers" not in table
@@ -244,32 +244,40 @@ def test_the_over_constrained_file_is_the_drawing_of_the_displacement_method() -
     assert dict(wall) == WALL_JOINTS
 
 
-def displacement_method(p: dict[str, np.ndarray]) -> dict[str, float]:
-    """The seed's method: the free nodes' stiffness matrix K = Σ (E·A/L)·[e eᵀ, −e eᵀ; …]
-    over the bars (a wall end does not move), the nodal loads P (the hoist, and half of each
-    bar's weight at each of its ends: a pinned bar's weight at its middle), K u = P, then
-    each bar's tension (E·A/L)·e·(u_j − u_i)."""
+def unit_and_stiffness(p: dict[str, np.ndarray], bar: str) -> tuple[np.ndarray, float]:
+    """A bar's unit vector from its first end to its second and its axial stiffness E·A/L."""
+    i, j, area, _ = BARS[bar]
+    length = float(np.hypot(*(p[j] - p[i])))
+    return (p[j] - p[i]) / length, E_STEEL * area * 1e-6 / length
+
+
+def free_node_system(p: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """K and P of the free nodes D, E (x, y each): each bar adds (E·A/L)·e eᵀ on the diagonal
+    blocks of its free ends and −(E·A/L)·e eᵀ between them (a wall end does not move); P
+    holds the hoist and half of each bar's weight at each free end (a pinned bar's weight at
+    its middle)."""
     index = {node: 2 * k for k, node in enumerate(FREE)}
-    stiffness = np.zeros((4, 4))
-    loads = np.zeros(4)
+    stiffness, loads = np.zeros((4, 4)), np.zeros(4)
     loads[index["D"]:index["D"] + 2] += HOIST
-    for i, j, area, mass in BARS.values():
-        e = (p[j] - p[i]) / np.hypot(*(p[j] - p[i]))
-        k = E_STEEL * area * 1e-6 / float(np.hypot(*(p[j] - p[i]))) * np.outer(e, e)
-        for a in (i, j):
-            if a in index:
-                loads[index[a]:index[a] + 2] += [0.0, -0.5 * G * mass]
-            for b in (i, j):
-                if a in index and b in index:
-                    sign = 1.0 if a == b else -1.0
-                    stiffness[index[a]:index[a] + 2, index[b]:index[b] + 2] += sign * k
-    u = np.linalg.solve(stiffness, loads)
-    moved = {node: u[index[node]:index[node] + 2] if node in index else np.zeros(2) for node in p}
+    for bar, (i, j, _, mass) in BARS.items():
+        e, k = unit_and_stiffness(p, bar)
+        ends = [index[n] for n in (i, j) if n in index]
+        for a in ends:
+            loads[a:a + 2] += [0.0, -0.5 * G * mass]
+            for b in ends:
+                stiffness[a:a + 2, b:b + 2] += (1.0 if a == b else -1.0) * k * np.outer(e, e)
+    return stiffness, loads
+
+
+def displacement_method(p: dict[str, np.ndarray]) -> dict[str, float]:
+    """The seed's method: the free nodes' displacements u from K u = P, then each bar's
+    tension (E·A/L)·e·(u_j − u_i)."""
+    u = np.linalg.solve(*free_node_system(p))
+    moved = {node: u[2 * k:2 * k + 2] for k, node in enumerate(FREE)}
     out = {}
-    for name, (i, j, area, _) in BARS.items():
-        length = float(np.hypot(*(p[j] - p[i])))
-        e = (p[j] - p[i]) / length
-        out[name] = E_STEEL * area * 1e-6 / length * float(e @ (moved[j] - moved[i]))
+    for bar, (i, j, _, _) in BARS.items():
+        e, k = unit_and_stiffness(p, bar)
+        out[bar] = k * float(e @ (moved.get(j, np.zeros(2)) - moved.get(i, np.zeros(2))))
     return out
 
 
