@@ -331,3 +331,26 @@ def test_the_over_constrained_stretches_are_small() -> None:
     strain = max(abs(n) / (E_STEEL * BARS[b][2] * 1e-6) for b, n in expected.items())
     assert solution.diagnostics["max_strain"] == pytest.approx(strain, rel=RTOL)
     assert strain < 1e-4
+
+
+# -- every backend --------------------------------------------------------------------------
+#: Two analytic backends do not yet handle elastic members with redundant joints:
+#: superposition adds single-load solutions without the members' compatibility, and
+#: virtual_work drops the axial forces its strain diagnostic reads.
+ELASTIC_BACKENDS_PENDING = pytest.mark.xfail(
+    strict=True, reason="superposition and virtual_work on a redundant elastic structure")
+
+
+@pytest.mark.parametrize("stem", ["gear_pair", "mixed",
+                                  pytest.param("over_constrained", marks=ELASTIC_BACKENDS_PENDING)])
+def test_mechcheck_run_passes_the_file_on_every_backend(stem: str, tmp_path: Path) -> None:
+    """`mechcheck run FILE` on every available backend: each comparison within the policy's
+    tolerance, and a backend that does not model gears or elastic redundancy answers
+    not_applicable with its reason; exit 0."""
+    from typer.testing import CliRunner
+
+    from mechcheck.cli import app
+
+    result = CliRunner().invoke(app, ["run", "-q", str(CATALOGUE / f"{stem}.toml"),
+                                      "-o", str(tmp_path)])
+    assert result.exit_code == 0, result.output
