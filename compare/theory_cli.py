@@ -177,15 +177,19 @@ CATALOGUE_FILES = {
     "shaper (kurs)": "catalogue/shaper.toml", "five-bar": "linkages/five_bar_two_drivers.toml",
     "seven-link": "catalogue/seven_link.toml", "garage door": "catalogue/garage_door.toml",
     "excavator bucket": "catalogue/excavator_bucket.toml", "truss": "catalogue/truss.toml",
+    "gear pair": "catalogue/gear_pair.toml", "mixed": "catalogue/mixed.toml",
+    "over-constrained": "catalogue/over_constrained.toml",
 }
 CASES = Path(__file__).parent / "cases"
-#: The seed's joint letters of the engine's joint kinds (Cs: the pin in a slot).
-SEED_LETTERS = {"revolute": "R", "prismatic": "P", "pin_in_slot": "Cs"}
+#: The seed's joint letters of the engine's joint kinds (Cs: the pin in a slot; G: a gear
+#: mesh).
+SEED_LETTERS = {"revolute": "R", "prismatic": "P", "pin_in_slot": "Cs", "gear": "G"}
 
 
-def file_mobility(relative: str) -> tuple[int, dict[str, int], int, int]:
-    """A catalogue file's links (ground included), joints by seed letter, and its mobility
-    twice: Gruebler–Kutzbach with each kind's Sᵢ and 3(n − 1) − rank J at the drawn pose."""
+def file_mobility(relative: str) -> tuple[int, dict[str, int], int, int, int]:
+    """A catalogue file's links (ground included), joints by seed letter, its mobility twice
+    (Gruebler–Kutzbach with each kind's Sᵢ, and 3(n − 1) − rank J at the drawn pose: the
+    freedoms it moves with) and its redundant constraint rows (those beyond rank J)."""
     from mechcheck.casefile import load_cases
 
     linkage = load_cases(CASES / relative)[0].linkage
@@ -193,7 +197,15 @@ def file_mobility(relative: str) -> tuple[int, dict[str, int], int, int]:
     for joint in linkage.joints:
         letter = SEED_LETTERS[joint.kind.name]
         joints[letter] = joints.get(letter, 0) + 1
-    return len(linkage.links), joints, linkage.gruebler, linkage.dof
+    redundant = linkage.constraint_rows - linkage.joint_rank
+    return len(linkage.links), joints, linkage.gruebler, linkage.dof, redundant
+
+
+def rank_text(dof: int, redundant: int) -> str:
+    """The rank count as the line shows it: the freedoms, and the redundant rows where there
+    are any (a structure of S = −1 moves with 0 freedoms and has 1 redundant row: the rank
+    of J cannot be negative, so the printed S is freedoms − redundant rows)."""
+    return f"{dof:2d} rank J" + (f", {redundant} redundant" if redundant else "")
 
 
 def mobility_row(name: str, u: int, joints: str, spatial: bool, printed: int) -> tuple[str, bool]:
@@ -207,14 +219,15 @@ def mobility_row(name: str, u: int, joints: str, spatial: bool, printed: int) ->
         s = theory.mobility(u, parse_joints(joints), spatial=spatial)
         return (f"{head}S = {s:2d}{'':21s} (printed {printed:2d})  "
                 f"{'table, spatial' if spatial else 'table'}", s == printed)
-    links, counts, gruebler, dof = file_mobility(relative)
+    links, counts, gruebler, dof, redundant = file_mobility(relative)
     same = links == u and counts == parse_joints(joints)
-    line = (f"{head}S = {gruebler:2d} Gruebler, {dof:2d} rank J (printed {printed:2d})  "
-            f"file cases/{relative}")
+    line = (f"{head}S = {gruebler:2d} Gruebler, {rank_text(dof, redundant)} "
+            f"(printed {printed:2d})  file cases/{relative}")
     if not same:
         found = ",".join(f"{n}{k}" for k, n in counts.items())
         line += f" (which has u={links}, {found})"
-    return line, same and gruebler == dof == printed
+    by_rank = (dof, redundant) == (max(printed, 0), max(-printed, 0))
+    return line, same and gruebler == printed and by_rank
 
 
 @app.command("catalogue")
