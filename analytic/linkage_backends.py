@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import LinearSpring, Linkage
-from mechcheck.analytic.linkage_elastic import largest_strain
+from mechcheck.analytic.linkage_elastic import axial_forces, compatible_forces, largest_strain
 from mechcheck.analytic.linkage_equilibrium import unstable_reason
 from mechcheck.analytic.linkage_forces import (
     LinkageResults,
@@ -182,9 +182,9 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
         "method": method, "condition_number": float(results.condition[index]),
         "dof": linkage.dof, "gruebler": linkage.gruebler, "wall_time_s": elapsed,
     }
-    if linkage.elastic_links:   # how small the displacements the statics neglects are
+    axial = {q: v[index:index + 1] for q, v in results.values.items() if q.startswith("N_")}
+    if linkage.elastic_links and axial:   # how small the displacements statics neglects are
         one = slice(index, index + 1)
-        axial = {q: v[one] for q, v in results.values.items() if q.startswith("N_")}
         diagnostics["max_strain"] = float(largest_strain(results.pose.take(one), axial)[0])
     # Every value is kept: one that is not finite at a pose without a verdict is a failure
     # of the method, which the harness reports as such rather than as a missing row.
@@ -244,12 +244,25 @@ def superposition_results(case: Case, first: Array | None = None) -> LinkageResu
     results = analytic_results(case, first)
     pose = results.pose
     k = coefficient_matrix(pose)
-    x = sum((solve_batched(k, -b) for b in single_loads(linkage, pose)),
+    x = sum((_single_load_forces(pose, k, part) for part in single_load_parts(linkage)),
             start=np.zeros((1, k.shape[2])))
     x[results.withheld] = np.nan
     values = dict(results.values)
     values.update(_forces_from(pose, x))
+    if linkage.elastic_links:
+        values.update(axial_forces(pose, k, x))
     return replace(results, values=values)
+
+
+def _single_load_forces(pose: LinkagePose, k: Array, part: Linkage) -> Array:
+    """The reactions under one load alone (``part``: the linkage with that load only): from
+    equilibrium, and, where the joints are redundant and elastic members decide them, from
+    compatible stretches too (linear in the loads as well)."""
+    alone = replace(pose, linkage=part)
+    b = known_vector(alone)
+    if part.redundant and part.elastic_links:
+        return compatible_forces(alone, k, b)[0]
+    return solve_batched(k, -b)
 
 
 def virtual_work_results(case: Case, first: Array | None = None) -> LinkageResults:
@@ -306,15 +319,21 @@ def virtual_work(case: Case) -> Solution:
                     only={f"Q_{d.joint}" for d in case.linkage.drivers})
 
 
-def single_loads(linkage: Linkage, pose: LinkagePose) -> list[Array]:
-    """The known vector of each load alone: b is linear in the loads, so they add up to b."""
+def single_load_parts(linkage: Linkage) -> list[Linkage]:
+    """The linkage with each known load alone (an external load, a mass's weight and
+    inertia, a spring, the viscous terms): b is linear in the loads, so theirs add up to b."""
     bare = Linkage(linkage.points, linkage.links, linkage.joints, linkage.drivers)
     parts = [replace(bare, loads=(load,)) for load in linkage.loads]
     parts += [replace(bare, masses=(mass,), gravity=linkage.gravity) for mass in linkage.masses]
     parts += [replace(bare, springs=(spring,)) for spring in linkage.springs]
     if linkage.friction is not None:
         parts.append(replace(bare, friction=linkage.friction))
-    return [known_vector(replace(pose, linkage=part)) for part in parts]
+    return parts
+
+
+def single_loads(linkage: Linkage, pose: LinkagePose) -> list[Array]:
+    """The known vector of each load alone (:func:`single_load_parts`)."""
+    return [known_vector(replace(pose, linkage=part)) for part in single_load_parts(linkage)]
 
 
 def _forces_from(pose: LinkagePose, x: Array) -> dict[str, Array]:

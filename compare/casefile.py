@@ -307,6 +307,12 @@ def builtin_case_files() -> list[Path]:
     return sorted(cases.glob("*.toml")) + sorted((cases / "linkages").glob("*.toml"))
 
 
+def catalogue_case_files() -> list[Path]:
+    """Seed 001's catalogue of mechanisms as case files (``cases/catalogue/``), shipped with
+    the package beside the built-in suite."""
+    return sorted((Path(__file__).parent / "cases" / "catalogue").glob("*.toml"))
+
+
 def builtin_sweep_files() -> list[Path]:
     """The sweeps shipped with the package: the seed four-bar and slider-crank."""
     return sorted((Path(__file__).parent / "sweeps").glob("*.toml"))

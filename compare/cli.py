@@ -237,13 +237,18 @@ def study_command(
 def reports_command(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path("reports"),
 ) -> None:
-    """Regenerate the committed reports: the built-in suite, the whole-cycle sweeps of the
-    seed four-bar and slider-crank through every backend, and the assumption studies."""
+    """Regenerate the committed reports: the built-in suite, seed 001's catalogue, the
+    whole-cycle sweeps of the seed four-bar and slider-crank through every backend, and the
+    assumption studies."""
+    from mechcheck.casefile import catalogue_case_files
     from mechcheck.studies import STUDIES
     from mechcheck.studies_report import run_studies
 
     codes = []
+    # Quoted in the report as found from here, so that it does not name this machine's path.
+    catalogue = [os.path.relpath(path) for path in catalogue_case_files()]
     for args in (["run", "-q", "--out", str(out / "suite")],
+                 ["run", "-q", *catalogue, "--out", str(out / "catalogue")],
                  ["sweep", "-q", "--fresh", "--out", str(out / "sweep")]):
         # Without standalone mode click returns the exit status instead of exiting.
         code = app(args, standalone_mode=False)

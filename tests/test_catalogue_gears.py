@@ -334,15 +334,7 @@ def test_the_over_constrained_stretches_are_small() -> None:
 
 
 # -- every backend --------------------------------------------------------------------------
-#: Two analytic backends do not yet handle elastic members with redundant joints:
-#: superposition adds single-load solutions without the members' compatibility, and
-#: virtual_work drops the axial forces its strain diagnostic reads.
-ELASTIC_BACKENDS_PENDING = pytest.mark.xfail(
-    strict=True, reason="superposition and virtual_work on a redundant elastic structure")
-
-
-@pytest.mark.parametrize("stem", ["gear_pair", "mixed",
-                                  pytest.param("over_constrained", marks=ELASTIC_BACKENDS_PENDING)])
+@pytest.mark.parametrize("stem", ["gear_pair", "mixed", "over_constrained"])
 def test_mechcheck_run_passes_the_file_on_every_backend(stem: str, tmp_path: Path) -> None:
     """`mechcheck run FILE` on every available backend: each comparison within the policy's
     tolerance, and a backend that does not model gears or elastic redundancy answers
