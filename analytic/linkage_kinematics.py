@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic import linalg
 from mechcheck.analytic.linalg import Batched
-from mechcheck.analytic.rigid import Array, Constraints, Layout, Motion, perp, rotate
+from mechcheck.analytic.rigid import Array, Constraints, Layout, Motion, link_column, perp, rotate
 
 if TYPE_CHECKING:
     from mechcheck.analytic.linkage import Joint, Linkage
@@ -68,7 +68,7 @@ class LinkagePose:
 
     def link_state(self, link: str, which: Array) -> tuple[Array, Array]:
         """(t (N, 2), φ (N,)) of ``link`` from one of q, q̇, q̈."""
-        k = Layout(self.linkage).index(link)
+        k = link_column(self.linkage, link)
         n = which.shape[0]
         if k < 0:
             return np.zeros((n, 2)), np.zeros(n)
@@ -83,8 +83,9 @@ class LinkagePose:
         a, alpha = self.link_state(link, self.qddot)
         r = rotate(phi, p0)
         position = t + r
-        velocity = v + omega[:, None] * perp(r)
-        acceleration = a + alpha[:, None] * perp(r) - (omega**2)[:, None] * r
+        turned = perp(r)
+        velocity = v + omega[:, None] * turned
+        acceleration = a + alpha[:, None] * turned - (omega**2)[:, None] * r
         return position, velocity, acceleration
 
     def angle(self, link: str) -> tuple[Array, Array, Array]:

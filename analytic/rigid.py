@@ -25,14 +25,22 @@ if TYPE_CHECKING:
 Array = NDArray[np.float64]
 
 
+#: perp(v) = v reversed times this: (−v_y, v_x) in one operation (negation and ×−1 are
+#: the same in IEEE arithmetic, signed zeros included).
+_PERP = np.array([-1.0, 1.0])
+
+
 def perp(v: Array) -> Array:
     """v turned +90°."""
-    return _pair(-v[..., 1], v[..., 0])
+    return np.asarray(v[..., ::-1] * _PERP, dtype=np.float64)
 
 
 def rotate(angle: Array, v: Array) -> Array:
     """R(angle)·v for arrays of angles (N,) and a vector (2,) or vectors (N, 2)."""
     c, s = np.cos(angle), np.sin(angle)
+    if np.ndim(v) == 1:     # one vector: its components as numbers (cheaper than 0-d views)
+        x, y = float(v[0]), float(v[1])
+        return _pair(c * x - s * y, s * x + c * y)
     return _pair(c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1])
 
 
@@ -53,6 +61,11 @@ def cross(r: Array, f: Array) -> Array:
     return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
 
 
+def link_column(linkage: Linkage, link: str) -> int:
+    """Column of the link's t_x in q (t_y and φ follow); −1 for the ground."""
+    return -1 if link == GROUND else 3 * linkage.link_number[link]
+
+
 @dataclass(frozen=True)
 class Layout:
     """Where each moving link's three coordinates sit in q, and where each joint's and each
@@ -62,7 +75,7 @@ class Layout:
 
     def index(self, link: str) -> int:
         """Column of the link's t_x (t_y and φ follow); −1 for the ground."""
-        return -1 if link == GROUND else 3 * self.linkage.link_number[link]
+        return link_column(self.linkage, link)
 
     @property
     def size(self) -> int:
@@ -218,8 +231,13 @@ class ForceLayout:
         return out
 
     def joint_columns(self, joint: Joint) -> tuple[int, ...]:
-        first = self._first_columns[joint.name]
-        return tuple(range(first, first + joint.kind.rows))
+        return self._columns_of[joint.name]
+
+    @cached_property
+    def _columns_of(self) -> dict[str, tuple[int, ...]]:
+        first = self._first_columns
+        return {j.name: tuple(range(first[j.name], first[j.name] + j.kind.rows))
+                for j in self.linkage.joints}
 
     def driver_column(self, index: int) -> int:
         return self.joint_unknowns + index
@@ -242,9 +260,14 @@ class ForceLayout:
         r = self.row(link)
         if r < 0:
             return
-        k.add(r, col, sign * direction[:, 0])
-        k.add(r + 1, col, sign * direction[:, 1])
-        k.add(r + 2, col, sign * cross(point, direction))
+        # The three entries (force, and its moment about the origin) in one product.
+        entries = np.empty((3, direction.shape[0]))
+        entries[:2] = direction.T
+        entries[2] = cross(point, direction)
+        entries *= sign
+        k.add(r, col, entries[0])
+        k.add(r + 1, col, entries[1])
+        k.add(r + 2, col, entries[2])
 
     def couple_on(self, k: Batched, link: str, col: int, sign: float) -> None:
         r = self.row(link)
