@@ -317,7 +317,7 @@ def place(plan: AssurPlan, value: Array) -> Placement:
     """Place every group at driver values ``value`` (N,); angles raw (atan2) for dyad links,
     exact for cranks (relative to their body's raw angle)."""
     frames: dict[str, Frame] = {GROUND: GROUND_FRAME}
-    angles: dict[str, Array] = {GROUND: np.zeros(1)}
+    angles: dict[str, Array] = {GROUND: np.zeros(())}   # adds to one pose or to many
     points: dict[int, tuple[Array | float, ...]] = {}
     closed = np.ones(value.shape, dtype=bool)
     with np.errstate(invalid="ignore", divide="ignore"):

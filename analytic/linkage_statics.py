@@ -82,9 +82,10 @@ class StaticResults:
     condition_bound: Array
 
 
-def static_results(plan: AssurPlan, values: Array) -> StaticResults:
+def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> StaticResults:
     """Statics at each driver value (N, 1): pose, reactions, efforts, springs, and the bound
-    from which :func:`.linkage_forces.solve_linkage` decides the singular verdicts."""
+    from which :func:`.linkage_forces.solve_linkage` decides the singular verdicts (infinite
+    without ``bounded``: the exact condition numbers will be computed anyway)."""
     linkage = plan.linkage
     value = np.ascontiguousarray(values[:, 0], dtype=float)
     n = value.shape[0]
@@ -93,18 +94,26 @@ def static_results(plan: AssurPlan, values: Array) -> StaticResults:
     out = {name: np.empty(n) for name in names}
     q = np.empty((n, 3 * len(linkage.moving_links)))
     locked = np.empty(n)
-    bound = np.empty(n)
+    bound = np.full(n, np.inf)
     constants = link_constants(linkage)
     for start in range(0, n, CHUNK):
         part = slice(start, min(start + CHUNK, n))
-        chunk = _Chunk(plan, route, value[part], constants)
-        chunk.write(out, q, locked, bound, part)
+        chunk = _Chunk(plan, route, _chunk_values(value, part), constants)
+        chunk.write(out, q, locked, bound if bounded else None, part)
     inside = np.isfinite(q).all(axis=1)
     qdot, qddot = np.zeros(q.shape), np.zeros(q.shape)   # untouched pages cost nothing
     qdot[~inside] = np.nan
     qddot[~inside] = np.nan
     pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
     return StaticResults(pose, out, bound)
+
+
+def _chunk_values(value: Array, part: slice) -> Array:
+    """The driver values of a chunk; a single pose's as a number (0-d), whose arithmetic
+    costs a tenth of a one-element array's and rounds the same."""
+    if value.shape[0] == 1:
+        return value[0]     # type: ignore[no-any-return]
+    return value[part]
 
 
 def quantity_names(linkage: Linkage) -> list[str]:
@@ -137,7 +146,7 @@ class _Chunk:
     def point(self, link: str, p0: tuple[float, float]) -> tuple[Array | float, Array | float]:
         return on_body(self.placed.frames[link], p0)
 
-    def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array,
+    def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array | None,
               part: slice) -> None:
         linkage = self.linkage
         for name, p0 in linkage.points.items():
@@ -159,8 +168,9 @@ class _Chunk:
         for name, f in forces.items():
             out[name][part] = f
         locked[part] = self.locked
-        bound[part] = self.condition_bound()
-        nan = ~self.inside
+        if bound is not None:
+            bound[part] = self.condition_bound()
+        nan = np.atleast_1d(~self.inside)
         if nan.any():   # a pose the path does not reach has no pose and no forces
             q[part][nan] = np.nan
             for name in out:
@@ -217,7 +227,7 @@ class _Chunk:
             (la, pa), (lb, pb) = spring.ends
             ax, ay = self.point(la, pa)
             bx, by = self.point(lb, pb)
-            d = np.stack(np.broadcast_arrays(bx - ax, by - ay), axis=-1)
+            d = np.stack(np.broadcast_arrays(bx - ax, by - ay), axis=-1).reshape(-1, 2)
             unit = spring_axis(self.linkage, d)[1]
             fx, fy = tension * unit[:, 0], tension * unit[:, 1]
             _add(b, la, fx, fy, ax, ay)   # tension pulls a toward b
