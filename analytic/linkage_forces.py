@@ -361,9 +361,11 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
     exact = _ExactCondition(pose)
     singular = _singular_by_bound(pose, found.condition_bound, exact)
     undirected = undirected_springs(pose)
-    for name, value in found.values.items():
-        if name.startswith(("F_", "Q_")):
-            value[singular | (undirected != "")] = np.nan
+    withheld = singular | (undirected != "")
+    if withheld.any():
+        for name, value in found.values.items():
+            if name.startswith(("F_", "Q_")):
+                value[withheld] = np.nan
     n = vals.shape[0]
     return LinkageResults(pose, found.values, exact.all, singular, np.ones(n, dtype=bool),
                           np.zeros(n, dtype="<U1"), undirected=undirected)

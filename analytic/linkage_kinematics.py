@@ -103,6 +103,13 @@ class LinkagePose:
         return np.all(np.isfinite(self.q), axis=1)
 
 
+def known_assembled(pose: LinkagePose, assembled: NDArray[np.bool_]) -> LinkagePose:
+    """``pose`` with :attr:`LinkagePose.assembled` given (a solver that wrote q chunk by
+    chunk knows it without another pass over all of q)."""
+    pose.__dict__["assembled"] = assembled   # what the cached property stores
+    return pose
+
+
 # -- constraints ------------------------------------------------------------------------
 
 def residual_and_jacobian(linkage: Linkage, q: Array, targets: Array, *,

@@ -51,10 +51,10 @@ from mechcheck.analytic.linkage_assur import (
     place,
     reachable,
 )
-from mechcheck.analytic.linkage_kinematics import Array, LinkagePose
+from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, known_assembled
 from mechcheck.analytic.linkage_loads import spring_axis
 from mechcheck.analytic.resultant import Resultant, resultants
-from mechcheck.analytic.values import GROUND
+from mechcheck.analytic.values import GROUND, Vec2
 
 #: Longest plan the condition bound is tried on: each group multiplies the bound by a
 #: factor above 1, so for longer chains it exceeds the singular threshold whatever the pose.
@@ -96,16 +96,18 @@ def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> S
     locked = np.empty(n)
     bound = np.full(n, np.inf)
     constants = link_constants(linkage)
+    inside = np.empty(n, dtype=bool)
     for start in range(0, n, CHUNK):
         part = slice(start, min(start + CHUNK, n))
         chunk = _Chunk(plan, route, _chunk_values(value, part), constants)
         chunk.write(out, q, locked, bound if bounded else None, part)
-    inside = np.isfinite(q).all(axis=1)
+        inside[part] = np.isfinite(q[part]).all(axis=1)   # while the chunk is in cache
     qdot, qddot = np.zeros(q.shape), np.zeros(q.shape)   # untouched pages cost nothing
-    qdot[~inside] = np.nan
-    qddot[~inside] = np.nan
+    if not inside.all():
+        qdot[~inside] = np.nan
+        qddot[~inside] = np.nan
     pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
-    return StaticResults(pose, out, bound)
+    return StaticResults(known_assembled(pose, inside), out, bound)
 
 
 def _chunk_values(value: Array, part: slice) -> Array:
@@ -139,12 +141,19 @@ class _Chunk:
         self.angle = {link: continuous_angle(plan, route, link, value, self.placed)
                       for link in self.linkage.moving_links}
         self.constants = constants
+        self.carried: dict[tuple[str, Vec2], tuple[Array | float, Array | float]] = {}
 
     def frame(self, link: str) -> tuple[Array | float, ...]:
         return self.placed.frames[link]
 
-    def point(self, link: str, p0: tuple[float, float]) -> tuple[Array | float, Array | float]:
-        return on_body(self.placed.frames[link], p0)
+    def point(self, link: str, p0: Vec2) -> tuple[Array | float, Array | float]:
+        """Where ``link`` carries its drawn point ``p0`` now: computed once per chunk (the
+        output, the loads, the elimination and the bound all ask for the joints' points)."""
+        key = (link, p0)
+        found = self.carried.get(key)
+        if found is None:
+            found = self.carried[key] = on_body(self.placed.frames[link], p0)
+        return found
 
     def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array | None,
               part: slice) -> None:
