@@ -83,6 +83,15 @@ class Batched:
         # Most entries are already a value per pose: broadcasting costs more than the entry.
         self._v.append(v if v.shape == (self.poses,) else np.broadcast_to(v, (self.poses,)))
 
+    def add_rows(self, row: int, col: int, values: Array) -> None:
+        """Add the rows of ``values`` (k, N) at (row, col), (row + 1, col), …: a few entries
+        of one column computed together."""
+        if not isinstance(self._v, list):
+            self._v = list(self._v)
+        self._r.extend(range(row, row + values.shape[0]))
+        self._c.extend([col] * values.shape[0])
+        self._v.extend(values)
+
     def _constant(self, value: float) -> Array:
         row = self._constants.get(value)
         if row is None:

@@ -380,7 +380,9 @@ class _ExactCondition:
 
     def of(self, which: NDArray[np.bool_]) -> Array:
         todo = which & np.isnan(self.known)
-        if todo.any():
+        if todo.all():  # every pose (a case solved on its own): K from the pose as it is
+            self.known = condition(self.pose, coefficient_entries(self.pose))
+        elif todo.any():
             rest = np.zeros_like(self.pose.q[todo])
             near = LinkagePose(self.pose.linkage, self.pose.drivers[todo], self.pose.q[todo], rest,
                                rest, self.pose.locked_at[todo])

@@ -36,6 +36,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mechcheck.analytic.linkage import Joint, Linkage, TorsionSpring
 from mechcheck.analytic.linkage_assur import (
@@ -101,13 +102,22 @@ def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> S
         part = slice(start, min(start + CHUNK, n))
         chunk = _Chunk(plan, route, _chunk_values(value, part), constants)
         chunk.write(out, q, locked, bound if bounded else None, part)
-        inside[part] = np.isfinite(q[part]).all(axis=1)   # while the chunk is in cache
+        inside[part] = _finite_rows(q[part])   # while the chunk is in cache
     qdot, qddot = np.zeros(q.shape), np.zeros(q.shape)   # untouched pages cost nothing
     if not inside.all():
         qdot[~inside] = np.nan
         qddot[~inside] = np.nan
     pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
     return StaticResults(known_assembled(pose, inside), out, bound)
+
+
+def _finite_rows(block: Array) -> NDArray[np.bool_]:
+    """Which rows of ``block`` are finite throughout: column by column (a reduction along
+    rows of a few columns costs twice as much)."""
+    finite = np.isfinite(block[:, 0])
+    for k in range(1, block.shape[1]):
+        finite &= np.isfinite(block[:, k])
+    return finite
 
 
 def _chunk_values(value: Array, part: slice) -> Array:

@@ -265,9 +265,7 @@ class ForceLayout:
         entries[:2] = direction.T
         entries[2] = cross(point, direction)
         entries *= sign
-        k.add(r, col, entries[0])
-        k.add(r + 1, col, entries[1])
-        k.add(r + 2, col, entries[2])
+        k.add_rows(r, col, entries)
 
     def couple_on(self, k: Batched, link: str, col: int, sign: float) -> None:
         r = self.row(link)
