@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
+from mechcheck.analytic.resultant import Resultant, resultants
 from mechcheck.analytic.values import GROUND, Vec2
 
 if TYPE_CHECKING:
@@ -166,6 +167,28 @@ class AssurPlan:
     def step(self) -> float:
         """The grid of the driver's travel (:data:`GRID_STEP`)."""
         return GRID_STEP
+
+    @cached_property
+    def quantity_names(self) -> list[str]:
+        """The quantities of :func:`.linkage_forces.solve_linkage`, in its order (kept: a
+        case solved again does not spell them again)."""
+        linkage = self.linkage
+        names = [f"{axis}_{p}" for p in linkage.points for axis in "xy"]
+        names += [f"phi_{link}" for link in linkage.moving_links]
+        names += [f"q_{j.name}" for j in linkage.joints]
+        names += [name for j in linkage.joints for name in j.kind.quantities(j)]
+        names += [f"Q_{d.joint}" for d in linkage.drivers]
+        return names + [f"S_{s.name}" for s in linkage.springs]
+
+    @cached_property
+    def constants(self) -> dict[str, Resultant]:
+        """Every constant force on each moving link (loads, weights) folded into one."""
+        linkage = self.linkage
+        g = linkage.gravity
+        loads = [(ld.link, ld.at, ld.force, ld.torque) for ld in linkage.loads]
+        loads += [(m.link, m.com, (m.mass * g[0], m.mass * g[1]), 0.0) for m in linkage.masses]
+        folded = resultants(loads)
+        return {link: folded.get(link, Resultant()) for link in linkage.moving_links}
 
 
 def assur_plan(linkage: Linkage) -> AssurPlan | None:
@@ -408,14 +431,24 @@ class Path:
 
     def lift(self, link: str, value: Array, raw: Array) -> Array:
         """The continuous angle of ``link`` at ``value`` from its raw atan2 angle."""
-        nodes = self.node_angles[link]
-        reachable = np.flatnonzero(np.isfinite(nodes))
-        if np.all(np.abs(nodes[reachable]) < NO_WRAP):
+        span = self.spans[link]
+        if span is None:
             return raw
-        index = np.clip(np.rint(value / self.step).astype(np.int64) - self.first,
-                        reachable[0], reachable[-1])
+        nodes = self.node_angles[link]
+        index = np.clip(np.rint(value / self.step).astype(np.int64) - self.first, *span)
         ref = nodes[index]
         return raw + math.tau * np.rint((ref - raw) / math.tau)
+
+    @cached_property
+    def spans(self) -> dict[str, tuple[int, int] | None]:
+        """Each link's first and last reachable node, or None where its raw angle is
+        already the continuous one (:data:`NO_WRAP`); found once per path, not per chunk."""
+        out: dict[str, tuple[int, int] | None] = {}
+        for link, nodes in self.node_angles.items():
+            reachable = np.flatnonzero(np.isfinite(nodes))
+            wraps = not np.all(np.abs(nodes[reachable]) < NO_WRAP)
+            out[link] = (int(reachable[0]), int(reachable[-1])) if wraps else None
+        return out
 
 
 def path(plan: AssurPlan, values: Array) -> Path:

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic.linkage import Joint, Linkage, TorsionSpring
+from mechcheck.analytic.linkage import Joint, TorsionSpring
 from mechcheck.analytic.linkage_assur import (
     AssurPlan,
     Crank,
@@ -54,7 +54,7 @@ from mechcheck.analytic.linkage_assur import (
 )
 from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, known_assembled
 from mechcheck.analytic.linkage_loads import spring_axis
-from mechcheck.analytic.resultant import Resultant, resultants
+from mechcheck.analytic.resultant import Resultant
 from mechcheck.analytic.values import GROUND, Vec2
 
 #: Longest plan the condition bound is tried on: each group multiplies the bound by a
@@ -62,15 +62,6 @@ from mechcheck.analytic.values import GROUND, Vec2
 BOUND_GROUPS = 24
 #: Poses per chunk: ~30 live arrays of this many doubles stay within a core's L2 cache.
 CHUNK = 8192
-
-
-def link_constants(linkage: Linkage) -> dict[str, Resultant]:
-    """Every constant force on each moving link (loads, weights) folded into one."""
-    g = linkage.gravity
-    loads = [(ld.link, ld.at, ld.force, ld.torque) for ld in linkage.loads]
-    loads += [(m.link, m.com, (m.mass * g[0], m.mass * g[1]), 0.0) for m in linkage.masses]
-    folded = resultants(loads)
-    return {link: folded.get(link, Resultant()) for link in linkage.moving_links}
 
 
 @dataclass(frozen=True)
@@ -91,12 +82,13 @@ def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> S
     value = np.ascontiguousarray(values[:, 0], dtype=float)
     n = value.shape[0]
     route = path(plan, value)
-    names = quantity_names(linkage)
-    out = {name: np.empty(n) for name in names}
+    names = plan.quantity_names
+    # One block, a row per quantity: one allocation, not one per column.
+    out = dict(zip(names, np.empty((len(names), n)), strict=True))
     q = np.empty((n, 3 * len(linkage.moving_links)))
     locked = np.empty(n)
     bound = np.full(n, np.inf)
-    constants = link_constants(linkage)
+    constants = plan.constants
     inside = np.empty(n, dtype=bool)
     for start in range(0, n, CHUNK):
         part = slice(start, min(start + CHUNK, n))
@@ -114,6 +106,8 @@ def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> S
 def _finite_rows(block: Array) -> NDArray[np.bool_]:
     """Which rows of ``block`` are finite throughout: column by column (a reduction along
     rows of a few columns costs twice as much)."""
+    if block.shape[0] == 1:     # one pose: one call
+        return np.asarray(np.isfinite(block).all(axis=1))
     finite = np.isfinite(block[:, 0])
     for k in range(1, block.shape[1]):
         finite &= np.isfinite(block[:, k])
@@ -126,16 +120,6 @@ def _chunk_values(value: Array, part: slice) -> Array:
     if value.shape[0] == 1:
         return value[0]     # type: ignore[no-any-return]
     return value[part]
-
-
-def quantity_names(linkage: Linkage) -> list[str]:
-    """The quantities of :func:`.linkage_forces.solve_linkage`, in its order."""
-    names = [f"{axis}_{p}" for p in linkage.points for axis in "xy"]
-    names += [f"phi_{link}" for link in linkage.moving_links]
-    names += [f"q_{j.name}" for j in linkage.joints]
-    names += [name for j in linkage.joints for name in j.kind.quantities(j)]
-    names += [f"Q_{d.joint}" for d in linkage.drivers]
-    return names + [f"S_{s.name}" for s in linkage.springs]
 
 
 class _Chunk:
