@@ -85,7 +85,9 @@ def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> S
     names = plan.quantity_names
     # One block, a row per quantity: one allocation, not one per column.
     out = dict(zip(names, np.empty((len(names), n)), strict=True))
-    q = np.empty((n, 3 * len(linkage.moving_links)))
+    # Column-major: each coordinate is written (and read by the pose's links) as one
+    # contiguous column, not strided across rows.
+    q = np.empty((3 * len(linkage.moving_links), n)).T
     locked = np.empty(n)
     bound = np.full(n, np.inf)
     constants = plan.constants
