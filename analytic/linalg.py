@@ -104,6 +104,19 @@ class Batched:
     def small(self) -> bool:
         return self.cols <= DENSE_COLUMNS
 
+    @property
+    def distinct(self) -> bool:
+        """No two entries at one place (so scaling the entries or the dense matrix is the
+        same arithmetic)."""
+        return len(set(zip(self._r, self._c, strict=True))) == len(self._r)
+
+    @property
+    def pattern(self) -> NDArray[np.bool_]:
+        """(rows, cols): where the matrix has entries."""
+        out = np.zeros((self.rows, self.cols), dtype=bool)
+        out[self.index()] = True
+        return out
+
     def values(self) -> Array:
         """(entries, N)."""
         if not isinstance(self._v, list):
@@ -243,6 +256,11 @@ def condition(a: Batched) -> Array:
     for pose in np.flatnonzero(finite):
         out[pose] = _condition_sparse(a.at(int(pose)))
     return out
+
+
+def condition_of_dense(m: Array) -> Array:
+    """:func:`condition` of dense matrices (N, rows, cols)."""
+    return _condition_dense(m)
 
 
 def _condition_dense(m: Array) -> Array:

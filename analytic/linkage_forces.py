@@ -177,16 +177,32 @@ def condition(pose: LinkagePose, k: Batched | Array) -> Array:
         cols[layout.driver_column(index)] = linkage.joint(driver.joint).kind.length(linkage.scale)
     rows = np.ones(layout.rows)
     rows[2::3] = 1.0 / linkage.scale
+    if entries.small and entries.distinct:
+        return _condition_small(entries, rows, cols)
     first = entries.scaled(np.broadcast_to(rows, (entries.poses, rows.size)), cols)
-    norms = first.row_norms()
+    # A pose that does not assemble has no matrix: its condition is infinite by definition
+    # (its entries are not finite, and linalg.condition says so).
+    return linalg.condition(first.scaled(_unit_rows(first.row_norms()), np.ones(layout.columns)))
+
+
+def _unit_rows(norms: Array) -> Array:
+    """The row scales that make each link's two force rows together, and its moment row,
+    of unit length (1 for a row of zeros); ``norms`` (N, rows), overwritten."""
     pair = np.sqrt(0.5 * (norms[:, 0::3] ** 2 + norms[:, 1::3] ** 2))
     norms[:, 0::3] = pair
     norms[:, 1::3] = pair
     with np.errstate(divide="ignore", invalid="ignore"):
-        unit = np.where(norms > 0.0, 1.0 / norms, 1.0)
-    # A pose that does not assemble has no matrix: its condition is infinite by definition
-    # (its entries are not finite, and linalg.condition says so).
-    return linalg.condition(first.scaled(unit, np.ones(layout.columns)))
+        return np.asarray(np.where(norms > 0.0, 1.0 / norms, 1.0), dtype=np.float64)
+
+
+def _condition_small(entries: Batched, rows: Array, cols: Array) -> Array:
+    """:func:`condition` of a small K with at most one entry per place, scaled as a dense
+    matrix: each entry goes through the same products as :meth:`.Batched.scaled` (so the
+    same number), in a few calls rather than a few per entry (one pose pays for calls)."""
+    first = entries.dense() * rows[:, None] * cols
+    unit = _unit_rows(np.asarray(np.linalg.norm(first, axis=2), dtype=np.float64))
+    second = np.where(entries.pattern, first * unit[:, :, None], 0.0)   # × 1: the columns
+    return linalg.condition_of_dense(second)
 
 
 @dataclass(frozen=True)
