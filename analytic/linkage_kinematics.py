@@ -27,7 +27,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic import linalg
 from mechcheck.analytic.linalg import Batched
-from mechcheck.analytic.rigid import Array, Constraints, Layout, Motion, link_column, perp, rotate
+from mechcheck.analytic.rigid import (
+    Array,
+    Constraints,
+    Layout,
+    Motion,
+    Turn,
+    link_column,
+    perp,
+    rotate,
+    turn_of,
+    turned,
+)
 
 if TYPE_CHECKING:
     from mechcheck.analytic.linkage import Joint, Linkage
@@ -81,12 +92,26 @@ class LinkagePose:
         t, phi = self.link_state(link, self.q)
         v, omega = self.link_state(link, self.qdot)
         a, alpha = self.link_state(link, self.qddot)
-        r = rotate(phi, p0)
+        k = link_column(self.linkage, link)
+        r = turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)
         position = t + r
-        turned = perp(r)
-        velocity = v + omega[:, None] * turned
-        acceleration = a + alpha[:, None] * turned - (omega**2)[:, None] * r
+        across = perp(r)
+        velocity = v + omega[:, None] * across
+        acceleration = a + alpha[:, None] * across - (omega**2)[:, None] * r
         return position, velocity, acceleration
+
+    def turn(self, k: int) -> Turn:
+        """The rotation (:func:`.rigid.turn_of`) of the link whose t_x is column ``k`` of q,
+        computed once (every point the link carries is turned by it)."""
+        found = self.turns.get(k)
+        if found is None:
+            found = self.turns[k] = turn_of(self.q[:, k + 2])
+        return found
+
+    @cached_property
+    def turns(self) -> dict[int, Turn]:
+        """The links' rotations computed so far (:meth:`turn`)."""
+        return {}
 
     def angle(self, link: str) -> tuple[Array, Array, Array]:
         """φ, ω, α of ``link`` (rotation from the drawn pose)."""

@@ -9,7 +9,7 @@ exist (:mod:`.joint_kinds` does); the engine's modules and the kinds both build 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -42,6 +42,26 @@ def rotate(angle: Array, v: Array) -> Array:
         x, y = float(v[0]), float(v[1])
         return _pair(c * x - s * y, s * x + c * y)
     return _pair(c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1])
+
+
+Turn = tuple[Array, Array]
+
+
+def turn_of(angle: Array) -> Turn:
+    """The rotations by ``angle`` (N,) as the images of the x and y axes, (cos, sin) and
+    (−sin, cos), each (N, 2): what :func:`turned` applies."""
+    c, s = np.cos(angle), np.sin(angle)
+    return _pair(c, s), _pair(-s, c)
+
+
+def turned(turn: Turn, v: Array) -> Array:
+    """:func:`rotate` by rotations given as :func:`turn_of`: x·R(e_x) + y·R(e_y), the same
+    products and sums as :func:`rotate` (a + (−b) is a − b in IEEE arithmetic), in three
+    operations for a link turned many times."""
+    ex, ey = turn
+    if np.ndim(v) == 1:
+        return np.asarray(ex * float(v[0]) + ey * float(v[1]), dtype=np.float64)
+    return np.asarray(ex * v[..., 0:1] + ey * v[..., 1:2], dtype=np.float64)
 
 
 def _pair(x: Array, y: Array) -> Array:
@@ -99,10 +119,20 @@ class Constraints:
     q: Array
     phi: Array
     jac: Batched
+    #: Each link's rotation (:func:`turn_of`), by its column, computed once (every joint on
+    #: the link turns its points by it).
+    turns: dict[int, Turn] = field(default_factory=dict)
 
     @property
     def linkage(self) -> Linkage:
         return self.layout.linkage
+
+    def turn(self, k: int) -> Turn:
+        """The rotation (:func:`turn_of`) of the link whose t_x is column ``k`` of q."""
+        found = self.turns.get(k)
+        if found is None:
+            found = self.turns[k] = turn_of(self.q[:, k + 2])
+        return found
 
     def angle(self, link: str) -> Array:
         k = self.layout.index(link)
@@ -114,7 +144,7 @@ class Constraints:
         n = self.q.shape[0]
         if k < 0:
             return np.broadcast_to(p0, (n, 2)).copy(), np.zeros((n, 2))
-        r = rotate(self.q[:, k + 2], p0)
+        r = turned(self.turn(k), p0)
         return self.q[:, k:k + 2] + r, perp(r)
 
     def put(self, row: int, link: str, d_t: Array | None, d_phi: Array | float) -> None:
@@ -155,7 +185,8 @@ class Constraints:
         """Row w_i·(p_j(A0) − p_i(A0)), with w (drawn w0) fixed in the joint's links[0]."""
         i, j = joint.links
         a0 = np.array(self.linkage.points[joint.at])
-        w = rotate(self.angle(i), w0)
+        ki = self.layout.index(i)
+        w = turned(self.turn(ki), w0) if ki >= 0 else rotate(self.angle(i), w0)
         pj, dpj = self.point(j, a0)
         pi, dpi = self.point(i, a0)
         d = pj - pi
@@ -171,10 +202,19 @@ class Motion:
     layout: Layout
     q: Array
     qdot: Array
+    #: Each link's rotation, by its column (as :attr:`Constraints.turns`).
+    turns: dict[int, Turn] = field(default_factory=dict)
 
     @property
     def linkage(self) -> Linkage:
         return self.layout.linkage
+
+    def turn(self, k: int) -> Turn:
+        """The rotation (:func:`turn_of`) of the link whose t_x is column ``k`` of q."""
+        found = self.turns.get(k)
+        if found is None:
+            found = self.turns[k] = turn_of(self.q[:, k + 2])
+        return found
 
     def spin(self, link: str) -> Array:
         k = self.layout.index(link)
@@ -183,7 +223,7 @@ class Motion:
     def rotated(self, link: str, p0: Array) -> Array:
         """R(φ)·P0 of a drawn point on ``link``."""
         k = self.layout.index(link)
-        return rotate(self.q[:, k + 2], p0) if k >= 0 else np.zeros((self.q.shape[0], 2))
+        return turned(self.turn(k), p0) if k >= 0 else np.zeros((self.q.shape[0], 2))
 
     def position(self, link: str, p0: Array) -> Array:
         k = self.layout.index(link)
@@ -202,7 +242,7 @@ class Motion:
         a0 = np.array(self.linkage.points[joint.at])
         n = self.q.shape[0]
         ki = self.layout.index(i)
-        w = rotate(self.q[:, ki + 2], w0) if ki >= 0 else np.broadcast_to(w0, (n, 2))
+        w = turned(self.turn(ki), w0) if ki >= 0 else np.broadcast_to(w0, (n, 2))
         d = self.position(j, a0) - self.position(i, a0)
         dd = self.velocity(j, a0) - self.velocity(i, a0)
         wi = self.spin(i)
