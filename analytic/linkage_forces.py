@@ -37,7 +37,7 @@ from mechcheck.analytic.linkage_kinematics import (
     solve_pose,
 )
 from mechcheck.analytic.linkage_loads import known_vector, spring_force, undirected_springs
-from mechcheck.analytic.rigid import ForceLayout
+from mechcheck.analytic.rigid import force_layout
 
 #: Above this condition number of the scaled equilibrium matrix the pose is singular and
 #: its forces withheld (the same line as the closed-form presets, for the same reason).
@@ -59,7 +59,7 @@ def coefficient_entries(pose: LinkagePose) -> Batched:
     """K as entries (:class:`~.linalg.Batched`): each joint's reactions as its kind puts them
     in, then each driver's effort, a few entries per joint whatever the linkage's size."""
     linkage = pose.linkage
-    layout = ForceLayout(linkage)
+    layout = force_layout(linkage)
     k = Batched(layout.rows, layout.columns, pose.q.shape[0])
     frames = {j.name: j.kind.frame(pose, j) for j in linkage.joints}
     for joint in linkage.joints:
@@ -108,7 +108,7 @@ def coulomb_terms(pose: LinkagePose) -> list[CoulombTerm]:
 def friction_residual(pose: LinkagePose, terms: list[CoulombTerm], x: Array) -> tuple[Array, Array]:
     """φ(x) (N, 3n) and ∂φ/∂x (N, 3n, unknowns) of the Coulomb terms, each as its joint's
     kind applies it."""
-    layout = ForceLayout(pose.linkage)
+    layout = force_layout(pose.linkage)
     n = x.shape[0]
     phi = np.zeros((n, layout.rows))
     dphi = np.zeros((n, layout.rows, layout.columns))
@@ -169,12 +169,8 @@ def condition(pose: LinkagePose, k: Batched | Array) -> Array:
     entries = k if isinstance(k, Batched) else Batched.from_dense(k)
     if 0 in (entries.rows, entries.cols):
         return np.ones(entries.poses)
-    layout = ForceLayout(linkage)
-    cols = np.ones(layout.columns)
-    for joint in linkage.joints:
-        cols[list(layout.joint_columns(joint))] = joint.kind.reaction_lengths(linkage.scale)
-    for index, driver in enumerate(linkage.drivers):
-        cols[layout.driver_column(index)] = linkage.joint(driver.joint).kind.length(linkage.scale)
+    layout = force_layout(linkage)
+    cols = layout.unknown_lengths
     rows = np.ones(layout.rows)
     rows[2::3] = 1.0 / linkage.scale
     if entries.small and entries.distinct:
@@ -291,7 +287,7 @@ def force_quantities(pose: LinkagePose, x: Array, terms: list[CoulombTerm]) -> d
     """Each joint's reactions as its kind reports them (a slide's force with its friction
     along the axis), Q_<joint> and S_<spring>, from the unknowns x."""
     linkage = pose.linkage
-    layout = ForceLayout(linkage)
+    layout = force_layout(linkage)
     coulomb = {t.joint.name: t for t in terms}
     out: dict[str, Array] = {}
     for joint in linkage.joints:

@@ -9,6 +9,7 @@ exist (:mod:`.joint_kinds` does); the engine's modules and the kinds both build 
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -294,6 +295,19 @@ class ForceLayout:
     def columns(self) -> int:
         return self.joint_unknowns + len(self.linkage.drivers)
 
+    @cached_property
+    def unknown_lengths(self) -> Array:
+        """(columns,): the length that makes each unknown a force (1 for a force, the
+        linkage's size for a couple; the kinds' ``reaction_lengths`` and ``length``)."""
+        linkage = self.linkage
+        cols = np.ones(self.columns)
+        for joint in linkage.joints:
+            cols[list(self.joint_columns(joint))] = joint.kind.reaction_lengths(linkage.scale)
+        for index, driver in enumerate(linkage.drivers):
+            cols[self.driver_column(index)] = linkage.joint(driver.joint).kind.length(linkage.scale)
+        cols.flags.writeable = False
+        return cols
+
     def force_on(self, k: Batched, link: str, col: int, direction: Array, point: Array,
                  sign: float) -> None:
         """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
@@ -325,3 +339,25 @@ class ForceLayout:
         r = self.row(link)
         if r >= 0:
             b[:, r + 2] += torque
+
+
+#: :func:`force_layout`'s layouts, by the identity of their linkage (each holds its linkage,
+#: so an identity is not reused while kept), the most recent last.
+_KEPT_LAYOUTS: dict[int, ForceLayout] = {}
+KEPT_LAYOUTS = 32
+_LAYOUTS_LOCK = threading.Lock()
+
+
+def force_layout(linkage: Linkage) -> ForceLayout:
+    """The linkage's :class:`ForceLayout`, kept for the last few linkages: its columns and
+    scales are derived once, not on every solve of a case (they cost as much as a pose's
+    statics)."""
+    found = _KEPT_LAYOUTS.get(id(linkage))
+    if found is not None and found.linkage is linkage:
+        return found
+    found = ForceLayout(linkage)
+    with _LAYOUTS_LOCK:  # solves may run in several threads
+        _KEPT_LAYOUTS[id(linkage)] = found
+        while len(_KEPT_LAYOUTS) > KEPT_LAYOUTS:
+            del _KEPT_LAYOUTS[next(iter(_KEPT_LAYOUTS))]
+    return found
