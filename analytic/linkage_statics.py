@@ -120,7 +120,7 @@ def _chunk_values(value: Array, part: slice) -> Array:
     """The driver values of a chunk; a single pose's as a number (0-d), whose arithmetic
     costs a tenth of a one-element array's and rounds the same."""
     if value.shape[0] == 1:
-        return value[0]     # type: ignore[no-any-return]
+        return value[0]
     return value[part]
 
 
