@@ -543,6 +543,8 @@ def assur_positions(plan: AssurPlan, values: Array) -> tuple[Array, Array]:
 def reachable(route: Path, value: Array, placed: Placement) -> tuple[NDArray[np.bool_], Array]:
     """Which poses the path reaches, and the fraction of the travel where the others lock."""
     inside = (value >= route.lo) & (value <= route.hi) & placed.closed
+    if route.lo == -math.inf and route.hi == math.inf:  # no lock either way: none locks
+        return inside, np.full(np.shape(value), np.nan)
     with np.errstate(invalid="ignore", divide="ignore"):
         locked = np.where(value > route.hi, route.hi / value,
                           np.where(value < route.lo, route.lo / value, np.nan))

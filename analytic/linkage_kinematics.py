@@ -95,6 +95,8 @@ class LinkagePose:
         k = link_column(self.linkage, link)
         r = turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)
         position = t + r
+        if self.at_rest:    # what the sums below give: +0 at every pose
+            return position, np.zeros(position.shape), np.zeros(position.shape)
         across = perp(r)
         velocity = v + omega[:, None] * across
         acceleration = a + alpha[:, None] * across - (omega**2)[:, None] * r
@@ -107,6 +109,14 @@ class LinkagePose:
         if found is None:
             found = self.turns[k] = turn_of(self.q[:, k + 2])
         return found
+
+    @cached_property
+    def at_rest(self) -> bool:
+        """Every rate exactly +0 and every pose assembled (finite): then every point's
+        velocity and acceleration in :meth:`point` are +0 (+0 + (±0) is +0)."""
+        return bool(self.assembled.all() and not (
+            self.qdot.any() or self.qddot.any()
+            or np.signbit(self.qdot).any() or np.signbit(self.qddot).any()))
 
     @cached_property
     def turns(self) -> dict[int, Turn]:

@@ -260,8 +260,8 @@ class _Chunk:
         couple = px * fy - py * fx - m      # the driver's couple on the crank
         sense = 1.0 if group.joint.links[1] == group.link else -1.0
         name = group.joint.name
-        out[f"F_{name}_x"], out[f"F_{name}_y"] = -sense * fx, -sense * fy
-        out[f"Q_{name}"] = sense * couple
+        out[f"F_{name}_x"], out[f"F_{name}_y"] = _signed(-sense, fx), _signed(-sense, fy)
+        out[f"Q_{name}"] = _signed(sense, couple)
         _add(b, group.body, fx, fy, px, py, -couple)
 
     def _dyad(self, index: int, group: Dyad, b: dict[str, list[Array | float]],
@@ -282,7 +282,7 @@ class _Chunk:
         for joint, link, fx, fy in ((group.joints[0], a, g1x, g1y), (group.joints[1], a, gx, gy),
                                     (group.joints[2], c, g2x, g2y)):
             sense = 1.0 if joint.links[1] == link else -1.0
-            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = sense * fx, sense * fy
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = _signed(sense, fx), _signed(sense, fy)
         _add(b, group.bodies[0], -g1x, -g1y, x1, y1)
         _add(b, group.bodies[1], -g2x, -g2y, x2, y2)
 
@@ -306,10 +306,11 @@ class _Chunk:
         couple = mx * gy - my * gx - mb - push * (sx * ux + sy * uy)   # and its couple
         for joint, fx, fy in ((group.joints[0], g1x, g1y), (group.joints[1], gx, gy)):
             sense = 1.0 if joint.links[1] == a else -1.0
-            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = sense * fx, sense * fy
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = _signed(sense, fx), _signed(sense, fy)
         sense = 1.0 if slide.links[1] == c else -1.0    # reported: by links[0] on links[1]
-        out[f"F_{slide.name}_x"], out[f"F_{slide.name}_y"] = -sense * push * uy, sense * push * ux
-        out[f"M_{slide.name}"] = sense * couple
+        out[f"F_{slide.name}_x"] = _signed(-sense, push * uy)
+        out[f"F_{slide.name}_y"] = _signed(sense, push * ux)
+        out[f"M_{slide.name}"] = _signed(sense, couple)
         _add(b, group.bodies[0], -g1x, -g1y, x1, y1)
         _add(b, group.bodies[1], push * uy, -push * ux, sx, sy, -couple)
 
@@ -406,6 +407,12 @@ class _Chunk:
                 + math.sqrt(2.0 * force_row[a])
                 + fb * np.sqrt(1.0 + ((sx * ux + sy * uy) / size)**2)
                 + np.sqrt(moment_row[c]))
+
+
+def _signed(sense: float, value: Array | float) -> Array | float:
+    """``sense · value`` for a sense of ±1: the value or its negation, the same numbers
+    (rounding is symmetric in sign) without a pass over the poses for +1."""
+    return value if sense > 0.0 else -value
 
 
 def _add(b: dict[str, list[Array | float]], link: str, fx: Array | float, fy: Array | float,
