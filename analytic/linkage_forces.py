@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic import linalg
 from mechcheck.analytic.linalg import Batched
-from mechcheck.analytic.linkage import Joint, Linkage
+from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage
 from mechcheck.analytic.linkage_equilibrium import equilibrium_poses
 from mechcheck.analytic.linkage_kinematics import (
     Array,
@@ -372,8 +372,12 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
     pose = found.pose
     exact = _ExactCondition(pose)
     singular = _singular_by_bound(pose, found.condition_bound, exact)
-    undirected = undirected_springs(pose)
-    withheld = singular | (undirected != "")
+    if any(isinstance(s, LinearSpring) for s in linkage.springs):
+        undirected = undirected_springs(pose)
+        withheld = singular | (undirected != "")
+    else:   # only a linear spring can pull along no line: none here (its "" at every pose)
+        undirected = np.zeros(pose.q.shape[0], dtype="<U1")
+        withheld = singular
     if withheld.any():
         for name, value in found.values.items():
             if name.startswith(("F_", "Q_")):
