@@ -169,7 +169,7 @@ class AssurPlan:
         return GRID_STEP
 
     @cached_property
-    def quantity_names(self) -> list[str]:
+    def quantity_names(self) -> tuple[str, ...]:
         """The quantities of :func:`.linkage_forces.solve_linkage`, in its order (kept: a
         case solved again does not spell them again)."""
         linkage = self.linkage
@@ -178,7 +178,7 @@ class AssurPlan:
         names += [f"q_{j.name}" for j in linkage.joints]
         names += [name for j in linkage.joints for name in j.kind.quantities(j)]
         names += [f"Q_{d.joint}" for d in linkage.drivers]
-        return names + [f"S_{s.name}" for s in linkage.springs]
+        return tuple(names + [f"S_{s.name}" for s in linkage.springs])
 
     @cached_property
     def constants(self) -> dict[str, Resultant]:
