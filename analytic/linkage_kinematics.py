@@ -33,6 +33,7 @@ from mechcheck.analytic.rigid import (
     Layout,
     Motion,
     Turn,
+    kept,
     link_column,
     perp,
     rotate,
@@ -306,13 +307,24 @@ def continuation_positions(linkage: Linkage, values: Array) -> tuple[Array, Arra
     return q, locked
 
 
+def _closed_drawing(linkage: Linkage) -> tuple[Array, NDArray[np.bool_]]:
+    """The drawing closed by Newton's method (q (1, 3n), and whether it closed): the start
+    of every path, kept with the linkage (:func:`.rigid.kept`), read-only."""
+    def close() -> tuple[Array, NDArray[np.bool_]]:
+        q, ok = _newton(linkage, np.zeros((1, Layout(linkage).size)), np.zeros((1, 1)))
+        q.flags.writeable = False
+        ok.flags.writeable = False
+        return q, ok
+    return kept(linkage, "closed drawing", close)
+
+
 def _walked_positions(linkage: Linkage, value: Array) -> tuple[Array, Array]:
     """:func:`continuation_positions` of one driver at values (N,)."""
     n = value.shape[0]
     q = np.full((n, Layout(linkage).size), np.nan)
     locked = np.full(n, np.nan)
     size = _step_size(linkage, 0)
-    start, closed = _newton(linkage, np.zeros((1, q.shape[1])), np.zeros((1, 1)))
+    start, closed = _closed_drawing(linkage)
     if not closed[0]:   # the drawing itself does not close
         locked[:] = 0.0
         return q, locked

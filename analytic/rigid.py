@@ -10,9 +10,10 @@ exist (:mod:`.joint_kinds` does); the engine's modules and the kinds both build 
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -341,23 +342,31 @@ class ForceLayout:
             b[:, r + 2] += torque
 
 
-#: :func:`force_layout`'s layouts, by the identity of their linkage (each holds its linkage,
-#: so an identity is not reused while kept), the most recent last.
-_KEPT_LAYOUTS: dict[int, ForceLayout] = {}
-KEPT_LAYOUTS = 32
-_LAYOUTS_LOCK = threading.Lock()
+#: What :func:`kept` keeps: by the identity of a linkage and a name, the linkage itself
+#: (so that its identity is not reused while kept) and the value, the most recent last.
+_KEPT: dict[tuple[int, str], tuple[Linkage, Any]] = {}
+KEPT_VALUES = 64
+_KEPT_LOCK = threading.Lock()
+T = TypeVar("T")
+
+
+def kept(linkage: Linkage, what: str, make: Callable[[], T]) -> T:
+    """``make()``, a value that depends on the linkage alone, kept for the last few
+    linkages: a case solved again does not derive it again. ``what`` names the value."""
+    key = (id(linkage), what)
+    found = _KEPT.get(key)
+    if found is not None and found[0] is linkage:
+        value: T = found[1]
+        return value
+    value = make()
+    with _KEPT_LOCK:  # solves may run in several threads
+        _KEPT[key] = (linkage, value)
+        while len(_KEPT) > KEPT_VALUES:
+            del _KEPT[next(iter(_KEPT))]
+    return value
 
 
 def force_layout(linkage: Linkage) -> ForceLayout:
-    """The linkage's :class:`ForceLayout`, kept for the last few linkages: its columns and
-    scales are derived once, not on every solve of a case (they cost as much as a pose's
-    statics)."""
-    found = _KEPT_LAYOUTS.get(id(linkage))
-    if found is not None and found.linkage is linkage:
-        return found
-    found = ForceLayout(linkage)
-    with _LAYOUTS_LOCK:  # solves may run in several threads
-        _KEPT_LAYOUTS[id(linkage)] = found
-        while len(_KEPT_LAYOUTS) > KEPT_LAYOUTS:
-            del _KEPT_LAYOUTS[next(iter(_KEPT_LAYOUTS))]
-    return found
+    """The linkage's :class:`ForceLayout`, kept (:func:`kept`): its columns and scales are
+    derived once, not on every solve of a case (they cost as much as a pose's statics)."""
+    return kept(linkage, "force layout", lambda: ForceLayout(linkage))
