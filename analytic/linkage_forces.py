@@ -273,11 +273,11 @@ def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
     out: dict[str, Array] = {}
     carriers = linkage.carriers
     for name, drawn in linkage.points.items():
-        position = pose.point(carriers[name], drawn)[0]
+        position = pose.position(carriers[name], drawn)
         out[f"x_{name}"] = position[:, 0] + linkage.offset[0]
         out[f"y_{name}"] = position[:, 1] + linkage.offset[1]
     for link in linkage.moving_links:
-        out[f"phi_{link}"] = pose.angle(link)[0]
+        out[f"phi_{link}"] = pose.link_state(link, pose.q)[1]
     for joint in linkage.joints:
         out[f"q_{joint.name}"] = pose.joint_coordinate(joint)[0]
     return out

@@ -103,6 +103,14 @@ class LinkagePose:
         acceleration = a + alpha[:, None] * across - (omega**2)[:, None] * r
         return position, velocity, acceleration
 
+    def position(self, link: str, drawn: ArrayLike) -> Array:
+        """:meth:`point`'s position alone (N, 2): the same numbers, without the rates."""
+        p0 = np.asarray(drawn, dtype=float)
+        t, phi = self.link_state(link, self.q)
+        k = link_column(self.linkage, link)
+        return np.asarray(t + (turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)),
+                          dtype=np.float64)
+
     def turn(self, k: int) -> Turn:
         """The rotation (:func:`.rigid.turn_of`) of the link whose t_x is column ``k`` of q,
         computed once (every point the link carries is turned by it)."""
