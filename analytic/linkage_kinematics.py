@@ -219,7 +219,12 @@ def unit_scales(linkage: Linkage, *, drivers: bool = True) -> tuple[Array, Array
     """Row and column scales that make the constraint system a system in lengths: rotation
     columns become L·φ (L the linkage's size) and angle rows are multiplied by L. Solved
     in these units, least-squares and least-norm steps, residuals and ranks do not depend on
-    where the drawing sits, how it is turned or how large it is."""
+    where the drawing sits, how it is turned or how large it is. Kept with the linkage
+    (:func:`.rigid.kept`; read-only): every Newton step and solve asks for them."""
+    return kept(linkage, f"unit scales, drivers {drivers}", lambda: _unit_scales(linkage, drivers))
+
+
+def _unit_scales(linkage: Linkage, drivers: bool) -> tuple[Array, Array]:
     size = linkage.scale
     cols = np.ones(Layout(linkage).size)
     cols[2::3] = 1.0 / size
@@ -228,7 +233,10 @@ def unit_scales(linkage: Linkage, *, drivers: bool = True) -> tuple[Array, Array
         rows += joint.kind.row_lengths(size)
     if drivers:
         rows += [linkage.joint(d.joint).kind.length(size) for d in linkage.drivers]
-    return np.array(rows), cols
+    out = np.array(rows)
+    out.flags.writeable = False
+    cols.flags.writeable = False
+    return out, cols
 
 
 def solve_in_lengths(linkage: Linkage, jac: Batched, rhs: Array, *,
