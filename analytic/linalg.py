@@ -42,6 +42,12 @@ LANCZOS_TOL = 1e-12
 RANK_RTOL = 1e-9
 
 
+#: Up to this many poses, a matrix's entries are summed into it by one ``np.add.at`` over
+#: all of them (one pose pays for a few calls, not one per entry); beyond it, entry by
+#: entry, each a contiguous row of poses (``np.add.at`` is 3× slower on long rows).
+FEW_POSES = 64
+
+
 @dataclass
 class Batched:
     """A (rows × columns) matrix at each of N poses, held as its entries."""
@@ -51,7 +57,10 @@ class Batched:
     poses: int
     _r: list[int] = field(default_factory=list)
     _c: list[int] = field(default_factory=list)
-    _v: list[Array] = field(default_factory=list)
+    #: Each entry's values (N,), or all of them stacked (entries, N) once derived.
+    _v: list[Array] | Array = field(default_factory=list)
+    #: A number's row of N values, made once per matrix (entries are never written to).
+    _constants: dict[float, Array] = field(default_factory=dict, repr=False)
 
     @classmethod
     def from_dense(cls, m: Array) -> Batched:
@@ -63,28 +72,69 @@ class Batched:
 
     def add(self, row: int, col: int, values: Array | float) -> None:
         """Add ``values`` (N,) (or one number for every pose) at (row, col)."""
+        if not isinstance(self._v, list):
+            self._v = list(self._v)
         self._r.append(row)
         self._c.append(col)
+        if isinstance(values, (float, int)):
+            self._v.append(self._constant(float(values)))
+            return
         v = np.asarray(values, dtype=float)
         # Most entries are already a value per pose: broadcasting costs more than the entry.
         self._v.append(v if v.shape == (self.poses,) else np.broadcast_to(v, (self.poses,)))
+
+    def add_rows(self, row: int, col: int, values: Array) -> None:
+        """Add the rows of ``values`` (k, N) at (row, col), (row + 1, col), …: a few entries
+        of one column computed together."""
+        if not isinstance(self._v, list):
+            self._v = list(self._v)
+        self._r.extend(range(row, row + values.shape[0]))
+        self._c.extend([col] * values.shape[0])
+        self._v.extend(values)
+
+    def _constant(self, value: float) -> Array:
+        row = self._constants.get(value)
+        if row is None:
+            row = np.full(self.poses, value)
+            row.flags.writeable = False
+            self._constants[value] = row
+        return row
 
     @property
     def small(self) -> bool:
         return self.cols <= DENSE_COLUMNS
 
+    @property
+    def distinct(self) -> bool:
+        """No two entries at one place (so scaling the entries or the dense matrix is the
+        same arithmetic)."""
+        return len(set(zip(self._r, self._c, strict=True))) == len(self._r)
+
+    @property
+    def pattern(self) -> NDArray[np.bool_]:
+        """(rows, cols): where the matrix has entries."""
+        out = np.zeros((self.rows, self.cols), dtype=bool)
+        out[self.index()] = True
+        return out
+
     def values(self) -> Array:
         """(entries, N)."""
+        if not isinstance(self._v, list):
+            return self._v
         return np.array(self._v) if self._v else np.zeros((0, self.poses))
 
     def index(self) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         return np.asarray(self._r, dtype=np.intp), np.asarray(self._c, dtype=np.intp)
 
     def dense(self) -> Array:
-        """(N, rows, cols), duplicates summed."""
+        """(N, rows, cols), duplicates summed (in the order they were added)."""
         out = np.zeros((self.rows, self.cols, self.poses))
-        for r, c, v in zip(self._r, self._c, self._v, strict=True):
-            out[r, c] += v   # a row of N contiguous values per entry
+        if self.poses <= FEW_POSES:
+            if self._r:
+                np.add.at(out, self.index(), self.values())
+        else:
+            for r, c, v in zip(self._r, self._c, self._v, strict=True):
+                out[r, c] += v   # a row of N contiguous values per entry
         return np.moveaxis(out, 2, 0)
 
     def at(self, pose: int) -> sparse.csc_matrix:
@@ -92,14 +142,16 @@ class Batched:
         from scipy import sparse
 
         r, c = self.index()
-        v = self.values()[:, pose] if self._v else np.zeros(0)
+        v = self.values()[:, pose] if self._r else np.zeros(0)
         return sparse.csc_matrix((v, (r, c)), shape=(self.rows, self.cols))
 
     def scaled(self, row_scale: Array, col_scale: Array) -> Batched:
         """diag(row_scale)·A·diag(col_scale); ``row_scale`` (N, rows), ``col_scale`` (cols,)."""
-        out = Batched(self.rows, self.cols, self.poses)
-        for r, c, v in zip(self._r, self._c, self._v, strict=True):
-            out.add(r, c, v * row_scale[:, r] * col_scale[c])
+        out = Batched(self.rows, self.cols, self.poses, list(self._r), list(self._c))
+        if self._r:
+            r, c = self.index()
+            # Entry by entry as v · row_scale · col_scale, all entries in three operations.
+            out._v = self.values() * row_scale.T[r] * col_scale[c][:, None]
         return out
 
     def row_norms(self) -> Array:
@@ -114,7 +166,8 @@ class Batched:
 
     def plus(self, other: Batched) -> Batched:
         out = Batched(self.rows, self.cols, self.poses)
-        out._r, out._c, out._v = self._r + other._r, self._c + other._c, self._v + other._v
+        out._r, out._c = self._r + other._r, self._c + other._c
+        out._v = list(self._v) + list(other._v)
         return out
 
 
@@ -203,6 +256,11 @@ def condition(a: Batched) -> Array:
     for pose in np.flatnonzero(finite):
         out[pose] = _condition_sparse(a.at(int(pose)))
     return out
+
+
+def condition_of_dense(m: Array) -> Array:
+    """:func:`condition` of dense matrices (N, rows, cols)."""
+    return _condition_dense(m)
 
 
 def _condition_dense(m: Array) -> Array:

@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
+from mechcheck.analytic.resultant import Resultant, resultants
 from mechcheck.analytic.values import GROUND, Vec2
 
 if TYPE_CHECKING:
@@ -166,6 +167,28 @@ class AssurPlan:
     def step(self) -> float:
         """The grid of the driver's travel (:data:`GRID_STEP`)."""
         return GRID_STEP
+
+    @cached_property
+    def quantity_names(self) -> tuple[str, ...]:
+        """The quantities of :func:`.linkage_forces.solve_linkage`, in its order (kept: a
+        case solved again does not spell them again)."""
+        linkage = self.linkage
+        names = [f"{axis}_{p}" for p in linkage.points for axis in "xy"]
+        names += [f"phi_{link}" for link in linkage.moving_links]
+        names += [f"q_{j.name}" for j in linkage.joints]
+        names += [name for j in linkage.joints for name in j.kind.quantities(j)]
+        names += [f"Q_{d.joint}" for d in linkage.drivers]
+        return tuple(names + [f"S_{s.name}" for s in linkage.springs])
+
+    @cached_property
+    def constants(self) -> dict[str, Resultant]:
+        """Every constant force on each moving link (loads, weights) folded into one."""
+        linkage = self.linkage
+        g = linkage.gravity
+        loads = [(ld.link, ld.at, ld.force, ld.torque) for ld in linkage.loads]
+        loads += [(m.link, m.com, (m.mass * g[0], m.mass * g[1]), 0.0) for m in linkage.masses]
+        folded = resultants(loads)
+        return {link: folded.get(link, Resultant()) for link in linkage.moving_links}
 
 
 def assur_plan(linkage: Linkage) -> AssurPlan | None:
@@ -317,7 +340,7 @@ def place(plan: AssurPlan, value: Array) -> Placement:
     """Place every group at driver values ``value`` (N,); angles raw (atan2) for dyad links,
     exact for cranks (relative to their body's raw angle)."""
     frames: dict[str, Frame] = {GROUND: GROUND_FRAME}
-    angles: dict[str, Array] = {GROUND: np.zeros(1)}
+    angles: dict[str, Array] = {GROUND: np.zeros(())}   # adds to one pose or to many
     points: dict[int, tuple[Array | float, ...]] = {}
     closed = np.ones(value.shape, dtype=bool)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -408,14 +431,24 @@ class Path:
 
     def lift(self, link: str, value: Array, raw: Array) -> Array:
         """The continuous angle of ``link`` at ``value`` from its raw atan2 angle."""
-        nodes = self.node_angles[link]
-        reachable = np.flatnonzero(np.isfinite(nodes))
-        if np.all(np.abs(nodes[reachable]) < NO_WRAP):
+        span = self.spans[link]
+        if span is None:
             return raw
-        index = np.clip(np.rint(value / self.step).astype(np.int64) - self.first,
-                        reachable[0], reachable[-1])
+        nodes = self.node_angles[link]
+        index = np.clip(np.rint(value / self.step).astype(np.int64) - self.first, *span)
         ref = nodes[index]
         return raw + math.tau * np.rint((ref - raw) / math.tau)
+
+    @cached_property
+    def spans(self) -> dict[str, tuple[int, int] | None]:
+        """Each link's first and last reachable node, or None where its raw angle is
+        already the continuous one (:data:`NO_WRAP`); found once per path, not per chunk."""
+        out: dict[str, tuple[int, int] | None] = {}
+        for link, nodes in self.node_angles.items():
+            reachable = np.flatnonzero(np.isfinite(nodes))
+            wraps = not np.all(np.abs(nodes[reachable]) < NO_WRAP)
+            out[link] = (int(reachable[0]), int(reachable[-1])) if wraps else None
+        return out
 
 
 def path(plan: AssurPlan, values: Array) -> Path:
@@ -510,6 +543,8 @@ def assur_positions(plan: AssurPlan, values: Array) -> tuple[Array, Array]:
 def reachable(route: Path, value: Array, placed: Placement) -> tuple[NDArray[np.bool_], Array]:
     """Which poses the path reaches, and the fraction of the travel where the others lock."""
     inside = (value >= route.lo) & (value <= route.hi) & placed.closed
+    if route.lo == -math.inf and route.hi == math.inf:  # no lock either way: none locks
+        return inside, np.full(np.shape(value), np.nan)
     with np.errstate(invalid="ignore", divide="ignore"):
         locked = np.where(value > route.hi, route.hi / value,
                           np.where(value < route.lo, route.lo / value, np.nan))

@@ -120,8 +120,11 @@ class DecidedPoses:
 
 def texts(n: int, text: str) -> NDArray[np.object_]:
     """``text`` at each of n poses, as an array of Python strings (``np.full`` assigns an
-    object array element by element: 20 times slower for a sweep's 10⁶ poses)."""
-    return np.repeat(np.array([text], dtype=object), n)
+    object array element by element: 40 times slower for a sweep's 10⁶ poses; ``fill``
+    twice as fast as ``np.repeat``)."""
+    out = np.empty(n, dtype=object)
+    out.fill(text)
+    return out
 
 
 Rule = tuple[NDArray[np.bool_], Status, Callable[[int], str]]

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic import linalg
 from mechcheck.analytic.linalg import Batched
-from mechcheck.analytic.linkage import Joint, Linkage
+from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage
 from mechcheck.analytic.linkage_elastic import axial_forces, compatible_forces
 from mechcheck.analytic.linkage_equilibrium import equilibrium_poses
 from mechcheck.analytic.linkage_kinematics import (
@@ -38,7 +38,7 @@ from mechcheck.analytic.linkage_kinematics import (
     solve_pose,
 )
 from mechcheck.analytic.linkage_loads import known_vector, spring_force, undirected_springs
-from mechcheck.analytic.rigid import ForceLayout
+from mechcheck.analytic.rigid import force_layout
 
 #: Above this condition number of the scaled equilibrium matrix the pose is singular and
 #: its forces withheld (the same line as the closed-form presets, for the same reason).
@@ -60,7 +60,7 @@ def coefficient_entries(pose: LinkagePose) -> Batched:
     """K as entries (:class:`~.linalg.Batched`): each joint's reactions as its kind puts them
     in, then each driver's effort, a few entries per joint whatever the linkage's size."""
     linkage = pose.linkage
-    layout = ForceLayout(linkage)
+    layout = force_layout(linkage)
     k = Batched(layout.rows, layout.columns, pose.q.shape[0])
     frames = {j.name: j.kind.frame(pose, j) for j in linkage.joints}
     for joint in linkage.joints:
@@ -115,7 +115,7 @@ def coulomb_terms(pose: LinkagePose) -> list[CoulombTerm]:
 def friction_residual(pose: LinkagePose, terms: list[CoulombTerm], x: Array) -> tuple[Array, Array]:
     """φ(x) (N, 3n) and ∂φ/∂x (N, 3n, unknowns) of the Coulomb terms, each as its joint's
     kind applies it."""
-    layout = ForceLayout(pose.linkage)
+    layout = force_layout(pose.linkage)
     n = x.shape[0]
     phi = np.zeros((n, layout.rows))
     dphi = np.zeros((n, layout.rows, layout.columns))
@@ -176,24 +176,36 @@ def condition(pose: LinkagePose, k: Batched | Array) -> Array:
     entries = k if isinstance(k, Batched) else Batched.from_dense(k)
     if 0 in (entries.rows, entries.cols):
         return np.ones(entries.poses)
-    layout = ForceLayout(linkage)
-    cols = np.ones(layout.columns)
-    for joint in linkage.joints:
-        cols[list(layout.joint_columns(joint))] = joint.kind.reaction_lengths(linkage.scale)
-    for index, driver in enumerate(linkage.drivers):
-        cols[layout.driver_column(index)] = linkage.joint(driver.joint).kind.length(linkage.scale)
+    layout = force_layout(linkage)
+    cols = layout.unknown_lengths
     rows = np.ones(layout.rows)
     rows[2::3] = 1.0 / linkage.scale
+    if entries.small and entries.distinct:
+        return _condition_small(entries, rows, cols)
     first = entries.scaled(np.broadcast_to(rows, (entries.poses, rows.size)), cols)
-    norms = first.row_norms()
+    # A pose that does not assemble has no matrix: its condition is infinite by definition
+    # (its entries are not finite, and linalg.condition says so).
+    return linalg.condition(first.scaled(_unit_rows(first.row_norms()), np.ones(layout.columns)))
+
+
+def _unit_rows(norms: Array) -> Array:
+    """The row scales that make each link's two force rows together, and its moment row,
+    of unit length (1 for a row of zeros); ``norms`` (N, rows), overwritten."""
     pair = np.sqrt(0.5 * (norms[:, 0::3] ** 2 + norms[:, 1::3] ** 2))
     norms[:, 0::3] = pair
     norms[:, 1::3] = pair
     with np.errstate(divide="ignore", invalid="ignore"):
-        unit = np.where(norms > 0.0, 1.0 / norms, 1.0)
-    # A pose that does not assemble has no matrix: its condition is infinite by definition
-    # (its entries are not finite, and linalg.condition says so).
-    return linalg.condition(first.scaled(unit, np.ones(layout.columns)))
+        return np.asarray(np.where(norms > 0.0, 1.0 / norms, 1.0), dtype=np.float64)
+
+
+def _condition_small(entries: Batched, rows: Array, cols: Array) -> Array:
+    """:func:`condition` of a small K with at most one entry per place, scaled as a dense
+    matrix: each entry goes through the same products as :meth:`.Batched.scaled` (so the
+    same number), in a few calls rather than a few per entry (one pose pays for calls)."""
+    first = entries.dense() * rows[:, None] * cols
+    unit = _unit_rows(np.asarray(np.linalg.norm(first, axis=2), dtype=np.float64))
+    second = np.where(entries.pattern, first * unit[:, :, None], 0.0)   # × 1: the columns
+    return linalg.condition_of_dense(second)
 
 
 @dataclass(frozen=True)
@@ -272,11 +284,11 @@ def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
     out: dict[str, Array] = {}
     carriers = linkage.carriers
     for name, drawn in linkage.points.items():
-        position = pose.point(carriers[name], drawn)[0]
+        position = pose.position(carriers[name], drawn)
         out[f"x_{name}"] = position[:, 0] + linkage.offset[0]
         out[f"y_{name}"] = position[:, 1] + linkage.offset[1]
     for link in linkage.moving_links:
-        out[f"phi_{link}"] = pose.angle(link)[0]
+        out[f"phi_{link}"] = pose.link_state(link, pose.q)[1]
     for joint in linkage.joints:
         out[f"q_{joint.name}"] = pose.joint_coordinate(joint)[0]
     return out
@@ -286,7 +298,7 @@ def force_quantities(pose: LinkagePose, x: Array, terms: list[CoulombTerm]) -> d
     """Each joint's reactions as its kind reports them (a slide's force with its friction
     along the axis), Q_<joint> and S_<spring>, from the unknowns x."""
     linkage = pose.linkage
-    layout = ForceLayout(linkage)
+    layout = force_layout(linkage)
     coulomb = {t.joint.name: t for t in terms}
     out: dict[str, Array] = {}
     for joint in linkage.joints:
@@ -380,14 +392,22 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
     assert linkage.assur_plan is not None
     vals = np.array([[d.value for d in linkage.drivers]]) if values is None \
         else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, len(linkage.drivers))
-    found = static_results(linkage.assur_plan, vals)
+    # One pose (a case solved on its own) reports its exact condition number: the bound,
+    # which spares most poses of a sweep theirs, would be computed for nothing.
+    found = static_results(linkage.assur_plan, vals, bounded=vals.shape[0] > 1)
     pose = found.pose
     exact = _ExactCondition(pose)
     singular = _singular_by_bound(pose, found.condition_bound, exact)
-    undirected = undirected_springs(pose)
-    for name, value in found.values.items():
-        if name.startswith(("F_", "Q_")):
-            value[singular | (undirected != "")] = np.nan
+    if any(isinstance(s, LinearSpring) for s in linkage.springs):
+        undirected = undirected_springs(pose)
+        withheld = singular | (undirected != "")
+    else:   # only a linear spring can pull along no line: none here (its "" at every pose)
+        undirected = np.zeros(pose.q.shape[0], dtype="<U1")
+        withheld = singular
+    if withheld.any():
+        for name, value in found.values.items():
+            if name.startswith(("F_", "Q_")):
+                value[withheld] = np.nan
     n = vals.shape[0]
     return LinkageResults(pose, found.values, exact.all, singular, np.ones(n, dtype=bool),
                           np.zeros(n, dtype="<U1"), undirected=undirected)
@@ -402,7 +422,9 @@ class _ExactCondition:
 
     def of(self, which: NDArray[np.bool_]) -> Array:
         todo = which & np.isnan(self.known)
-        if todo.any():
+        if todo.all():  # every pose (a case solved on its own): K from the pose as it is
+            self.known = condition(self.pose, coefficient_entries(self.pose))
+        elif todo.any():
             rest = np.zeros_like(self.pose.q[todo])
             near = LinkagePose(self.pose.linkage, self.pose.drivers[todo], self.pose.q[todo], rest,
                                rest, self.pose.locked_at[todo])

@@ -27,7 +27,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic import linalg
 from mechcheck.analytic.linalg import Batched
-from mechcheck.analytic.rigid import Array, Constraints, Layout, Motion, perp, rotate
+from mechcheck.analytic.rigid import (
+    Array,
+    Constraints,
+    Layout,
+    Motion,
+    Turn,
+    kept,
+    link_column,
+    perp,
+    rotate,
+    turn_of,
+    turned,
+)
 
 if TYPE_CHECKING:
     from mechcheck.analytic.linkage import Joint, Linkage
@@ -71,7 +83,7 @@ class LinkagePose:
 
     def link_state(self, link: str, which: Array) -> tuple[Array, Array]:
         """(t (N, 2), φ (N,)) of ``link`` from one of q, q̇, q̈."""
-        k = Layout(self.linkage).index(link)
+        k = link_column(self.linkage, link)
         n = which.shape[0]
         if k < 0:
             return np.zeros((n, 2)), np.zeros(n)
@@ -84,11 +96,44 @@ class LinkagePose:
         t, phi = self.link_state(link, self.q)
         v, omega = self.link_state(link, self.qdot)
         a, alpha = self.link_state(link, self.qddot)
-        r = rotate(phi, p0)
+        k = link_column(self.linkage, link)
+        r = turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)
         position = t + r
-        velocity = v + omega[:, None] * perp(r)
-        acceleration = a + alpha[:, None] * perp(r) - (omega**2)[:, None] * r
+        if self.at_rest:    # what the sums below give: +0 at every pose
+            return position, np.zeros(position.shape), np.zeros(position.shape)
+        across = perp(r)
+        velocity = v + omega[:, None] * across
+        acceleration = a + alpha[:, None] * across - (omega**2)[:, None] * r
         return position, velocity, acceleration
+
+    def position(self, link: str, drawn: ArrayLike) -> Array:
+        """:meth:`point`'s position alone (N, 2): the same numbers, without the rates."""
+        p0 = np.asarray(drawn, dtype=float)
+        t, phi = self.link_state(link, self.q)
+        k = link_column(self.linkage, link)
+        return np.asarray(t + (turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)),
+                          dtype=np.float64)
+
+    def turn(self, k: int) -> Turn:
+        """The rotation (:func:`.rigid.turn_of`) of the link whose t_x is column ``k`` of q,
+        computed once (every point the link carries is turned by it)."""
+        found = self.turns.get(k)
+        if found is None:
+            found = self.turns[k] = turn_of(self.q[:, k + 2])
+        return found
+
+    @cached_property
+    def at_rest(self) -> bool:
+        """Every rate exactly +0 and every pose assembled (finite): then every point's
+        velocity and acceleration in :meth:`point` are +0 (+0 + (±0) is +0)."""
+        return bool(self.assembled.all() and not (
+            self.qdot.any() or self.qddot.any()
+            or np.signbit(self.qdot).any() or np.signbit(self.qddot).any()))
+
+    @cached_property
+    def turns(self) -> dict[int, Turn]:
+        """The links' rotations computed so far (:meth:`turn`)."""
+        return {}
 
     def angle(self, link: str) -> tuple[Array, Array, Array]:
         """φ, ω, α of ``link`` (rotation from the drawn pose)."""
@@ -103,6 +148,13 @@ class LinkagePose:
     def assembled(self) -> NDArray[np.bool_]:
         """Which poses the linkage reaches (asked for by every verdict: computed once)."""
         return np.all(np.isfinite(self.q), axis=1)
+
+
+def known_assembled(pose: LinkagePose, assembled: NDArray[np.bool_]) -> LinkagePose:
+    """``pose`` with :attr:`LinkagePose.assembled` given (a solver that wrote q chunk by
+    chunk knows it without another pass over all of q)."""
+    pose.__dict__["assembled"] = assembled   # what the cached property stores
+    return pose
 
 
 # -- constraints ------------------------------------------------------------------------
@@ -170,7 +222,12 @@ def unit_scales(linkage: Linkage, *, drivers: bool = True) -> tuple[Array, Array
     """Row and column scales that make the constraint system a system in lengths: rotation
     columns become L·φ (L the linkage's size) and angle rows are multiplied by L. Solved
     in these units, least-squares and least-norm steps, residuals and ranks do not depend on
-    where the drawing sits, how it is turned or how large it is."""
+    where the drawing sits, how it is turned or how large it is. Kept with the linkage
+    (:func:`.rigid.kept`; read-only): every Newton step and solve asks for them."""
+    return kept(linkage, f"unit scales, drivers {drivers}", lambda: _unit_scales(linkage, drivers))
+
+
+def _unit_scales(linkage: Linkage, drivers: bool) -> tuple[Array, Array]:
     size = linkage.scale
     cols = np.ones(Layout(linkage).size)
     cols[2::3] = 1.0 / size
@@ -179,7 +236,10 @@ def unit_scales(linkage: Linkage, *, drivers: bool = True) -> tuple[Array, Array
         rows += joint.kind.row_lengths(size)
     if drivers:
         rows += [linkage.joint(d.joint).kind.length(size) for d in linkage.drivers]
-    return np.array(rows), cols
+    out = np.array(rows)
+    out.flags.writeable = False
+    cols.flags.writeable = False
+    return out, cols
 
 
 def solve_in_lengths(linkage: Linkage, jac: Batched, rhs: Array, *,
@@ -266,13 +326,24 @@ def continuation_positions(linkage: Linkage, values: Array) -> tuple[Array, Arra
     return q, locked
 
 
+def _closed_drawing(linkage: Linkage) -> tuple[Array, NDArray[np.bool_]]:
+    """The drawing closed by Newton's method (q (1, 3n), and whether it closed): the start
+    of every path, kept with the linkage (:func:`.rigid.kept`), read-only."""
+    def close() -> tuple[Array, NDArray[np.bool_]]:
+        q, ok = _newton(linkage, np.zeros((1, Layout(linkage).size)), np.zeros((1, 1)))
+        q.flags.writeable = False
+        ok.flags.writeable = False
+        return q, ok
+    return kept(linkage, "closed drawing", close)
+
+
 def _walked_positions(linkage: Linkage, value: Array) -> tuple[Array, Array]:
     """:func:`continuation_positions` of one driver at values (N,)."""
     n = value.shape[0]
     q = np.full((n, Layout(linkage).size), np.nan)
     locked = np.full(n, np.nan)
     size = _step_size(linkage, 0)
-    start, closed = _newton(linkage, np.zeros((1, q.shape[1])), np.zeros((1, 1)))
+    start, closed = _closed_drawing(linkage)
     if not closed[0]:   # the drawing itself does not close
         locked[:] = 0.0
         return q, locked

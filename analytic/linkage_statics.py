@@ -36,8 +36,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
-from mechcheck.analytic.linkage import Joint, Linkage, TorsionSpring
+from mechcheck.analytic.linkage import Joint, TorsionSpring
 from mechcheck.analytic.linkage_assur import (
     AssurPlan,
     Crank,
@@ -51,25 +52,16 @@ from mechcheck.analytic.linkage_assur import (
     place,
     reachable,
 )
-from mechcheck.analytic.linkage_kinematics import Array, LinkagePose
+from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, known_assembled
 from mechcheck.analytic.linkage_loads import spring_axis
-from mechcheck.analytic.resultant import Resultant, resultants
-from mechcheck.analytic.values import GROUND
+from mechcheck.analytic.resultant import Resultant
+from mechcheck.analytic.values import GROUND, Vec2
 
 #: Longest plan the condition bound is tried on: each group multiplies the bound by a
 #: factor above 1, so for longer chains it exceeds the singular threshold whatever the pose.
 BOUND_GROUPS = 24
 #: Poses per chunk: ~30 live arrays of this many doubles stay within a core's L2 cache.
 CHUNK = 8192
-
-
-def link_constants(linkage: Linkage) -> dict[str, Resultant]:
-    """Every constant force on each moving link (loads, weights) folded into one."""
-    g = linkage.gravity
-    loads = [(ld.link, ld.at, ld.force, ld.torque) for ld in linkage.loads]
-    loads += [(m.link, m.com, (m.mass * g[0], m.mass * g[1]), 0.0) for m in linkage.masses]
-    folded = resultants(loads)
-    return {link: folded.get(link, Resultant()) for link in linkage.moving_links}
 
 
 @dataclass(frozen=True)
@@ -82,39 +74,54 @@ class StaticResults:
     condition_bound: Array
 
 
-def static_results(plan: AssurPlan, values: Array) -> StaticResults:
+def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> StaticResults:
     """Statics at each driver value (N, 1): pose, reactions, efforts, springs, and the bound
-    from which :func:`.linkage_forces.solve_linkage` decides the singular verdicts."""
+    from which :func:`.linkage_forces.solve_linkage` decides the singular verdicts (infinite
+    without ``bounded``: the exact condition numbers will be computed anyway)."""
     linkage = plan.linkage
     value = np.ascontiguousarray(values[:, 0], dtype=float)
     n = value.shape[0]
     route = path(plan, value)
-    names = quantity_names(linkage)
-    out = {name: np.empty(n) for name in names}
-    q = np.empty((n, 3 * len(linkage.moving_links)))
+    names = plan.quantity_names
+    # One block, a row per quantity: one allocation, not one per column.
+    out = dict(zip(names, np.empty((len(names), n)), strict=True))
+    # Column-major: each coordinate is written (and read by the pose's links) as one
+    # contiguous column, not strided across rows.
+    q = np.empty((3 * len(linkage.moving_links), n)).T
     locked = np.empty(n)
-    bound = np.empty(n)
-    constants = link_constants(linkage)
+    bound = np.full(n, np.inf)
+    constants = plan.constants
+    inside = np.empty(n, dtype=bool)
     for start in range(0, n, CHUNK):
         part = slice(start, min(start + CHUNK, n))
-        chunk = _Chunk(plan, route, value[part], constants)
-        chunk.write(out, q, locked, bound, part)
-    inside = np.isfinite(q).all(axis=1)
+        chunk = _Chunk(plan, route, _chunk_values(value, part), constants)
+        chunk.write(out, q, locked, bound if bounded else None, part)
+        inside[part] = _finite_rows(q[part])   # while the chunk is in cache
     qdot, qddot = np.zeros(q.shape), np.zeros(q.shape)   # untouched pages cost nothing
-    qdot[~inside] = np.nan
-    qddot[~inside] = np.nan
+    if not inside.all():
+        qdot[~inside] = np.nan
+        qddot[~inside] = np.nan
     pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
-    return StaticResults(pose, out, bound)
+    return StaticResults(known_assembled(pose, inside), out, bound)
 
 
-def quantity_names(linkage: Linkage) -> list[str]:
-    """The quantities of :func:`.linkage_forces.solve_linkage`, in its order."""
-    names = [f"{axis}_{p}" for p in linkage.points for axis in "xy"]
-    names += [f"phi_{link}" for link in linkage.moving_links]
-    names += [f"q_{j.name}" for j in linkage.joints]
-    names += [name for j in linkage.joints for name in j.kind.quantities(j)]
-    names += [f"Q_{d.joint}" for d in linkage.drivers]
-    return names + [f"S_{s.name}" for s in linkage.springs]
+def _finite_rows(block: Array) -> NDArray[np.bool_]:
+    """Which rows of ``block`` are finite throughout: column by column (a reduction along
+    rows of a few columns costs twice as much)."""
+    if block.shape[0] == 1:     # one pose: one call
+        return np.asarray(np.isfinite(block).all(axis=1))
+    finite = np.isfinite(block[:, 0])
+    for k in range(1, block.shape[1]):
+        finite &= np.isfinite(block[:, k])
+    return finite
+
+
+def _chunk_values(value: Array, part: slice) -> Array:
+    """The driver values of a chunk; a single pose's as a number (0-d), whose arithmetic
+    costs a tenth of a one-element array's and rounds the same."""
+    if value.shape[0] == 1:
+        return value[0]
+    return value[part]
 
 
 class _Chunk:
@@ -130,14 +137,21 @@ class _Chunk:
         self.angle = {link: continuous_angle(plan, route, link, value, self.placed)
                       for link in self.linkage.moving_links}
         self.constants = constants
+        self.carried: dict[tuple[str, Vec2], tuple[Array | float, Array | float]] = {}
 
     def frame(self, link: str) -> tuple[Array | float, ...]:
         return self.placed.frames[link]
 
-    def point(self, link: str, p0: tuple[float, float]) -> tuple[Array | float, Array | float]:
-        return on_body(self.placed.frames[link], p0)
+    def point(self, link: str, p0: Vec2) -> tuple[Array | float, Array | float]:
+        """Where ``link`` carries its drawn point ``p0`` now: computed once per chunk (the
+        output, the loads, the elimination and the bound all ask for the joints' points)."""
+        key = (link, p0)
+        found = self.carried.get(key)
+        if found is None:
+            found = self.carried[key] = on_body(self.placed.frames[link], p0)
+        return found
 
-    def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array,
+    def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array | None,
               part: slice) -> None:
         linkage = self.linkage
         for name, p0 in linkage.points.items():
@@ -159,8 +173,9 @@ class _Chunk:
         for name, f in forces.items():
             out[name][part] = f
         locked[part] = self.locked
-        bound[part] = self.condition_bound()
-        nan = ~self.inside
+        if bound is not None:
+            bound[part] = self.condition_bound()
+        nan = np.atleast_1d(~self.inside)
         if nan.any():   # a pose the path does not reach has no pose and no forces
             q[part][nan] = np.nan
             for name in out:
@@ -217,7 +232,7 @@ class _Chunk:
             (la, pa), (lb, pb) = spring.ends
             ax, ay = self.point(la, pa)
             bx, by = self.point(lb, pb)
-            d = np.stack(np.broadcast_arrays(bx - ax, by - ay), axis=-1)
+            d = np.stack(np.broadcast_arrays(bx - ax, by - ay), axis=-1).reshape(-1, 2)
             unit = spring_axis(self.linkage, d)[1]
             fx, fy = tension * unit[:, 0], tension * unit[:, 1]
             _add(b, la, fx, fy, ax, ay)   # tension pulls a toward b
@@ -245,8 +260,8 @@ class _Chunk:
         couple = px * fy - py * fx - m      # the driver's couple on the crank
         sense = 1.0 if group.joint.links[1] == group.link else -1.0
         name = group.joint.name
-        out[f"F_{name}_x"], out[f"F_{name}_y"] = -sense * fx, -sense * fy
-        out[f"Q_{name}"] = sense * couple
+        out[f"F_{name}_x"], out[f"F_{name}_y"] = _signed(-sense, fx), _signed(-sense, fy)
+        out[f"Q_{name}"] = _signed(sense, couple)
         _add(b, group.body, fx, fy, px, py, -couple)
 
     def _dyad(self, index: int, group: Dyad, b: dict[str, list[Array | float]],
@@ -267,7 +282,7 @@ class _Chunk:
         for joint, link, fx, fy in ((group.joints[0], a, g1x, g1y), (group.joints[1], a, gx, gy),
                                     (group.joints[2], c, g2x, g2y)):
             sense = 1.0 if joint.links[1] == link else -1.0
-            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = sense * fx, sense * fy
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = _signed(sense, fx), _signed(sense, fy)
         _add(b, group.bodies[0], -g1x, -g1y, x1, y1)
         _add(b, group.bodies[1], -g2x, -g2y, x2, y2)
 
@@ -291,10 +306,11 @@ class _Chunk:
         couple = mx * gy - my * gx - mb - push * (sx * ux + sy * uy)   # and its couple
         for joint, fx, fy in ((group.joints[0], g1x, g1y), (group.joints[1], gx, gy)):
             sense = 1.0 if joint.links[1] == a else -1.0
-            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = sense * fx, sense * fy
+            out[f"F_{joint.name}_x"], out[f"F_{joint.name}_y"] = _signed(sense, fx), _signed(sense, fy)
         sense = 1.0 if slide.links[1] == c else -1.0    # reported: by links[0] on links[1]
-        out[f"F_{slide.name}_x"], out[f"F_{slide.name}_y"] = -sense * push * uy, sense * push * ux
-        out[f"M_{slide.name}"] = sense * couple
+        out[f"F_{slide.name}_x"] = _signed(-sense, push * uy)
+        out[f"F_{slide.name}_y"] = _signed(sense, push * ux)
+        out[f"M_{slide.name}"] = _signed(sense, couple)
         _add(b, group.bodies[0], -g1x, -g1y, x1, y1)
         _add(b, group.bodies[1], push * uy, -push * ux, sx, sy, -couple)
 
@@ -391,6 +407,12 @@ class _Chunk:
                 + math.sqrt(2.0 * force_row[a])
                 + fb * np.sqrt(1.0 + ((sx * ux + sy * uy) / size)**2)
                 + np.sqrt(moment_row[c]))
+
+
+def _signed(sense: float, value: Array | float) -> Array | float:
+    """``sense · value`` for a sense of ±1: the value or its negation, the same numbers
+    (rounding is symmetric in sign) without a pass over the poses for +1."""
+    return value if sense > 0.0 else -value
 
 
 def _add(b: dict[str, list[Array | float]], link: str, fx: Array | float, fy: Array | float,

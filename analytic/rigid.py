@@ -9,9 +9,11 @@ exist (:mod:`.joint_kinds` does); the engine's modules and the kinds both build 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,15 +27,43 @@ if TYPE_CHECKING:
 Array = NDArray[np.float64]
 
 
+#: perp(v) = v reversed times this: (−v_y, v_x) in one operation (negation and ×−1 are
+#: the same in IEEE arithmetic, signed zeros included).
+_PERP = np.array([-1.0, 1.0])
+
+
 def perp(v: Array) -> Array:
     """v turned +90°."""
-    return _pair(-v[..., 1], v[..., 0])
+    return np.asarray(v[..., ::-1] * _PERP, dtype=np.float64)
 
 
 def rotate(angle: Array, v: Array) -> Array:
     """R(angle)·v for arrays of angles (N,) and a vector (2,) or vectors (N, 2)."""
     c, s = np.cos(angle), np.sin(angle)
+    if np.ndim(v) == 1:     # one vector: its components as numbers (cheaper than 0-d views)
+        x, y = float(v[0]), float(v[1])
+        return _pair(c * x - s * y, s * x + c * y)
     return _pair(c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1])
+
+
+Turn = tuple[Array, Array]
+
+
+def turn_of(angle: Array) -> Turn:
+    """The rotations by ``angle`` (N,) as the images of the x and y axes, (cos, sin) and
+    (−sin, cos), each (N, 2): what :func:`turned` applies."""
+    c, s = np.cos(angle), np.sin(angle)
+    return _pair(c, s), _pair(-s, c)
+
+
+def turned(turn: Turn, v: Array) -> Array:
+    """:func:`rotate` by rotations given as :func:`turn_of`: x·R(e_x) + y·R(e_y), the same
+    products and sums as :func:`rotate` (a + (−b) is a − b in IEEE arithmetic), in three
+    operations for a link turned many times."""
+    ex, ey = turn
+    if np.ndim(v) == 1:
+        return np.asarray(ex * float(v[0]) + ey * float(v[1]), dtype=np.float64)
+    return np.asarray(ex * v[..., 0:1] + ey * v[..., 1:2], dtype=np.float64)
 
 
 def _pair(x: Array, y: Array) -> Array:
@@ -53,6 +83,11 @@ def cross(r: Array, f: Array) -> Array:
     return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
 
 
+def link_column(linkage: Linkage, link: str) -> int:
+    """Column of the link's t_x in q (t_y and φ follow); −1 for the ground."""
+    return -1 if link == GROUND else 3 * linkage.link_number[link]
+
+
 @dataclass(frozen=True)
 class Layout:
     """Where each moving link's three coordinates sit in q, and where each joint's and each
@@ -62,7 +97,7 @@ class Layout:
 
     def index(self, link: str) -> int:
         """Column of the link's t_x (t_y and φ follow); −1 for the ground."""
-        return -1 if link == GROUND else 3 * self.linkage.link_number[link]
+        return link_column(self.linkage, link)
 
     @property
     def size(self) -> int:
@@ -86,10 +121,20 @@ class Constraints:
     q: Array
     phi: Array
     jac: Batched
+    #: Each link's rotation (:func:`turn_of`), by its column, computed once (every joint on
+    #: the link turns its points by it).
+    turns: dict[int, Turn] = field(default_factory=dict)
 
     @property
     def linkage(self) -> Linkage:
         return self.layout.linkage
+
+    def turn(self, k: int) -> Turn:
+        """The rotation (:func:`turn_of`) of the link whose t_x is column ``k`` of q."""
+        found = self.turns.get(k)
+        if found is None:
+            found = self.turns[k] = turn_of(self.q[:, k + 2])
+        return found
 
     def angle(self, link: str) -> Array:
         k = self.layout.index(link)
@@ -101,7 +146,7 @@ class Constraints:
         n = self.q.shape[0]
         if k < 0:
             return np.broadcast_to(p0, (n, 2)).copy(), np.zeros((n, 2))
-        r = rotate(self.q[:, k + 2], p0)
+        r = turned(self.turn(k), p0)
         return self.q[:, k:k + 2] + r, perp(r)
 
     def put(self, row: int, link: str, d_t: Array | None, d_phi: Array | float) -> None:
@@ -142,7 +187,8 @@ class Constraints:
         """Row w_i·(p_j(A0) − p_i(A0)), with w (drawn w0) fixed in the joint's links[0]."""
         i, j = joint.links
         a0 = np.array(self.linkage.points[joint.at])
-        w = rotate(self.angle(i), w0)
+        ki = self.layout.index(i)
+        w = turned(self.turn(ki), w0) if ki >= 0 else rotate(self.angle(i), w0)
         pj, dpj = self.point(j, a0)
         pi, dpi = self.point(i, a0)
         d = pj - pi
@@ -158,10 +204,19 @@ class Motion:
     layout: Layout
     q: Array
     qdot: Array
+    #: Each link's rotation, by its column (as :attr:`Constraints.turns`).
+    turns: dict[int, Turn] = field(default_factory=dict)
 
     @property
     def linkage(self) -> Linkage:
         return self.layout.linkage
+
+    def turn(self, k: int) -> Turn:
+        """The rotation (:func:`turn_of`) of the link whose t_x is column ``k`` of q."""
+        found = self.turns.get(k)
+        if found is None:
+            found = self.turns[k] = turn_of(self.q[:, k + 2])
+        return found
 
     def spin(self, link: str) -> Array:
         k = self.layout.index(link)
@@ -170,7 +225,7 @@ class Motion:
     def rotated(self, link: str, p0: Array) -> Array:
         """R(φ)·P0 of a drawn point on ``link``."""
         k = self.layout.index(link)
-        return rotate(self.q[:, k + 2], p0) if k >= 0 else np.zeros((self.q.shape[0], 2))
+        return turned(self.turn(k), p0) if k >= 0 else np.zeros((self.q.shape[0], 2))
 
     def position(self, link: str, p0: Array) -> Array:
         k = self.layout.index(link)
@@ -189,7 +244,7 @@ class Motion:
         a0 = np.array(self.linkage.points[joint.at])
         n = self.q.shape[0]
         ki = self.layout.index(i)
-        w = rotate(self.q[:, ki + 2], w0) if ki >= 0 else np.broadcast_to(w0, (n, 2))
+        w = turned(self.turn(ki), w0) if ki >= 0 else np.broadcast_to(w0, (n, 2))
         d = self.position(j, a0) - self.position(i, a0)
         dd = self.velocity(j, a0) - self.velocity(i, a0)
         wi = self.spin(i)
@@ -218,8 +273,13 @@ class ForceLayout:
         return out
 
     def joint_columns(self, joint: Joint) -> tuple[int, ...]:
-        first = self._first_columns[joint.name]
-        return tuple(range(first, first + joint.kind.rows))
+        return self._columns_of[joint.name]
+
+    @cached_property
+    def _columns_of(self) -> dict[str, tuple[int, ...]]:
+        first = self._first_columns
+        return {j.name: tuple(range(first[j.name], first[j.name] + j.kind.rows))
+                for j in self.linkage.joints}
 
     def driver_column(self, index: int) -> int:
         return self.joint_unknowns + index
@@ -236,15 +296,31 @@ class ForceLayout:
     def columns(self) -> int:
         return self.joint_unknowns + len(self.linkage.drivers)
 
+    @cached_property
+    def unknown_lengths(self) -> Array:
+        """(columns,): the length that makes each unknown a force (1 for a force, the
+        linkage's size for a couple; the kinds' ``reaction_lengths`` and ``length``)."""
+        linkage = self.linkage
+        cols = np.ones(self.columns)
+        for joint in linkage.joints:
+            cols[list(self.joint_columns(joint))] = joint.kind.reaction_lengths(linkage.scale)
+        for index, driver in enumerate(linkage.drivers):
+            cols[self.driver_column(index)] = linkage.joint(driver.joint).kind.length(linkage.scale)
+        cols.flags.writeable = False
+        return cols
+
     def force_on(self, k: Batched, link: str, col: int, direction: Array, point: Array,
                  sign: float) -> None:
         """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
         r = self.row(link)
         if r < 0:
             return
-        k.add(r, col, sign * direction[:, 0])
-        k.add(r + 1, col, sign * direction[:, 1])
-        k.add(r + 2, col, sign * cross(point, direction))
+        # The three entries (force, and its moment about the origin) in one product.
+        entries = np.empty((3, direction.shape[0]))
+        entries[:2] = direction.T
+        entries[2] = cross(point, direction)
+        entries *= sign
+        k.add_rows(r, col, entries)
 
     def couple_on(self, k: Batched, link: str, col: int, sign: float) -> None:
         r = self.row(link)
@@ -264,3 +340,33 @@ class ForceLayout:
         r = self.row(link)
         if r >= 0:
             b[:, r + 2] += torque
+
+
+#: What :func:`kept` keeps: by the identity of a linkage and a name, the linkage itself
+#: (so that its identity is not reused while kept) and the value, the most recent last.
+_KEPT: dict[tuple[int, str], tuple[Linkage, Any]] = {}
+KEPT_VALUES = 64
+_KEPT_LOCK = threading.Lock()
+T = TypeVar("T")
+
+
+def kept(linkage: Linkage, what: str, make: Callable[[], T]) -> T:
+    """``make()``, a value that depends on the linkage alone, kept for the last few
+    linkages: a case solved again does not derive it again. ``what`` names the value."""
+    key = (id(linkage), what)
+    found = _KEPT.get(key)
+    if found is not None and found[0] is linkage:
+        value: T = found[1]
+        return value
+    value = make()
+    with _KEPT_LOCK:  # solves may run in several threads
+        _KEPT[key] = (linkage, value)
+        while len(_KEPT) > KEPT_VALUES:
+            del _KEPT[next(iter(_KEPT))]
+    return value
+
+
+def force_layout(linkage: Linkage) -> ForceLayout:
+    """The linkage's :class:`ForceLayout`, kept (:func:`kept`): its columns and scales are
+    derived once, not on every solve of a case (they cost as much as a pose's statics)."""
+    return kept(linkage, "force layout", lambda: ForceLayout(linkage))
