@@ -421,12 +421,15 @@ def preset_results(case: Case, theta12: np.ndarray, backend: str,
         conditions.append(functools.partial(getattr, item.results, "condition"))
     names = dict.fromkeys(q for c in columns for q in c)
     sizes = [s.size for s in statuses]
-    values = {q: _joined([c.get(q, np.full(n, np.nan)) for c, n in zip(columns, sizes, strict=True)],
-                         float)
+    values = {q: _joined([c[q] if q in c else np.full(n, np.nan)
+                          for c, n in zip(columns, sizes, strict=True)], float)
               for q in names}
     return DecidedPoses(values, _joined(statuses, object), _joined(messages, object),
                          lambda: _joined([np.asarray(c(), dtype=float) for c in conditions], float))
 
 
 def _joined(parts: Sequence[np.ndarray], dtype: type) -> np.ndarray:
+    """The stretches' columns end to end (one stretch: its own column, not a copy)."""
+    if len(parts) == 1:
+        return np.asarray(parts[0], dtype=dtype)
     return np.concatenate(parts) if parts else np.array([], dtype=dtype)
