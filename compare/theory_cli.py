@@ -181,9 +181,6 @@ CATALOGUE_FILES = {
     "over-constrained": "catalogue/over_constrained.toml",
 }
 CASES = Path(__file__).parent / "cases"
-#: The seed's joint letters of the engine's joint kinds (Cs: the pin in a slot; G: a gear
-#: mesh).
-SEED_LETTERS = {"revolute": "R", "prismatic": "P", "pin_in_slot": "Cs", "gear": "G"}
 
 
 def file_mobility(relative: str) -> tuple[int, dict[str, int], int, int, int]:
@@ -195,7 +192,7 @@ def file_mobility(relative: str) -> tuple[int, dict[str, int], int, int, int]:
     linkage = load_cases(CASES / relative)[0].linkage
     joints: dict[str, int] = {}
     for joint in linkage.joints:
-        letter = SEED_LETTERS[joint.kind.name]
+        letter = joint.kind.symbol
         joints[letter] = joints.get(letter, 0) + 1
     redundant = linkage.constraint_rows - linkage.joint_rank
     return len(linkage.links), joints, linkage.gruebler, linkage.dof, redundant

@@ -39,6 +39,8 @@ class JointKind(ABC):
 
     #: The name a case file gives it (``kind = "revolute"``).
     name: ClassVar[str]
+    #: Its letter in the seed's mobility tables (R, P, Cs, G).
+    symbol: ClassVar[str]
     #: Relative freedoms it leaves between its two links (Sᵢ); it removes 3 − Sᵢ.
     freedoms: ClassVar[int]
     #: Its coordinate (and a driver on it) is an angle, else a length.

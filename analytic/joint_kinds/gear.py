@@ -107,6 +107,7 @@ class _Centres:
 
 class Gear(JointKind):
     name = "gear"
+    symbol = "G"
     freedoms = 2
     rotates = False
     pins = False

@@ -30,6 +30,7 @@ if TYPE_CHECKING:
 
 class PinInSlot(Prismatic):
     name = "pin_in_slot"
+    symbol = "Cs"
     freedoms = 2
     rotates = False
     pins = False

@@ -35,6 +35,7 @@ def slot_axis(joint: Joint) -> Array:
 
 class Prismatic(JointKind):
     name = "prismatic"
+    symbol = "P"
     freedoms = 1
     rotates = False
     pins = False

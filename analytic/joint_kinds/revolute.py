@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
 class Revolute(JointKind):
     name = "revolute"
+    symbol = "R"
     freedoms = 1
     rotates = True
     pins = True

@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING
 
 import pymunk
 
+from mechcheck.analytic.joint_kinds import GEAR, PIN_IN_SLOT, PRISMATIC, REVOLUTE
 from mechcheck.analytic.linkage import Joint, JointFriction, Linkage
 from mechcheck.sim_models.pymunk._fast import Cell, impulse_cells
 from mechcheck.sim_models.pymunk.gear_mesh import ToothContact, centre_distance_held
@@ -264,10 +265,10 @@ class Mesh(JointBuilder):
 
 #: Every kind pymunk builds, by the name a case file gives it (``JointKind.name``).
 BUILDERS: dict[str, JointBuilder] = {
-    "revolute": Pin(),
-    "prismatic": Slide(locks_turning=True),
-    "pin_in_slot": Slide(locks_turning=False),
-    "gear": Mesh(),
+    REVOLUTE.name: Pin(),
+    PRISMATIC.name: Slide(locks_turning=True),
+    PIN_IN_SLOT.name: Slide(locks_turning=False),
+    GEAR.name: Mesh(),
 }
 
 
