@@ -4,7 +4,8 @@ whose pin slides in a slotted lever driving a ram through a rod) against the ind
 Lagrange-multiplier reference (tests/linkage_reference.py), moving, loaded and heavy; random
 three-gear trains against their hand solution (moment balances of the three gears, the
 radial parts on the separating side); random planetary trains against Willis' formula and
-the power balance."""
+the power balance; and the random crank-shapers and gear trains through both simulators,
+held and solved at the pose."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from mechcheck.analytic.joint_kinds import GEAR, REVOLUTE, GearMesh
 from mechcheck.analytic.linkage import Driver, Joint, Link, Linkage, PointLoad
 from mechcheck.analytic.linkage_forces import solve_linkage
 from mechcheck.casefile import parse_cases
+from mechcheck.testing import assert_solution_close
 
 from .test_linkage_against_reference import assert_agree
 
@@ -164,3 +166,29 @@ def test_random_planetary_trains_follow_willis(sun: float, ratio: float, carrier
         or abs(math.remainder(v["phi_sun"] - carrier * willis, math.tau)) <= 1e-9 * willis
     assert abs(v["Q_Oa"] + torque * willis) <= 1e-12 * max(abs(torque) * willis, 1e-3)
 
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
+@given(crank_shapers(), st.sampled_from(["mujoco_solve", "pymunk_solve", "mujoco", "pymunk"]))
+def test_random_crank_shapers_in_the_simulators(table: dict[str, Any], backend: str) -> None:
+    """Each simulator, held or solved at the pose (the crank at rest), reads every quantity
+    of a random crank-shaper within the policy's tolerance of the analytic backend."""
+    table = table | {"drivers": [{"joint": "O2", "rotation": 0.0}]}
+    table.pop("friction", None)
+    ((case, _),) = parse_cases({"case": [table]}, "random")
+    assume(mechcheck.solve(case).diagnostics["condition_number"] < MAX_CONDITION)
+    assert_solution_close(case, mechcheck.solve(case, backend), complete=True)
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.tuples(*[st.floats(0.02, 0.2)] * 3), st.floats(-math.pi, math.pi),
+       st.floats(0.6, 2.6), st.floats(-50.0, 50.0), st.floats(0.0, 30.0),
+       st.sampled_from(["mujoco_solve", "pymunk_solve", "mujoco", "pymunk"]))
+def test_random_gear_trains_in_the_simulators(radii: tuple[float, float, float], first: float,
+                                              bend: float, torque: float, pressure: float,
+                                              backend: str) -> None:
+    """Each simulator reads a random three-gear train (tooth forces, bearings, the drive
+    torque) within the policy's tolerance of the analytic backend."""
+    assume(abs(torque) > 0.1)
+    case = Case("train", gear_train(radii, (first, first + bend), torque, pressure))
+    assert_solution_close(case, mechcheck.solve(case, backend), complete=True)
