@@ -19,19 +19,32 @@ from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.linkage_motion import gated_sweep, is_driven, unmodelled
 from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, linkage_sweep
 from mechcheck.sim_models.pymunk.joint_kinds import BUILDERS, builder
+from mechcheck.sim_models.pymunk.members import modelled, sliding_ends
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 
 __all__ = ["settle", "solve_at_pose", "sweep"]
 
 
-def refused(case: Case, backend: str) -> Solution | None:
+def refused(case: Case, backend: str, stretches: bool = False) -> Solution | None:
     """``not_applicable`` for what the pymunk model has no counterpart for
-    (:func:`~mechcheck.sim_models.linkage_motion.unmodelled`), else None."""
-    why = unmodelled(case.linkage, BUILDERS, "pymunk") or built_inexactly(case)
+    (:func:`~mechcheck.sim_models.linkage_motion.unmodelled`), else None. ``stretches``: the
+    run models elastic members (a held structure settled by simulation), if each has an
+    end to slide (:func:`.members.sliding_ends`)."""
+    why = (unmodelled(case.linkage, BUILDERS, "pymunk", stretches) or built_inexactly(case)
+           or (unstretched(case) if stretches else None))
     if why is None:
         return None
     return Solution(case.name, backend, {}, status="not_applicable", message=why,
                     units=quantity_units(case.linkage))
+
+
+def unstretched(case: Case) -> str | None:
+    """Why the elastic members of this redundant linkage cannot stretch in the model, or
+    None."""
+    if not modelled(case.linkage):
+        return None
+    ends = sliding_ends(case.linkage)
+    return ends if isinstance(ends, str) else None
 
 
 def built_inexactly(case: Case) -> str | None:
@@ -49,7 +62,7 @@ def settle(case: Case, settings: SolverSettings | None = None) -> Solution:
     (:func:`mechcheck.sim_models.pymunk.linkage.settle`), or driven along its prescribed motion
     when it moves or has Coulomb friction
     (:func:`mechcheck.sim_models.pymunk.linkage_dynamics.drive_linkage`)."""
-    no = refused(case, "pymunk")
+    no = refused(case, "pymunk", stretches=not is_driven(case))
     if no is not None:
         return no
     if is_driven(case):

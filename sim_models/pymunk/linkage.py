@@ -54,6 +54,7 @@ from mechcheck.sim_models.pymunk.linkage_model import (
     place,
     stage,
 )
+from mechcheck.sim_models.pymunk.members import member_settings, modelled
 from mechcheck.sim_models.pymunk.settings import (
     LINKAGE_SETTLE,
     LINKAGE_SOLVE,
@@ -347,7 +348,9 @@ def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Out
     poses = pose_table(linkage, q)
     gaps = loop_violations(linkage, q)
     drifts = pose_drifts(model.radii, q, results.pose.q[at])
-    held = not has_free_coordinates(model.case)
+    # A structure of elastic members rests where its members' stretch puts it: that
+    # deflection (about max_strain × its size) is its own, not a drift off the held pose.
+    held = not (has_free_coordinates(model.case) or model.members)
     pose_lists = {k: v.tolist() for k, v in poses.items()}
     out = []
     for m, o in enumerate(outcomes):
@@ -451,8 +454,12 @@ def settle(case: Case, settings: SolverSettings = LINKAGE_SETTLE,
         seed = free_start(case) if seed is None else seed
     elif seed is None:
         seed = results.pose.q[0]
+    stretches = modelled(case.linkage)
+    if stretches:   # the step its stiffest member needs
+        settings = member_settings(case.linkage, settings)
     model = build_linkage_model(case, settings, seed)
-    if has_free_coordinates(case):
+    if has_free_coordinates(case) or stretches:
+        # No priming: re-posed on the unstretched seed, the members would carry nothing.
         run = settle_run(model)
     else:
         model, run = primed_settle_run(model, seed)

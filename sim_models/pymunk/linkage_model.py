@@ -45,6 +45,7 @@ from mechcheck.sim_models.pymunk._fast import Bodies, Cell, Plan, impulse_cells
 from mechcheck.sim_models.pymunk.gear_mesh import ToothContact
 from mechcheck.sim_models.pymunk.joint_kinds import GROOVE_REACH as GROOVE_REACH, along as along, builder
 from mechcheck.sim_models.pymunk.loads import LoadTerms, apply_forces
+from mechcheck.sim_models.pymunk.members import MemberEnd, build_end, modelled, sliding_ends
 from mechcheck.sim_models.pymunk.readout import HeldSlide, Readout
 from mechcheck.sim_models.pymunk.settings import SolverSettings
 
@@ -94,6 +95,7 @@ class LinkageModel:
     springs: dict[str, Spring]
     radius: dict[str, float]
     meshes: dict[str, ToothContact] = field(default_factory=dict)
+    members: dict[str, MemberEnd] = field(default_factory=dict)
     scale: float = field(init=False)
     radii: np.ndarray = field(init=False)
     bulk: Bodies = field(init=False)
@@ -111,7 +113,8 @@ class LinkageModel:
     def constraints(self) -> list[pymunk.Constraint]:
         return [*self.pins.values(), *self.grooves.values(), *self.held.values(),
                 *self.locks.values(), *self.drives.values(), *self.springs.values(),
-                *(mesh.pin for mesh in self.meshes.values())]
+                *(mesh.pin for mesh in self.meshes.values()),
+                *(c for end in self.members.values() for c in (end.groove, end.spring))]
 
     @cached_property
     def plan(self) -> Plan:
@@ -209,11 +212,17 @@ def move_lock(model: LinkageModel, joint: Joint, value: float) -> None:
 
 
 def make_joints(model: LinkageModel) -> None:
-    """Every joint's constraints, and each driver's lock, added to the model's tables."""
+    """Every joint's constraints, and each driver's lock, added to the model's tables; an
+    elastic member's sliding end (:mod:`.members`) in place of its joint's pivot."""
     linkage = model.linkage
     driven = {d.joint: d.value for d in linkage.drivers}
+    ends = sliding_ends(linkage) if modelled(linkage) else {}
+    assert not isinstance(ends, str), ends
     for joint in linkage.joints:
-        builder(joint).build(model, joint, driven.get(joint.name))
+        if joint.name in ends:
+            model.members[joint.name] = build_end(model, ends[joint.name])
+        else:
+            builder(joint).build(model, joint, driven.get(joint.name))
 
 
 def make_springs(model: LinkageModel) -> None:
@@ -281,7 +290,8 @@ def reaction_names(model: LinkageModel) -> list[str]:
     names = []
     for joint in model.linkage.joints:
         names += builder(joint).reaction_names(joint, joint.name in model.held)
-    return names + [f"Q_{name}" for name in model.drives] + [f"S_{name}" for name in model.springs]
+    return (names + [f"Q_{name}" for name in model.drives] + [f"S_{name}" for name in model.springs]
+            + [f"N_{end.member}" for end in model.members.values()])
 
 
 def compile_readout(model: LinkageModel) -> Readout:
@@ -296,6 +306,10 @@ def compile_readout(model: LinkageModel) -> Readout:
     forces: list[tuple[str, Cell]] = []
     held: list[HeldSlide] = []
     for joint in linkage.joints:
+        if joint.name in model.members:   # the groove here; the spring with the springs
+            forces += list(zip((f"F_{joint.name}_x", f"F_{joint.name}_y"),
+                               model.members[joint.name].cells, strict=True))
+            continue
         cells, slide = builder(joint).reaction(model, joint)
         forces += cells
         if slide is not None:
@@ -305,8 +319,10 @@ def compile_readout(model: LinkageModel) -> Readout:
     units = quantity_units(linkage)
     springs = tuple((f"S_{name}", spring, units.get(f"S_{name}") == "N*m")
                     for name, spring in model.springs.items())
+    springs += tuple((f"N_{end.member}", end.spring, False) for end in model.members.values())
     return Readout(tuple(reaction_names(model)), model.settings.dt, linkage.scale, tuple(forces),
-                   tuple(couples), springs, tuple(held), tuple(model.meshes.values()))
+                   tuple(couples), springs, tuple(held), tuple(model.meshes.values()),
+                   tuple(model.members.values()))
 
 
 def place(model: LinkageModel, q: Array) -> None:

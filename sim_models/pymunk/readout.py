@@ -60,12 +60,21 @@ class MeshReading(Protocol):
     def reactions(self, dt: float) -> dict[str, float]: ...
 
 
+class MemberReading(Protocol):
+    """An elastic member's sliding end: its joint's whole force, the groove's impulse plus
+    the spring's (:class:`.members.MemberEnd`)."""
+
+    def reactions(self, dt: float) -> dict[str, float]: ...
+
+
 @dataclass(frozen=True)
 class Readout:
     """A model's reactions: ``forces`` (impulse cells of F components), ``couples`` (of M
     and Q of gears), ``springs`` (each with whether it is torsional), ``held`` slides,
     ``meshes`` (gear meshes: their tooth force, read from a pin's impulse along its
-    direction, and its parts; the impulse itself is among ``forces``), reported as the
+    direction, and its parts; the impulse itself is among ``forces``), ``members`` (elastic
+    members' sliding ends: the joint's force, groove and spring together; the groove's
+    impulse is among ``forces``, the spring's ``N_`` among ``springs``), reported as the
     quantities ``names`` (in this order) of a step of ``dt``; ``length`` is what a couple is
     divided by to compare it with a force."""
 
@@ -77,6 +86,7 @@ class Readout:
     springs: tuple[tuple[str, pymunk.Constraint, bool], ...]
     held: tuple[HeldSlide, ...]
     meshes: tuple[MeshReading, ...] = ()
+    members: tuple[MemberReading, ...] = ()
 
     @cached_property
     def _cells(self) -> tuple[tuple[Cell, ...], tuple[Cell, ...]]:
@@ -125,4 +135,6 @@ class Readout:
             table |= {f"Q_{slide.name}": q, f"F_{slide.name}_x": fx, f"F_{slide.name}_y": fy}
         for mesh in self.meshes:
             table |= mesh.reactions(self.dt)
+        for member in self.members:
+            table |= member.reactions(self.dt)
         return {name: table[name] for name in self.names}
