@@ -7,9 +7,12 @@ the displacement method written in tests/test_elastic.py."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import LinkMass
 from mechcheck.sim_models.pymunk import backend as pm
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
@@ -44,3 +47,13 @@ def test_the_constraint_solve_at_the_pose_still_refuses_elastic_members() -> Non
     """Re-posed on the unstretched pose, no member could carry anything: not_applicable."""
     solution = pm.solve_at_pose(Case("bars", bars(dict(THREE))))
     assert solution.status == "not_applicable" and "axial_stiffness" in solution.message
+
+
+def test_a_member_with_its_own_weight_is_refused_with_the_reason() -> None:
+    """A member's weight makes its tension vary along it: pymunk's spring carries the end's,
+    the analytic stretch the mean's; not_applicable, saying so."""
+    linkage = bars(dict(THREE))
+    heavy = replace(linkage, masses=(LinkMass("barB", 2.0, (0.6, 0.85), 0.0),),
+                    gravity=(0.0, -9.81))
+    solution = pm.settle(Case("heavy-bars", heavy))
+    assert solution.status == "not_applicable" and "barB" in solution.message

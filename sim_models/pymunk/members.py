@@ -60,7 +60,17 @@ def modelled(linkage: Linkage) -> bool:
 
 def sliding_ends(linkage: Linkage) -> dict[str, SlidingEnd] | str:
     """Per joint name, the member end that slides there; or why some member has no end to
-    slide (each needs an end with a single undriven revolute joint, not another member's)."""
+    slide (each needs an end with a single undriven revolute joint, not another member's),
+    or carries a load or a mass of its own."""
+    own = [m.name for m in linkage.elastic_links if _loaded_between_ends(linkage, m)]
+    if own:
+        # The spring carries the tension at the sliding end; a member with loads of its own
+        # (its weight) is stretched by its mean tension, which differs from that by half
+        # their axial part: the stretches, and so the shares of a redundant load, would not
+        # be the analytic model's.
+        return (f"the elastic member {own[0]} carries a mass or a load between its ends: the "
+                "pymunk model stretches a member by the tension at one end, the analytic one by "
+                "its mean; apply the loads at the nodes, or check it with the analytic backend")
     driven = {d.joint for d in linkage.drivers}
     out: dict[str, SlidingEnd] = {}
     for member in linkage.elastic_links:
@@ -71,6 +81,14 @@ def sliding_ends(linkage: Linkage) -> dict[str, SlidingEnd] | str:
                     "needs to stretch it")
         out[end.joint.name] = end
     return out
+
+
+def _loaded_between_ends(linkage: Linkage, member: Link) -> bool:
+    """The member carries a mass, or a load away from its two end points."""
+    ends = [linkage.points[p] for p in member.points]
+    at_an_end = [any(math.dist(load.at, end) <= 1e-12 * linkage.scale for end in ends)
+                 for load in linkage.loads if load.link == member.name]
+    return any(m.link == member.name for m in linkage.masses) or not all(at_an_end)
 
 
 def free_end(linkage: Linkage, member: Link, taken: set[str]) -> SlidingEnd | None:
