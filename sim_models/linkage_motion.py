@@ -35,16 +35,18 @@ class Motion:
                                                                          self.value.size)))
 
 
-def unmodelled(linkage: Linkage, built: Collection[str], simulator: str) -> str | None:
+def unmodelled(linkage: Linkage, built: Collection[str], simulator: str,
+               elastic: bool = False) -> str | None:
     """What of ``linkage`` a simulator with joint builds for the kinds ``built`` has no
-    counterpart for, or None: a kind of joint without a build, or members whose stretch
-    decides a redundant linkage's forces (a simulator's bodies are rigid)."""
+    counterpart for, or None: a kind of joint without a build, or, unless the simulator
+    models ``elastic`` members, members whose stretch decides a redundant linkage's forces
+    (its bodies are rigid)."""
     missing = [j for j in linkage.joints if j.kind.name not in built]
     if missing:
         j = missing[0]
         return (f"joint {j.name} is a {j.kind.name}, which the {simulator} model does not build: "
                 "its forces are checked by the analytic backends only")
-    if linkage.redundant and linkage.elastic_links:
+    if linkage.redundant and linkage.elastic_links and not elastic:
         return ("the forces of this redundant linkage follow its members' stretch "
                 f"(axial_stiffness of {', '.join(m.name for m in linkage.elastic_links)}), and "
                 f"the {simulator} model's bodies are rigid: they are checked by the analytic "
