@@ -22,6 +22,8 @@ coordinate q whichever way the tree runs, and a generalised force on it is its e
 - linear springs: spatial tendons between two sites, with MuJoCo's stiffness and spring
   length (and damping): the spring force is MuJoCo's passive force;
 - torsional springs: the hinge's stiffness with ``springref`` = the free rotation;
+- elastic members of a redundant linkage: two bodies on a slide, held at the member's
+  length by a soft tendon equality of E·A/L (:mod:`.linkage_members`);
 - loads and weights: ``xfrc_applied`` at sites, computed each step (:mod:`.linkage_rig`);
   MuJoCo's gravity is off, so statics may use fictitious masses (as :mod:`.model`).
 """
