@@ -46,11 +46,13 @@ def test_a_kind_without_a_build_is_refused_by_name(backend: str) -> None:
     assert [s.status for s in swept] == ["not_applicable", "not_applicable"]
 
 
-@pytest.mark.parametrize("backend", [s for s in SIMULATORS if s != "pymunk"])
-def test_a_redundant_elastic_structure_is_refused_by_every_simulator(backend: str) -> None:
-    """Three elastic bars to one node: the analytic backend decides the forces from the
-    stretches; a rigid simulator cannot, and says so. (The ``pymunk`` backend stretches
-    them: tests/test_pymunk_elastic.py.)"""
+@pytest.mark.parametrize("backend", SIMULATORS)
+def test_a_soft_redundant_structure_is_not_compared_by_any_simulator(backend: str) -> None:
+    """Three elastic bars to one node, soft enough (E·A ~ 10⁷ N) that they stretch by about
+    10⁻⁴: the analytic backend decides the forces from the stretches to first order; the
+    fixed-pose solves cannot stretch them, and the held simulators' exact equilibrium differs
+    from the first-order one by more than the policy allows: each says so, none compares.
+    (Stiff members are compared: tests/test_mujoco_elastic.py, tests/test_pymunk_elastic.py.)"""
     case = Case("bars", bars({"A": 2.0e7, "B": 1.0e7, "C": 3.0e7}))
     assert math.isfinite(mechcheck.solve(case).values["N_barA"])
     solution = mechcheck.solve(case, backend)

@@ -30,7 +30,13 @@ from mechcheck.analytic.linkage_forces import LinkageResults, coulomb_terms
 from mechcheck.analytic.solution import Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import real_inertial
-from mechcheck.sim_models.linkage_motion import driven_sweep, has_free_coordinates, is_driven
+from mechcheck.sim_models.linkage_motion import (
+    driven_sweep,
+    has_free_coordinates,
+    is_driven,
+    strain_verdict,
+    unmodelled,
+)
 from mechcheck.sim_models.mujoco import _fast
 from mechcheck.sim_models.mujoco.batch_settle import (
     BatchSettler,
@@ -38,6 +44,7 @@ from mechcheck.sim_models.mujoco.batch_settle import (
     copies_needed,
     kept_models,
 )
+from mechcheck.sim_models.mujoco.joint_kinds import BUILDS
 from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_friction import (
@@ -45,6 +52,7 @@ from mechcheck.sim_models.mujoco.linkage_friction import (
     clear_friction,
     friction_change,
 )
+from mechcheck.sim_models.mujoco.linkage_members import split_members
 from mechcheck.sim_models.mujoco.linkage_mesh import pushing
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable, spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
@@ -83,6 +91,26 @@ def unbuildable(case: Case) -> str | None:
     return None
 
 
+#: Why elastic members are settled only where the drivers hold everything.
+HELD_MEMBERS_ONLY = ("the MuJoCo model settles elastic members only in a linkage held still "
+                     "by its drivers: a driven run and free coordinates are not simulated with "
+                     "them")
+
+
+def unsettled_members(case: Case) -> str | None:
+    """Why the ``mujoco`` backend does not run a linkage with split members
+    (:mod:`.linkage_members`), or None: it moves, or has free coordinates."""
+    if split_members(case.linkage) and (is_driven(case) or has_free_coordinates(case)):
+        return HELD_MEMBERS_ONLY
+    return None
+
+
+def rigid_only(case: Case) -> str | None:
+    """Why the exact solve has no answer: a kind it does not build, or a redundant
+    linkage's members' stretch (its constraint forces are those of rigid bodies)."""
+    return unmodelled(case.linkage, BUILDS, "MuJoCo")
+
+
 def settle_linkage(case: Case, rig: LinkageRig | None = None,
                    results: LinkageResults | None = None) -> Solution:
     """The ``mujoco`` backend for a static linkage held by its drivers.
@@ -90,7 +118,7 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
     ``rig`` and ``results`` (the analytic pose analysis) may be given by a sweep.
     """
     start = time.perf_counter()
-    why = unbuildable(case)
+    why = unbuildable(case) or unsettled_members(case)
     if why is not None:
         return refused(case, "mujoco", why)
     results = results if results is not None else analytic_results(case)
@@ -103,7 +131,9 @@ def settle_linkage(case: Case, rig: LinkageRig | None = None,
     def run() -> Solution:
         qpos = seed(held, held.joint_states(results.pose)[0][0], driver_values(case))
         result = settle_refined(held, qpos)
-        return settled_solution(held, qpos, result, time.perf_counter() - start)
+        return strain_verdict(held.members,
+                              settled_solution(held, qpos, result, time.perf_counter() - start),
+                              "MuJoCo")
 
     return pushing([held.meshes], run, lambda solution: solution.values)
 
@@ -159,7 +189,7 @@ def solve_linkage_at_pose(case: Case, rig: LinkageRig | None = None,
     """The ``mujoco_solve`` backend: exact constraint forces at the analytic pose (row
     ``index`` of ``results``, the analytic pose analysis, which a sweep may give)."""
     start = time.perf_counter()
-    why = unbuildable(case)
+    why = unbuildable(case) or rigid_only(case)
     if why is not None:
         return refused(case, "mujoco_solve", why)
     exact = rig or exact_linkage_rig(case)
@@ -366,7 +396,7 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     Coulomb friction.
     """
     first = np.asarray(first, dtype=float)
-    why = unbuildable(case)
+    why = unbuildable(case) or (unsettled_members(case) if backend == "mujoco" else rigid_only(case))
     if backend == "mujoco" and why is None and is_driven(case):
         return driven_sweep(case, first, settle_linkage)
     if backend == "mujoco":
@@ -375,7 +405,8 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
         return [refused(case, backend, why)] * len(first)
     if results is None:
         results = analytic_results(case, np.asarray(first, dtype=float))
-    if spanning_tree(case.linkage).meshes:
+    if spanning_tree(case.linkage).meshes or split_members(case.linkage):
+        # A member's spring is never carried as a load, as the batches carry every row.
         return pose_by_pose(case, backend, results)
     if backend == "mujoco":
         return settled_sweep(case, first, results, continuation)
@@ -410,7 +441,8 @@ def held_at(case: Case, rig: LinkageRig, results: LinkageResults, index: int) ->
 
     def run() -> Solution:
         qpos = seed(rig, pose, results.pose.drivers[index])
-        return settled_solution(rig, qpos, settle_refined(rig, qpos), time.perf_counter() - start)
+        return strain_verdict(rig.members, settled_solution(rig, qpos, settle_refined(rig, qpos),
+                                                            time.perf_counter() - start), "MuJoCo")
 
     return pushing([rig.meshes], run, lambda solution: solution.values)
 

@@ -19,6 +19,11 @@ from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.linkage_kinematics import LinkagePose
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.mujoco.joint_kinds import MjJoint, builder_of
+from mechcheck.sim_models.mujoco.linkage_members import (
+    member_ends,
+    set_member_stiffness,
+    split_members,
+)
 from mechcheck.sim_models.mujoco.linkage_mesh import MeshLine, mesh_of, site_names, tendon_name
 from mechcheck.sim_models.mujoco.linkage_model import (
     CLOCK,
@@ -65,6 +70,14 @@ class RigModel:
             customize(spec)
         self.model = spec.compile()
         place_frames_exactly(self.model)
+        #: The split members (:mod:`.linkage_members`) and their equalities, whose soft
+        #: stiffness is E·A/L: a spring, not a constraint to hold rigidly.
+        self.members = split_members(linkage)
+        self.member_eqs = np.array(set_member_stiffness(self.model, self.members), dtype=int)
+        self.rigid_eqs = np.setdiff1d(np.arange(self.model.neq), self.member_eqs)
+        #: Each split member's near and far end (drawn), by name.
+        self.member_ends = {m.name: member_ends(m, self.tree.parent_joint(m.name).joint.at,
+                                                linkage.points) for m in self.members}
         self.data = mujoco.MjData(self.model)
         self.scale = linkage.scale
         self.units: dict[str, str] | None = quantity_units(linkage)
@@ -152,6 +165,8 @@ class RigModel:
         """Each equality's constraint rows (after a forward pass), the drivers' among them,
         and what scales their torques to forces."""
         self.loop_rows = {j: self.equality_rows(e) for j, e in self.loop_eq.items()}
+        self.member_rows = np.array([self.equality_rows(e)[0] for e in self.member_eqs],
+                                    dtype=int)
         self.mesh_rows = np.array([self.equality_rows(mesh.equality)[0] for mesh in self.meshes],
                                   dtype=int)
         # A switched-off driver (a servo model, ``customize``) has no constraint rows.
@@ -232,7 +247,7 @@ class RigModel:
         MuJoCo's stiffest 2·dt unless the settings fix it)."""
         self.model.opt.timestep = dt
         if self.settings.solref_timeconst is None:
-            self.model.eq_solref[:, 0] = 2.0 * dt
+            self.model.eq_solref[self.rigid_eqs, 0] = 2.0 * dt
 
     def set_targets(self, values: Array) -> None:
         """Hold each driven joint at its value (rad or m, from the drawn pose)."""

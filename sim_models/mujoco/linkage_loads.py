@@ -18,6 +18,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.mujoco import _fast
 from mechcheck.sim_models.mujoco.linkage_build import RigModel
+from mechcheck.sim_models.mujoco.linkage_members import far_share, far_site
 from mechcheck.sim_models.mujoco.model import STATIC, Settings
 from mechcheck.sim_models.mujoco.rig import LoadTable, cross_z, load_wrenches, rows_times
 
@@ -52,23 +53,37 @@ class RigLoads(RigModel):
         """The loads plus the weights m·g of the real masses (never fictitious ones); loads
         on the ground do nothing and are left out."""
         lk = self.linkage
-        sites, bodies, forces, torques = [], [], [], []
+        rows: list[tuple[int, int, tuple[float, float, float], float]] = []
         for i, load in enumerate(lk.loads):
             if load.link != GROUND:
-                sites.append(self._id(mujoco.mjtObj.mjOBJ_SITE, f"load{i}"))
-                bodies.append(self.body[load.link])
-                forces.append((load.force[0], load.force[1], 0.0))
-                torques.append(load.torque)
+                rows += self._load_rows(f"load{i}", load.link, load.at,
+                                        (load.force[0], load.force[1], 0.0), load.torque)
         if lk.gravity != (0.0, 0.0):
             for i, mass in enumerate(lk.masses):
                 if mass.link != GROUND:
-                    sites.append(self._id(mujoco.mjtObj.mjOBJ_SITE, f"weight{i}"))
-                    bodies.append(self.body[mass.link])
-                    forces.append((mass.mass * lk.gravity[0], mass.mass * lk.gravity[1], 0.0))
-                    torques.append(0.0)
-        return LoadTable(np.array(sites, dtype=int), np.array(bodies, dtype=int),
-                         np.array(forces, dtype=float).reshape(-1, 3),
-                         np.array(torques, dtype=float))
+                    rows += self._load_rows(f"weight{i}", mass.link, mass.com,
+                                            (mass.mass * lk.gravity[0], mass.mass * lk.gravity[1],
+                                             0.0), 0.0)
+        return LoadTable(np.array([r[0] for r in rows], dtype=int),
+                         np.array([r[1] for r in rows], dtype=int),
+                         np.array([r[2] for r in rows], dtype=float).reshape(-1, 3),
+                         np.array([r[3] for r in rows], dtype=float))
+
+    def _load_rows(self, site: str, link: str, at: tuple[float, float],
+                   force: tuple[float, float, float], torque: float
+                   ) -> list[tuple[int, int, tuple[float, float, float], float]]:
+        """A load's rows (site, body, force, couple): one, or on a split member its shares
+        on the near and far bodies (:func:`.linkage_members.far_share`)."""
+        parts = [(site, 1.0)]
+        if link in self.member_ends:
+            t = far_share(*self.member_ends[link], at)
+            parts = [(site, 1.0 - t), (far_site(site), t)]
+        out = []
+        for name, share in parts:
+            found = self._id(mujoco.mjtObj.mjOBJ_SITE, name)
+            out.append((found, int(self.model.site_bodyid[found]),
+                        (share * force[0], share * force[1], share * force[2]), share * torque))
+        return out
 
     def _carried_layout(self) -> CarriedPairs:
         """Where carried connect forces act, as a load table: one row per site of a
@@ -81,7 +96,7 @@ class RigLoads(RigModel):
                                      (links[0], self.loop_sites[name][1], -1.0)):
                 if link != GROUND:
                     sites.append(site)
-                    bodies.append(self.body[link])
+                    bodies.append(int(self.model.site_bodyid[site]))
                     signs.append(sign)
                     rows.append(eq_rows)
         incidence = np.zeros((self.model.nbody, len(sites)))
@@ -142,7 +157,11 @@ class RigLoads(RigModel):
     def carry(self, factor: float = 1.0) -> None:
         """The constraints' forces carried as loads from now on, times ``factor`` (an
         extrapolated pass, :class:`.settle.Refinement`)."""
-        self.carried = self.carried + factor * self.data.efc_force[:self.nefc]
+        carried = factor * self.data.efc_force[:self.nefc]
+        # A member's equality is its spring (:mod:`.linkage_members`): its force is the
+        # member's own at every pass, never a load.
+        carried[self.member_rows] = 0.0
+        self.carried = self.carried + carried
 
     def apply_carried(self) -> None:
         """The carried forces added to the loads (:meth:`carried_loads` at the current

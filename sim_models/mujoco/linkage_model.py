@@ -22,6 +22,8 @@ coordinate q whichever way the tree runs, and a generalised force on it is its e
 - linear springs: spatial tendons between two sites, with MuJoCo's stiffness and spring
   length (and damping): the spring force is MuJoCo's passive force;
 - torsional springs: the hinge's stiffness with ``springref`` = the free rotation;
+- elastic members of a redundant linkage: two bodies on a slide, held at the member's
+  length by a soft tendon equality of E·A/L (:mod:`.linkage_members`);
 - loads and weights: ``xfrc_applied`` at sites, computed each step (:mod:`.linkage_rig`);
   MuJoCo's gravity is off, so statics may use fictitious masses (as :mod:`.model`).
 """
@@ -30,17 +32,24 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
-from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage, TorsionSpring
+from mechcheck.analytic.linkage import Joint, LinearSpring, Link, Linkage, TorsionSpring
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import Inertial, link_extent, real_inertial
 from mechcheck.sim_models.linkage_motion import unmodelled
 from mechcheck.sim_models.mujoco import mjwarnings  # noqa: F401  (MuJoCo warnings into Python before any model)
 from mechcheck.sim_models.mujoco.joint_kinds import BUILDS, builder_of
+from mechcheck.sim_models.mujoco.linkage_members import (
+    add_far_body,
+    add_member_equality,
+    far_point,
+    far_site,
+    split_members,
+)
 from mechcheck.sim_models.mujoco.linkage_mesh import drawn_sites, site_names, tendon_name
 from mechcheck.sim_models.mujoco.model import (
     CLOCK_ARMATURE,
@@ -102,7 +111,7 @@ def spanning_tree(linkage: Linkage) -> LinkageTree:
     Raises :class:`Unbuildable` for a loop without a revolute joint, and for a driver or a
     torsional spring on a joint that must close a loop (a damper there is emulated).
     """
-    why = unmodelled(linkage, BUILDS, "MuJoCo")
+    why = unmodelled(linkage, BUILDS, "MuJoCo", stretches=True)
     if why is not None:
         raise Unbuildable(why)
     meshes = tuple(j for j in linkage.joints if builder_of(j).meshes)
@@ -231,6 +240,22 @@ def model_inertial(linkage: Linkage, link: str, settings: Settings) -> Inertial:
 
 # -- the spec ---------------------------------------------------------------------------
 
+@dataclass
+class Bodies:
+    """The spec's bodies: each link's, and each split member's far body with its far end
+    (:mod:`.linkage_members`), which carries everything at that point."""
+
+    links: dict[str, mujoco.MjsBody]
+    far: dict[str, tuple[tuple[float, float], mujoco.MjsBody]] = field(default_factory=dict)
+
+    def at(self, link: str, p: tuple[float, float]) -> mujoco.MjsBody:
+        """The body of ``link`` that carries the drawn point ``p``."""
+        end = self.far.get(link)
+        if end is not None and np.allclose(end[0], p, rtol=0.0, atol=1e-12 * max(1.0, *np.abs(p))):
+            return end[1]
+        return self.links[link]
+
+
 def body_name(link: str) -> str:
     return f"link_{link}"
 
@@ -258,9 +283,13 @@ def build_spec(name: str, linkage: Linkage, settings: Settings = STATIC) -> mujo
     spec.modelname = name
     spec.compiler.degree = False
     _options(spec, settings)
-    bodies = {GROUND: spec.worldbody}
+    bodies = Bodies({GROUND: spec.worldbody})
+    members = {m.name: m for m in split_members(linkage)}
     for t in tree.tree:
-        bodies[t.child] = _add_body(bodies[t.parent], tree, linkage, t, settings)
+        at = linkage.points[t.joint.at]
+        body = bodies.links[t.child] = _add_body(bodies.at(t.parent, at), tree, linkage, t, settings)
+        if t.child in members:
+            bodies.far[t.child] = _add_far(body, tree, linkage, members[t.child], t, settings)
     _add_point_sites(bodies, tree, linkage)
     _add_load_sites(bodies, tree, linkage)
     for joint in tree.closures:
@@ -269,6 +298,8 @@ def build_spec(name: str, linkage: Linkage, settings: Settings = STATIC) -> mujo
         _add_mesh(spec, bodies, tree, linkage, joint, settings)
     for spring in linkage.springs:
         _add_spring(spec, bodies, tree, linkage, spring)
+    for member in members.values():
+        add_member_equality(spec, member)
     if settings.clock:
         _add_clock(spec)
     for driver in linkage.drivers:
@@ -350,6 +381,15 @@ def _add_body(parent: mujoco.MjsBody, tree: LinkageTree, linkage: Linkage, t: Tr
     return body
 
 
+def _add_far(body: mujoco.MjsBody, tree: LinkageTree, linkage: Linkage, member: Link,
+             t: TreeJoint, settings: Settings) -> tuple[tuple[float, float], mujoco.MjsBody]:
+    """A split member's far body (:func:`.linkage_members.add_far_body`) and its far end."""
+    near = linkage.points[t.joint.at]
+    far = linkage.points[far_point(member, t.joint.at)]
+    return far, add_far_body(body, member, near, far, origin_of(tree, linkage, member.name),
+                             settings.timestep, settings.armature)
+
+
 def _torsion(linkage: Linkage, joint: Joint) -> tuple[float, float]:
     """(stiffness, free rotation) of the torsional springs at a joint (they add up)."""
     springs = [s for s in linkage.springs if isinstance(s, TorsionSpring) and s.joint == joint.name]
@@ -373,21 +413,25 @@ def _carrier(linkage: Linkage, point: str) -> str:
     return next(link.name for link in linkage.links if point in link.points)
 
 
-def _add_point_sites(bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+def _add_point_sites(bodies: Bodies, tree: LinkageTree,
                      linkage: Linkage) -> None:
     """A site at every named point, on the link it is reported on: x_, y_ are read there."""
     for name, p in linkage.points.items():
         link = _carrier(linkage, name)
-        bodies[link].add_site(name=f"point_{name}", pos=local(tree, linkage, link, p))
+        bodies.at(link, p).add_site(name=f"point_{name}", pos=local(tree, linkage, link, p))
 
 
-def _add_load_sites(bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+def _add_load_sites(bodies: Bodies, tree: LinkageTree,
                     linkage: Linkage) -> None:
-    """A site at every load point and centre of mass (where weights act)."""
-    for i, load in enumerate(linkage.loads):
-        bodies[load.link].add_site(name=f"load{i}", pos=local(tree, linkage, load.link, load.at))
-    for i, m in enumerate(linkage.masses):
-        bodies[m.link].add_site(name=f"weight{i}", pos=local(tree, linkage, m.link, m.com))
+    """A site at every load point and centre of mass (where weights act), and on a split
+    member its twin on the far body (:func:`.linkage_members.far_share`)."""
+    places = [(f"load{i}", load.link, load.at) for i, load in enumerate(linkage.loads)]
+    places += [(f"weight{i}", m.link, m.com) for i, m in enumerate(linkage.masses)]
+    for name, link, p in places:
+        pos = local(tree, linkage, link, p)
+        bodies.links[link].add_site(name=name, pos=pos)
+        if link in bodies.far:
+            bodies.far[link][1].add_site(name=far_site(name), pos=pos)
 
 
 def closure_sites(joint: Joint) -> tuple[str, str]:
@@ -397,31 +441,31 @@ def closure_sites(joint: Joint) -> tuple[str, str]:
     return f"{joint.name}_on_{joint.links[1]}", f"{joint.name}_on_{joint.links[0]}"
 
 
-def _add_closure(spec: mujoco.MjSpec, bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+def _add_closure(spec: mujoco.MjSpec, bodies: Bodies, tree: LinkageTree,
                  linkage: Linkage, joint: Joint, settings: Settings) -> None:
     p = linkage.points[joint.at]
     first, second = closure_sites(joint)
     for site, link in ((first, joint.links[1]), (second, joint.links[0])):
-        bodies[link].add_site(name=site, pos=local(tree, linkage, link, p))
+        bodies.at(link, p).add_site(name=site, pos=local(tree, linkage, link, p))
     spec.add_equality(name=f"loop_{joint.name}", type=mujoco.mjtEq.mjEQ_CONNECT,
                       objtype=mujoco.mjtObj.mjOBJ_SITE, name1=first, name2=second,
                       solref=list(settings.solref), solimp=list(settings.solimp))
 
 
-def _add_mesh(spec: mujoco.MjSpec, bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+def _add_mesh(spec: mujoco.MjSpec, bodies: Bodies, tree: LinkageTree,
               linkage: Linkage, joint: Joint, settings: Settings) -> None:
     """A gear mesh: a straight tendon from a site on gear a to one on gear b along the line
     of action, held at its length by a tendon equality (:mod:`.linkage_mesh`)."""
     tendon = spec.add_tendon(name=tendon_name(joint))
     for site, link, p in zip(site_names(joint), joint.links, drawn_sites(linkage, joint), strict=True):
-        bodies[link].add_site(name=site, pos=local(tree, linkage, link, p))
+        bodies.at(link, p).add_site(name=site, pos=local(tree, linkage, link, p))
         tendon.wrap_site(site)
     spec.add_equality(name=tendon_name(joint), type=mujoco.mjtEq.mjEQ_TENDON,
                       objtype=mujoco.mjtObj.mjOBJ_TENDON, name1=tendon_name(joint),
                       solref=list(settings.solref), solimp=list(settings.solimp))
 
 
-def _add_spring(spec: mujoco.MjSpec, bodies: dict[str, mujoco.MjsBody], tree: LinkageTree,
+def _add_spring(spec: mujoco.MjSpec, bodies: Bodies, tree: LinkageTree,
                 linkage: Linkage, spring: LinearSpring | TorsionSpring) -> None:
     """A linear spring as a spatial tendon between two sites (torsional: joint stiffness)."""
     if isinstance(spring, TorsionSpring):
@@ -431,7 +475,7 @@ def _add_spring(spec: mujoco.MjSpec, bodies: dict[str, mujoco.MjsBody], tree: Li
                              damping=[spring.damping, 0.0, 0.0])
     for k, (link, p) in enumerate(spring.ends):
         site = f"{spring.name}_end{k}"
-        bodies[link].add_site(name=site, pos=local(tree, linkage, link, p))
+        bodies.at(link, p).add_site(name=site, pos=local(tree, linkage, link, p))
         tendon.wrap_site(site)
 
 

@@ -148,7 +148,14 @@ class RigReadout(RigModel):
         out.update(self._springs(s))
         out.update(self._pose_columns(s.qpos, s.site_xpos))
         out.update(self._mesh_columns(s))
+        out.update(self._member_columns(s))
         return {name: out[name] for name in self.plan.order}
+
+    def _member_columns(self, s: Snapshot) -> dict[str, Array]:
+        """Each split member's tension N (:mod:`.linkage_members`): minus its tendon
+        equality's force (the force along the tendon's length, which a tension shortens)."""
+        forces = -s.efc_force[:, self.member_rows]
+        return {f"N_{member.name}": forces[:, k] for k, member in enumerate(self.members)}
 
     def _mesh_columns(self, s: Snapshot) -> dict[str, Array]:
         """Each gear mesh's tooth force (its tendon equality's force along its sites) and
@@ -281,6 +288,7 @@ def quantity_order(rig: RigModel) -> tuple[str, ...]:
     for joint in linkage.joints:
         order += builder_of(joint).reaction_names(joint)
     order += [f"S_{spring.name}" for spring in linkage.springs]
+    order += [f"N_{member.name}" for member in rig.members]
     order += [f"{axis}_{p}" for p in rig.point_sites for axis in "xy"]
     order += [f"phi_{link}" for link in linkage.moving_links]
     return tuple(order + [f"q_{joint.name}" for joint in linkage.joints])

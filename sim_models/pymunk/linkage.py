@@ -44,7 +44,7 @@ from mechcheck.analytic.linkage_kinematics import (
 )
 from mechcheck.analytic.solution import FORCE_FLOOR_N, Solution
 from mechcheck.sim_models.diagnostics import RunDiagnostics
-from mechcheck.sim_models.linkage_motion import has_free_coordinates, is_driven
+from mechcheck.sim_models.linkage_motion import has_free_coordinates, is_driven, strain_verdict
 from mechcheck.sim_models.pymunk import _fast
 from mechcheck.sim_models.pymunk.joint_kinds import axis_now as axis_now
 from mechcheck.sim_models.pymunk.linkage_model import (
@@ -463,7 +463,8 @@ def settle(case: Case, settings: SolverSettings = LINKAGE_SETTLE,
         run = settle_run(model)
     else:
         model, run = primed_settle_run(model, seed)
-    return solutions(model, backend, "settle", [outcome(model, run, start)], results)[0]
+    solution = solutions(model, backend, "settle", [outcome(model, run, start)], results)[0]
+    return strain_verdict(case.linkage.elastic_links if stretches else (), solution, "pymunk")
 
 
 def solve_at_pose(case: Case, settings: SolverSettings = LINKAGE_SOLVE) -> Solution:

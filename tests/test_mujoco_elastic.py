@@ -1,0 +1,87 @@
+"""Redundant structures with elastic members (``axial_stiffness``) settled in MuJoCo: each
+member is two bodies on a slide held by a soft tendon equality of E·A/L
+(sim_models/mujoco/linkage_members.py). Its reactions and each member's N (the equality's
+force, MuJoCo's own) against the analytic backend, and against the displacement method
+written in tests/test_elastic.py; where the members stretch more than MuJoCo's equilibrium
+is compared at, its verdict says so."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+import mechcheck
+from mechcheck.analytic.case import Case
+from mechcheck.sim_models.linkage_motion import STRAIN_LIMIT
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
+from mechcheck.testing import assert_solution_close
+from mechcheck.tolerance import rule
+from tests.test_elastic import bars, displacement_method
+
+RTOL = rule("mujoco", "force", "static").rtol
+
+#: Steel-like members stiff enough that the analytic backend's max_strain is ≤ 1e-8.
+STIFF = [
+    {"A": 2.0e11, "B": 1.0e11, "C": 3.0e11},
+    {"A": 1.0e11, "B": 5.0e10, "C": 1.0e11, "E": 2.0e10},
+]
+
+
+@pytest.mark.parametrize("stiffness", STIFF, ids=["three-bars", "four-bars"])
+def test_mujoco_settles_redundant_bars_as_the_analytic_backend(stiffness: dict[str, float]) -> None:
+    """Every quantity the analytic backend reports, N_<bar> among them, within the policy's
+    settled tolerance; MuJoCo's own largest strain is the analytic one."""
+    case = Case("bars", bars(dict(stiffness)))
+    reference = mechcheck.solve(case)
+    assert reference.diagnostics["max_strain"] <= STRAIN_LIMIT
+    sim = mechcheck.solve(case, "mujoco")
+    assert_solution_close(case, sim, reference, complete=True)
+    assert sim.diagnostics["max_strain"] == pytest.approx(reference.diagnostics["max_strain"],
+                                                          rel=1e-4)
+
+
+def test_mujoco_bars_carry_the_displacement_methods_forces() -> None:
+    """Three bars of E·A 2e11, 1e11, 3e11 N: each bar's N_<bar> is the displacement method's
+    (K_node·u = P, N = (E·A/L)·e·u) within the settled tolerance of the load (1000 N)."""
+    stiffness = STIFF[0]
+    sim = mechcheck.solve(Case("bars", bars(dict(stiffness))), "mujoco")
+    assert sim.status == "ok", sim.message
+    for w, tension in displacement_method(stiffness).items():
+        assert sim.values[f"N_bar{w}"] == pytest.approx(tension, rel=RTOL, abs=RTOL * 1000.0), w
+
+
+def test_a_member_is_a_spring_of_its_stiffness() -> None:
+    """The member's equality, after settling, holds a force of E·A/L per metre of its own
+    stretch (efc_pos): MuJoCo's soft constraint is the member's spring, not a fitted one."""
+    stiffness = STIFF[0]
+    case = Case("bars", bars(dict(stiffness)))
+    rig = LinkageRig(case)
+    m, d = rig.model, rig.data
+    for _ in range(2000):
+        mujoco.mj_kinematics(m, d)
+        rig.apply_loads()
+        mujoco.mj_forward(m, d)
+        mujoco.mj_Euler(m, d)
+    mujoco.mj_forward(m, d)
+    rows = rig.member_rows
+    measured = d.efc_force[rows] / d.efc_pos[rows]
+    lengths = [float(np.hypot(*np.subtract((1.2, 0.9), p))) for p in ((0.0, 0.0), (0.0, 0.8),
+                                                                        (0.0, 2.0))]
+    expected = [-stiffness[w] / length for w, length in zip("ABC", lengths, strict=True)]
+    assert measured == pytest.approx(expected, rel=1e-4)
+
+
+def test_members_that_stretch_more_are_not_compared() -> None:
+    """E·A of 2e7–3e7 N (strain ~3e-5): MuJoCo settles, measures its own strain and answers
+    not_applicable, naming the members and the strain."""
+    sim = mechcheck.solve(Case("bars", bars({"A": 2.0e7, "B": 1.0e7, "C": 3.0e7})), "mujoco")
+    assert sim.status == "not_applicable"
+    assert "axial_stiffness of barA, barB, barC" in sim.message
+    assert float(sim.diagnostics["max_strain"]) > STRAIN_LIMIT
+
+
+def test_the_exact_solve_still_refuses_elastic_redundancy() -> None:
+    """``mujoco_solve`` gives rigid constraint forces: it keeps its refusal."""
+    sim = mechcheck.solve(Case("bars", bars(dict(STIFF[0]))), "mujoco_solve")
+    assert sim.status == "not_applicable" and "axial_stiffness" in sim.message
