@@ -411,6 +411,13 @@ def dimensionless_condition(model: Model, jac: Matrix) -> float:
     return float(np.linalg.cond(rows[:, None] * jac * cols[None, :]))
 
 
+def kinematic_condition(case: Case) -> float:
+    """:attr:`Reference.kinematic_condition` from the positions alone (no forces solved)."""
+    model = build_model(case)
+    q, _ = solve_positions(model, initial_guess(case))
+    return dimensionless_condition(model, model.jacobian(q, 2))
+
+
 def solve(case: Case) -> Reference:
     """Kinematics, drive torque and every joint reaction of ``case``."""
     model = build_model(case)

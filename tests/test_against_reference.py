@@ -200,14 +200,24 @@ def usable(case: Case) -> Solution:
     where a Coulomb term's relative speed is within MIN_SENSE_SPEED of zero, and poses
     near a toggle of the crank-driven kinematics (the reference's kinematic condition
     number over CONDITION_LIMIT: with drive_link = 4 the backend's force condition
-    number does not see the rocker toggle, where ω3, ω4 → ∞) are out of scope."""
+    number does not see the rocker toggle, where ω3, ω4 → ∞) are out of scope, and so are
+    poses where the reference's own friction iteration does not converge."""
     got = analytic_solve(case)
     cond = got.diagnostics.get("condition_number", math.inf)
     assume(isinstance(cond, float) and cond <= CONDITION_LIMIT)
     assume(got.status == "ok")
-    reference = ref.solve(case)
+    # Decided before the reference's forces: next to a toggle its friction Newton may not
+    # converge, and the pose is out of scope anyway.
+    assume(ref.kinematic_condition(case) <= CONDITION_LIMIT)
+    try:
+        reference = ref.solve(case)
+    except ref.ReferenceError as error:
+        # The reference's Coulomb Newton is plain (no line search): next to a change point
+        # with a large friction circle it may not converge where the backend's does. Such an
+        # example has no reference to compare with; every one it solves is compared.
+        assume("friction" not in str(error))
+        raise
     assume(reference.min_sense_speed >= MIN_SENSE_SPEED)
-    assume(reference.kinematic_condition <= CONDITION_LIMIT)
     return got
 
 
