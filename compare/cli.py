@@ -83,7 +83,7 @@ def run_command(
     from mechcheck.casefile import builtin_case_files, load_specs
     from mechcheck.junit import junit_xml
     from mechcheck.output import OutputError, locked_folder, write_all
-    from mechcheck.report import render
+    from mechcheck.report import drawing_file, drawings, render
     from mechcheck.run import run
     from mechcheck.tables import diagnostics_frame, results_frame
 
@@ -105,7 +105,8 @@ def run_command(
     try:
         with locked_folder(out, "--out"):
             result = run(cases, names, progress=progress, fail_on=verdicts)
-            markdown, page = render(result, {c.name: s for c, s in specs})
+            pictures = drawings(result)
+            markdown, page = render(result, {c.name: s for c, s in specs}, pictures=pictures)
             write_all(out, {
                 "results.csv": results_frame(result.solutions).to_csv(index=False),
                 "comparison.csv": result.comparison.to_csv(index=False),
@@ -113,6 +114,9 @@ def run_command(
                 "report.md": markdown,
                 "report.html": page,
             })
+            if pictures:  # the Markdown report links to them; the HTML holds them
+                write_all(out / "drawings",
+                          {drawing_file(name): png for name, png in pictures.items()})
             if junit is not None:
                 write_all(junit.parent, {junit.name: junit_xml(result)})
     except OutputError as error:
@@ -245,8 +249,7 @@ def reports_command(
     from mechcheck.studies_report import run_studies
 
     codes = []
-    # Quoted in the report as found from here, so that it does not name this machine's path.
-    catalogue = [os.path.relpath(path) for path in catalogue_case_files()]
+    catalogue = [str(path) for path in catalogue_case_files()]
     for args in (["run", "-q", "--out", str(out / "suite")],
                  ["run", "-q", *catalogue, "--out", str(out / "catalogue")],
                  ["sweep", "-q", "--fresh", "--out", str(out / "sweep")]):

@@ -9,8 +9,10 @@ from __future__ import annotations
 import base64
 import html
 import math
+import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import jinja2
@@ -22,6 +24,7 @@ from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
 from mechcheck.figures import figure_file
 from mechcheck.linkage_file import LinkageCaseSpec
+from mechcheck.output import file_stem
 from mechcheck.run import RunResult
 from mechcheck.seeds import SeedRow, derived_value
 from mechcheck.tables import ordered, table_value
@@ -45,8 +48,13 @@ def fmt(value: float | None, digits: int = 6) -> str:
     return f"{value:.{digits}g}"
 
 
+def sci(value: float | None) -> str:
+    """An error or a tolerance: two significant digits, '—' for absent."""
+    return "—" if value is None else f"{value:.1e}"
+
+
 _ENV.filters["fmt"] = fmt
-_ENV.filters["sci"] = lambda v: "—" if v is None else f"{v:.1e}"
+_ENV.filters["sci"] = sci
 
 
 @dataclass(frozen=True)
@@ -58,24 +66,133 @@ class BackendSummary:
     verdicts: dict[str, int]
 
 
-def backend_summaries(result: RunResult) -> list[BackendSummary]:
-    """Passes, failures and the worst error of each quantity kind, per backend."""
+#: Bands of a comparison's error as a fraction of what its tolerance allows (its
+#: ``of_tolerance``, 1 at the tolerance): upper bound and name. They colour the matrix of
+#: cases × backends; a comparison outside its tolerance is ``fail`` whatever its number.
+BANDS: tuple[tuple[float, str], ...] = ((1e-3, "far"), (0.1, "clear"), (1.0, "near"))
+
+#: Markdown's marker of each band: a circle that fills as the error nears its tolerance.
+MARKERS = {"far": "○", "clear": "◔", "near": "◑", "fail": "●"}
+
+#: The legend of the matrix's colours, in the order shown.
+LEGEND = (("far", "≤ 0.001 of its tolerance"), ("clear", "≤ 0.1"), ("near", "≤ 1"),
+          ("fail", "outside tolerance"), ("verdict", "a verdict, no numbers"),
+          ("failing", "a verdict that fails the run"))
+
+
+@dataclass(frozen=True)
+class BackendLine:
+    """One backend's line at the top of the report."""
+
+    backend: str
+    compared: int
+    failed: int
+    verdicts: dict[str, int]
+    worst: dict[str, Any] | None   # the comparison row nearest to (or furthest past) its tolerance
+
+
+def severity(row: Mapping[str, Any]) -> tuple[bool, float, float]:
+    """Orders comparison rows from best to worst: failed last, then by the fraction of the
+    tolerance used, then by the relative error."""
+    return (not bool(row["passed"]), float(row["of_tolerance"]), float(row["rel_err"]))
+
+
+def worst_row(rows: Iterable[dict[str, Any]]) -> dict[str, Any] | None:
+    return max(rows, key=severity, default=None)
+
+
+def band(row: Mapping[str, Any]) -> str:
+    """The colour band of a comparison row: ``fail`` exactly when it failed."""
+    if not bool(row["passed"]):
+        return "fail"
+    ratio = float(row["of_tolerance"])
+    return next((name for bound, name in BANDS if ratio <= bound), "near")
+
+
+_ENV.filters["band"] = band
+
+
+def backend_lines(backends: list[str], by_backend: Mapping[str, list[dict[str, Any]]],
+                  solutions: list[Solution]) -> list[BackendLine]:
+    """Per backend: comparisons, failures, verdicts and its single worst comparison."""
     out = []
-    detail = result.detail
-    for backend in dict.fromkeys(s.backend for s in result.solutions):
-        if backend == REFERENCE:
-            continue
-        rows = detail[detail["backend"] == backend]
-        worst: dict[str, float] = {}
-        for q, group in rows.groupby("quantity"):
-            worst[str(q)] = float(group["rel_err"].max())
+    for backend in backends:
+        rows = by_backend.get(backend, [])
         verdicts: dict[str, int] = {}
-        for s in result.solutions:
+        for s in solutions:
             if s.backend == backend and s.status != "ok":
                 verdicts[s.status] = verdicts.get(s.status, 0) + 1
-        out.append(BackendSummary(backend, len(rows), int((~rows["passed"].astype(bool)).sum()),
-                                  {q: worst[q] for q in ordered(worst)}, verdicts))
+        out.append(BackendLine(backend, len(rows), sum(not r["passed"] for r in rows),
+                               verdicts, worst_row(rows)))
     return out
+
+
+def matrix_cell(solution: Solution | None, rows: list[dict[str, Any]],
+                fail_on: tuple[str, ...]) -> dict[str, str]:
+    """One case on one backend: a failing verdict; else its worst relative error, banded by
+    the fraction of its tolerance; else the verdict that left it without numbers."""
+    if solution is not None and solution.status in fail_on:
+        return {"band": "failing", "text": solution.status, "title": solution.message}
+    worst = worst_row(rows)
+    if worst is not None:
+        note = "" if solution is None or solution.status == "ok" else \
+            f"; {solution.status}: {solution.message}"
+        return {"band": band(worst), "text": sci(worst["rel_err"]),
+                "title": row_summary(worst) + note}
+    if solution is not None and solution.status != "ok":
+        return {"band": "verdict", "text": solution.status, "title": solution.message}
+    return {"band": "none", "text": "—",
+            "title": "not run" if solution is None else "no quantity in common with analytic"}
+
+
+def row_summary(row: Mapping[str, Any]) -> str:
+    """A comparison in words, for a cell's tooltip."""
+    return (f"{row['quantity']}: relative error {sci(row['rel_err'])}, tolerance "
+            f"{sci(row['tolerance'])}, {sci(row['of_tolerance'])} of it")
+
+
+def quantity_worst(detail: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One case's worst comparison of each quantity over the backends, worst first."""
+    by_quantity: dict[str, list[dict[str, Any]]] = {}
+    for row in detail:
+        by_quantity.setdefault(str(row["quantity"]), []).append(row)
+    worst = [w for rows in by_quantity.values() if (w := worst_row(rows)) is not None]
+    return [{**w, "band": band(w)} for w in sorted(worst, key=severity, reverse=True)]
+
+
+def case_drawing(case: Case, solution: Solution | None) -> bytes | None:
+    """A PNG of the mechanism at its pose, for the case's section; None: no drawing."""
+    return None
+
+
+def drawings(result: RunResult) -> dict[str, bytes]:
+    """Each case's drawing (PNG) at the reference's solution, by case name."""
+    reference = {s.case: s for s in result.solutions if s.backend == REFERENCE}
+    out = {}
+    for case in result.cases:
+        png = case_drawing(case, reference.get(case.name))
+        if png is not None:
+            out[case.name] = png
+    return out
+
+
+def drawing_file(case_name: str) -> str:
+    """A case's drawing's file name, in the report's ``drawings/`` folder."""
+    return f"{file_stem(case_name)}.png"
+
+
+def shown_path(path: str) -> str:
+    """A case file's path as the report shows it: inside the package as ``mechcheck/…``,
+    else relative to the current directory, so a report does not depend on where the
+    clone or the installation sits."""
+    absolute = Path(path).absolute()
+    package = Path(__file__).parent
+    if absolute.is_relative_to(package):
+        return "mechcheck/" + absolute.relative_to(package).as_posix()
+    try:
+        return os.path.relpath(absolute)
+    except ValueError:   # another drive (Windows): nothing relative to name
+        return path
 
 
 #: Above this many cases, the sections of passing cases are folded (<details>) so that a
@@ -151,7 +268,7 @@ def _pair(p: list[float]) -> str:
 
 
 def case_view(case: Case, spec: AnySpec | None, solutions: list[Solution],
-              detail: list[dict[str, Any]], folded: bool) -> dict[str, Any]:
+              detail: list[dict[str, Any]], folded: bool, drawing: bytes | None) -> dict[str, Any]:
     """Values of every backend side by side, with errors, for one case.
 
     ``detail`` holds this case's comparison rows only, as records: the caller splits
@@ -165,15 +282,17 @@ def case_view(case: Case, spec: AnySpec | None, solutions: list[Solution],
         "name": case.name, "anchor": f"case-{case.name}",
         "description": spec.description if spec else "",
         "mechanism": case.mechanism, "kind": str(detail[0]["case_kind"]) if detail
-        else case.kind, "source": case.source, "backends": backends, "rows": rows,
+        else case.kind, "source": shown_path(case.source) if case.source else "",
+        "backends": backends, "rows": rows,
         "inputs": case_inputs(case, spec),
         "compared": len(detail), "failed": failed,
-        "worst": max(float(r["rel_err"]) for r in detail) if detail else None,
-        "verdict_counts": _counts(s.status for s in verdicts),
+        "quantity_worst": quantity_worst(detail),
         "folded": folded and not failed and not verdicts,
         "verdicts": verdicts,
         "diagnostics": [(s.backend, s.status, dict(s.diagnostics)) for s in solutions],
         "overrides": list(case.tolerance),
+        "drawing": base64.b64encode(drawing).decode() if drawing else None,
+        "drawing_file": drawing_file(case.name),
     }
 
 
@@ -195,14 +314,8 @@ def _cell(q: str, s: Solution, hit: dict[str, Any] | None) -> dict[str, Any]:
         "passed": bool(hit["passed"]) if hit else None,
         "tolerance": float(hit["tolerance"]) if hit else None,
         "overridden": bool(hit["overridden"]) if hit else False,
+        "band": band(hit) if hit else None,
     }
-
-
-def _counts(statuses: Iterable[str]) -> str:
-    counts: dict[str, int] = {}
-    for status in statuses:
-        counts[status] = counts.get(status, 0) + 1
-    return ", ".join(f"{k} ×{v}" for k, v in counts.items())
 
 
 def seed_rows(result: RunResult, specs: Mapping[str, AnySpec]) -> list[SeedRow]:
@@ -219,41 +332,67 @@ def seed_rows(result: RunResult, specs: Mapping[str, AnySpec]) -> list[SeedRow]:
     return out
 
 
-def view_model(result: RunResult, specs: Mapping[str, AnySpec], title: str) -> dict[str, Any]:
+def view_model(result: RunResult, specs: Mapping[str, AnySpec], title: str,
+               pictures: Mapping[str, bytes]) -> dict[str, Any]:
+    """Everything the report's templates show: the verdict, the backends' lines, the matrix
+    of cases × backends, then each case's section."""
     by_case: dict[str, list[Solution]] = {}
     for s in result.solutions:
         by_case.setdefault(s.case, []).append(s)
-    failed = result.failed_comparisons
     per_case: dict[str, list[dict[str, Any]]] = {}
+    per_backend: dict[str, list[dict[str, Any]]] = {}
     for record in result.detail.to_dict("records"):
-        per_case.setdefault(str(record["case"]), []).append({str(k): v for k, v in record.items()})
+        row = {str(k): v for k, v in record.items()}
+        per_case.setdefault(str(row["case"]), []).append(row)
+        per_backend.setdefault(str(row["backend"]), []).append(row)
+    backends = [b for b in dict.fromkeys(s.backend for s in result.solutions) if b != REFERENCE]
+    lines = backend_lines(backends, per_backend, result.solutions)
     seeds = seed_rows(result, specs)
-    notes = {r.case: r.note for r in seeds}
     return {
         "title": title,
         "passed": result.exit_status == 0,
         "n_cases": len(result.cases),
         "n_comparisons": len(result.detail),
         "nothing_compared": result.nothing_compared,
-        "n_failed": len(failed),
+        "n_failed": len(result.failed_comparisons),
         "wall_time_s": result.wall_time_s,
         "fail_on": ", ".join(result.fail_on),
-        "summaries": backend_summaries(result),
-        "failures": failed.to_dict("records"),
+        "lines": lines,
+        "closest": max(((line.backend, line.worst) for line in lines if line.worst),
+                       key=lambda pair: severity(pair[1]), default=None),
+        "backends": backends,
+        "matrix": [matrix_row(c.name, by_case.get(c.name, []), per_case.get(c.name, []),
+                              backends, result.fail_on) for c in result.cases],
+        "legend": LEGEND, "markers": MARKERS,
+        "failures": result.failed_comparisons.to_dict("records"),
         "failing_verdicts": result.failing_verdicts,
         "seeds": seeds,
-        "seed_notes": notes,
+        "seed_notes": {r.case: r.note for r in seeds},
         "cases": [case_view(c, specs.get(c.name), by_case.get(c.name, []),
-                            per_case.get(c.name, []), folded=len(result.cases) > FOLD_ABOVE)
+                            per_case.get(c.name, []), folded=len(result.cases) > FOLD_ABOVE,
+                            drawing=pictures.get(c.name))
                   for c in result.cases],
         "policy": policy_table(),
     }
 
 
+def matrix_row(case: str, solutions: list[Solution], detail: list[dict[str, Any]],
+               backends: list[str], fail_on: tuple[str, ...]) -> dict[str, Any]:
+    """One case's row of the matrix: a cell per backend."""
+    solution = {s.backend: s for s in solutions}
+    rows: dict[str, list[dict[str, Any]]] = {}
+    for row in detail:
+        rows.setdefault(str(row["backend"]), []).append(row)
+    return {"case": case, "anchor": f"case-{case}",
+            "cells": [matrix_cell(solution.get(b), rows.get(b, []), fail_on) for b in backends]}
+
+
 def render(result: RunResult, specs: Mapping[str, AnySpec],
-           title: str = "mechcheck accuracy report") -> tuple[str, str]:
-    """(Markdown, HTML) of a run."""
-    model = view_model(result, specs, title)
+           title: str = "mechcheck accuracy report",
+           pictures: Mapping[str, bytes] | None = None) -> tuple[str, str]:
+    """(Markdown, HTML) of a run. ``pictures``: each case's drawing by case name (default:
+    :func:`drawings`); the Markdown links to them in ``drawings/``, the HTML holds them."""
+    model = view_model(result, specs, title, drawings(result) if pictures is None else pictures)
     return (_ENV.get_template("report.md.j2").render(**model),
             _ENV.get_template("report.html.j2").render(**model, escape=html.escape))
 

@@ -22,7 +22,7 @@ from mechcheck.analytic.solution import (
     unit_factor,
 )
 from mechcheck.backends import REFERENCE
-from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, case_kind, tolerance_for
+from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, case_kind, of_tolerance, tolerance_for
 
 RESULT_COLUMNS = ["case", "backend", "quantity", "value", "unit"]
 COMPARISON_COLUMNS = ["case", "quantity", "backend", "value", "reference", "abs_err",
@@ -97,6 +97,7 @@ def comparison_rows(case: Case, reference: Solution, other: Solution) -> list[di
             # Not written to comparison.csv (the contract fixes its columns); the report uses them.
             "atol": tol.atol, "case_kind": kind, "reason": tol.reason,
             "overridden": tol.overridden,
+            "of_tolerance": of_tolerance(rel_err, abs_err, tol.rtol, tol.atol),
         })
     return rows
 
@@ -115,7 +116,7 @@ def comparison_detail(cases: Sequence[Case], solutions: Sequence[Solution]) -> p
         for backend, other in found.items():
             if backend != REFERENCE:
                 rows += comparison_rows(case, reference, other)
-    columns = [*COMPARISON_COLUMNS, "atol", "case_kind", "reason", "overridden"]
+    columns = [*COMPARISON_COLUMNS, "atol", "case_kind", "reason", "overridden", "of_tolerance"]
     return pd.DataFrame(rows, columns=columns)
 
 

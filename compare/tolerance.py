@@ -19,6 +19,7 @@ A case file may tighten or loosen a tolerance for one case with
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from fnmatch import fnmatch
 from typing import Literal
@@ -75,6 +76,22 @@ _RULES: list[tuple[Family | Literal["*"], str, str, Tolerance]] = [
     ("*", "*", "*", Tolerance(
         1e-6, 0.0, "default for a backend the policy does not name yet")),
 ]
+
+
+def of_tolerance(rel_err: float, abs_err: float, rtol: float, atol: float) -> float:
+    """A comparison's error as a fraction of what its tolerance allows: 1 at the tolerance.
+
+    A comparison passes when ``rel_err <= rtol`` or ``abs_err <= atol`` (``abs_err`` in SI,
+    as the policy's ``atol``), so this is the smaller of the two ratios, and a comparison
+    passes exactly when it is at most 1. A limit of zero allows only a zero error.
+    """
+    return min(_ratio(rel_err, rtol), _ratio(abs_err, atol))
+
+
+def _ratio(error: float, limit: float) -> float:
+    if limit > 0:
+        return error / limit
+    return 0.0 if error <= 0 else math.inf
 
 
 def case_kind(case: Case, condition_number: float) -> str:
