@@ -196,7 +196,7 @@ def shown_path(path: str) -> str:
 
 
 #: Above this many cases, the sections of passing cases are folded (<details>) so that a
-#: large run's page stays readable; the index at the top links to every case.
+#: large run's page stays readable; the matrix at the top links to every case.
 FOLD_ABOVE = 50
 
 
