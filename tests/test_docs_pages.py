@@ -26,7 +26,7 @@ NARRATION = {
         "a project document the clone does not have",
     r"\bretired\b|\bno longer\b|\bused to\b|\bearlier (?:version|release|choice|closed form)s?\b"
     r"|\bthe run before\b|\(before,|\bbefore:|\bBefore,|\bit was \d|\bwas \d[\d.,]* ?(?:ms|s|µs)\b"
-    r"|\bdraw of README|\bfound by (?:a|the) random\b|\bTraced and fixed\b":
+    r"|\bwas once\b|\bdraw of README|\bfound by (?:a|the) random\b|\bTraced and fixed\b":
         "what an earlier version did, or how a finding was made",
 }
 
