@@ -11,7 +11,8 @@ A fenced block is one of:
   printed;
 - Python (```python): a doctest; README's is collected by pytest itself
   (`--doctest-glob=README.md`), the pages' here;
-- output (``` or ```text): what a command prints, not run.
+- output (``` or ```text): what a command prints; with a `<!-- output-of: mechcheck ... -->`
+  comment just above it, that command runs too and prints every line the block shows.
 
 A block that is not run (an install, the whole test suite, a Dask cluster) says why in a
 `<!-- not-run: REASON -->` comment just above it, visible in the page's source.
@@ -42,6 +43,7 @@ COMMAND = {"bash", "console", "sh", "shell"}
 OUTPUT = {"", "text"}
 NOT_RUN = re.compile(r"<!--\s*not-run:\s*(\S.*?)\s*-->", re.S)
 EXPECT = re.compile(r"<!--\s*expect:\s*(.*?)\s*-->", re.S)
+OUTPUT_OF = re.compile(r"<!--\s*output-of:\s*(mechcheck\b.*?)\s*-->", re.S)
 #: The analytic backends other than the reference: fast, and exact to rounding.
 FAST_BACKENDS = ["superposition", "virtual_work"]
 
@@ -125,16 +127,29 @@ def in_tmp(tmp_path: Path) -> Iterator[Path]:
         os.chdir(before)
 
 
-COMMAND_PAGES = sorted({b.page for b in ALL_BLOCKS if b.lang in COMMAND and b.runs and command_lines(b)})
+def shown_output(block: Block) -> tuple[list[str], list[str]]:
+    """The command an output block shows the output of (or none), and the lines it shows."""
+    match = OUTPUT_OF.search(block.comment) if block.lang in OUTPUT else None
+    shown = [line.rstrip() for line in block.text.splitlines() if line.strip()]
+    return (shlex.split(match.group(1)) if match else []), shown
+
+
+COMMAND_PAGES = sorted({b.page for b in ALL_BLOCKS
+                        if (b.lang in COMMAND and b.runs and command_lines(b)) or shown_output(b)[0]})
 
 
 @pytest.mark.parametrize("page", COMMAND_PAGES, ids=lambda page: str(page.relative_to(ROOT)))
 def test_the_commands_of_a_page_run(page: Path, in_tmp: Path) -> None:
-    """Each mechcheck command of the page, in page order in one fresh folder, exits 0."""
+    """Each mechcheck command of the page, in page order in one fresh folder, exits 0, and
+    prints every line of the output the page shows for it."""
     for block in blocks(page):
         if block.lang in COMMAND and block.runs:
             for words in command_lines(block):
                 run_command(words, in_tmp)
+        command, shown = shown_output(block)
+        if command:
+            printed = {line.rstrip() for line in run_command(command, in_tmp).splitlines()}
+            assert not [line for line in shown if line not in printed], (block.where, printed)
 
 
 CASE_BLOCKS = [b for b in ALL_BLOCKS if b.lang == "toml" and b.runs]
