@@ -15,15 +15,15 @@ ROOT = Path(__file__).resolve().parents[1]
 #: What a user reads: the front page and the reference pages.
 USER_PAGES = sorted([ROOT / "README.md", *(ROOT / "docs").glob("*.md")])
 #: Every page of the clone whose links and file names must resolve (the developers' too).
-ALL_PAGES = sorted([*USER_PAGES, ROOT / "CHANGELOG.md", *ROOT.glob("*/README.md")])
+ALL_PAGES = sorted([*USER_PAGES, ROOT / "CHANGELOG.md",
+                    *(path for path in ROOT.glob("*/**/README.md")
+                      if not any(part.startswith(".") for part in path.relative_to(ROOT).parts))])
 
 #: Development narration a user page must not carry, each with why.
 NARRATION = {
     r"\bissues? \d+|(?<![\w&/])#\d+\b": "an issue number",
     r"(?<!test )\bsessions?\b": "a work session (a pytest session is named so)",
     r"\b20\d\d-\d\d-\d\d\b": "a date (a dated finding or measurement belongs in CHANGELOG.md)",
-    r"\b(?:LINKAGES|SIMULATORS|SEEDS|DESIGN|CONVENTIONS|STYLE)\.md\b|\.\./shared\b":
-        "a project document the clone does not have",
     r"\bretired\b|\bno longer\b|\bused to\b|\bearlier (?:version|release|choice|closed form)s?\b"
     r"|\bthe run before\b|\(before,|\bbefore:|\bBefore,|\bit was \d|\bwas \d[\d.,]* ?(?:ms|s|µs)\b"
     r"|\bwas once\b|\bdraw of README|\bfound by (?:a|the) random\b|\bTraced and fixed\b":
@@ -119,6 +119,16 @@ def test_no_user_page_narrates_the_development(page: Path) -> None:
     found = [f"line {text.count(chr(10), 0, hit.start()) + 1}: {hit.group(0)!r} ({why})"
              for pattern, why in NARRATION.items() for hit in re.finditer(pattern, text)]
     assert not found, "\n".join(found)
+
+
+#: The project's planning documents, which live outside the repository.
+ABSENT_DOCUMENTS = re.compile(r"\b(?:LINKAGES|SIMULATORS|SEEDS|DESIGN|CONVENTIONS|STYLE)\.md\b|\.\./shared\b")
+
+
+@pytest.mark.parametrize("page", ALL_PAGES, ids=page_id)
+def test_no_page_sends_the_reader_to_a_document_the_clone_lacks(page: Path) -> None:
+    """No page, a developer's README included, names a planning document kept outside."""
+    assert not ABSENT_DOCUMENTS.findall(page.read_text(encoding="utf-8"))
 
 
 def test_changelog_names_no_issue_or_session() -> None:
