@@ -41,9 +41,11 @@ def bars(stiffness: dict[str, float | None]) -> Linkage:
                    loads=(PointLoad(f"bar{names[0]}", NODE, LOAD),))
 
 
-def displacement_method(stiffness: dict[str, float]) -> dict[str, float]:
-    """The seed's method: the node's displacement from the bars' stiffnesses, then each bar's
-    tension (E·A/L)·e·u, e the unit vector from the wall to the node."""
+def displacement_method(stiffness: dict[str, float],
+                        load: tuple[float, float] = LOAD) -> dict[str, float]:
+    """The seed's method: the node's displacement from the bars' stiffnesses under the node's
+    ``load``, then each bar's tension (E·A/L)·e·u, e the unit vector from the wall to the
+    node."""
     k_node = np.zeros((2, 2))
     units = {}
     for w, ea in stiffness.items():
@@ -52,7 +54,7 @@ def displacement_method(stiffness: dict[str, float]) -> dict[str, float]:
         e = d / length
         units[w] = (e, ea / length)
         k_node += ea / length * np.outer(e, e)
-    u = np.linalg.solve(k_node, LOAD)
+    u = np.linalg.solve(k_node, load)
     return {w: k * float(e @ u) for w, (e, k) in units.items()}
 
 
