@@ -8,18 +8,21 @@ the analytic answer is the linear one)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import mujoco
 import numpy as np
 import pytest
 
 import mechcheck
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import LinkMass
 from mechcheck.sim_models.linkage_motion import STRAIN_LIMIT
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
 from mechcheck.tables import comparison_rows
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import STRAIN_FACTOR, rule
-from tests.test_elastic import bars, displacement_method
+from tests.test_elastic import along_bar, bars, displacement_method, loaded_bar_method
 
 RTOL = rule("mujoco", "force", "static").rtol
 
@@ -51,6 +54,24 @@ def test_mujoco_bars_carry_the_displacement_methods_forces() -> None:
     assert sim.status == "ok", sim.message
     for w, tension in displacement_method(stiffness).items():
         assert sim.values[f"N_bar{w}"] == pytest.approx(tension, rel=RTOL, abs=RTOL * 1000.0), w
+
+
+@pytest.mark.parametrize("t", [0.5, 0.25])
+def test_a_member_with_its_own_weight_shares_the_load_as_the_displacement_method_says(
+        t: float) -> None:
+    """Bar B of 20 kg, its centre of mass at its middle or a quarter of the way from the wall:
+    each N_<bar> MuJoCo reads (its equality's force, less the weight's share off the middle)
+    is the displacement method's with the weight's lever-rule share at the node; every
+    reaction the analytic backend's."""
+    stiffness = STIFF[0]
+    heavy = replace(bars(dict(stiffness)), gravity=(0.0, -9.81),
+                    masses=(LinkMass("barB", 20.0, along_bar("B", t), 0.0),))
+    case = Case("heavy-bars", heavy)
+    sim = mechcheck.solve(case, "mujoco")
+    assert sim.status == "ok", sim.message
+    for w, tension in loaded_bar_method(stiffness, "B", t, (0.0, -9.81 * 20.0)).items():
+        assert sim.values[f"N_bar{w}"] == pytest.approx(tension, rel=RTOL, abs=RTOL * 1000.0), w
+    assert_solution_close(case, sim, complete=True)
 
 
 def test_a_member_is_a_spring_of_its_stiffness() -> None:

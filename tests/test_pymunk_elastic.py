@@ -20,7 +20,7 @@ from mechcheck.sim_models.pymunk import backend as pm
 from mechcheck.testing import assert_solution_close
 from mechcheck.tolerance import rule
 
-from .test_elastic import LOAD, bars, displacement_method
+from .test_elastic import LOAD, along_bar, bars, displacement_method, loaded_bar_method
 
 THREE = {"A": 2.0e10, "B": 1.0e10, "C": 3.0e10}
 FOUR = {"A": 1.0e10, "B": 5.0e10, "C": 1.0e10, "E": 2.0e10}
@@ -52,25 +52,23 @@ def test_the_constraint_solve_at_the_pose_still_refuses_elastic_members() -> Non
     assert solution.status == "not_applicable" and "axial_stiffness" in solution.message
 
 
-#: A 20 kg bar B (its weight, 196 N, a fifth of the load) hung at its middle.
-HEAVY = LinkMass("barB", 20.0, (0.6, 0.85), 0.0)
-
-
-def test_a_member_with_its_own_weight_shares_the_load_as_the_displacement_method_says() -> None:
-    """Bar B's weight at its middle: half of it bears on the node D, half on the wall, and
-    the bar stretches by its mean tension (∫N dx/(E·A)). The displacement method with the
-    node's load plus half the weight gives each bar's N, which pymunk's (its spring's tension
-    and the weight's share) meets within the settled tolerance; every reaction meets the
-    analytic backend's."""
-    heavy = replace(bars(dict(THREE)), masses=(HEAVY,), gravity=(0.0, -9.81))
+@pytest.mark.parametrize("t", [0.5, 0.25])
+def test_a_member_with_its_own_weight_shares_the_load_as_the_displacement_method_says(
+        t: float) -> None:
+    """Bar B of 20 kg (196 N, a fifth of the load), its centre of mass at its middle or a
+    quarter of the way from the wall: the node bears t of its weight, and the bar stretches
+    by its whole tension (∫N dx/(E·A)). Each N_<bar> of pymunk's (its spring's tension and
+    the weight's share) is the displacement method's (tests/test_elastic.py) within the
+    settled tolerance; every reaction the analytic backend's."""
+    weight = (0.0, -9.81 * 20.0)
+    heavy = replace(bars(dict(THREE)), gravity=(0.0, -9.81),
+                    masses=(LinkMass("barB", 20.0, along_bar("B", t), 0.0),))
     case = Case("heavy-bars", heavy)
     solution = pm.settle(case)
     assert solution.status == "ok", solution.message
-    weight = (0.0, -9.81 * HEAVY.mass)
-    node_load = (LOAD[0] + 0.5 * weight[0], LOAD[1] + 0.5 * weight[1])
     tol = rule("pymunk", "force", "static")
     size = max(abs(f) for f in LOAD)
-    expected = displacement_method(THREE, node_load)
+    expected = loaded_bar_method(THREE, "B", t, weight)
     unweighted = displacement_method(THREE)
     assert abs(expected["B"] - unweighted["B"]) > 1e3 * tol.rtol * size  # the weight matters
     for w, tension in expected.items():

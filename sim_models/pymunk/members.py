@@ -15,9 +15,9 @@ tension vary along it, and the spring carries the tension at the sliding end onl
 member's stretch is ∫N dx/(E·A): a load F at the fraction t of the way from the pinned end
 to the sliding end adds t·F·e to the spring's tension over the whole length (e the axis
 from the pinned end to the sliding end), so the spring's rest length is L plus that stretch
-(:func:`own_loads`). Its ``N_<link>`` is the mean of the tensions just inside the two ends,
-the analytic engine's: the spring's plus F·e for a load at the sliding end and ½·F·e for
-one between the ends. For a weight at the middle (t = ½) the stretch is then that mean's.
+(:func:`own_load_terms`). Its ``N_<link>`` is the mean of the tensions just inside the two
+ends, the analytic engine's: the spring's plus F·e for a point load at the sliding end and
+½·F·e for a weight or a load between the ends.
 
 Chipmunk applies a spring's force explicitly, so a stiff member needs a short step:
 :data:`STEP_FRACTION` × sqrt(m/k) for the fictitious mass m and the stiffest member's k.
@@ -35,6 +35,7 @@ import pymunk
 
 from mechcheck.analytic.joint_kinds import REVOLUTE
 from mechcheck.analytic.linkage import Joint, Link, Linkage
+from mechcheck.analytic.linkage_elastic import own_loads
 from mechcheck.sim_models.pymunk._fast import Cell, impulse_cells, read
 from mechcheck.sim_models.pymunk.joint_kinds import GROOVE_REACH
 from mechcheck.sim_models.pymunk.settings import SolverSettings
@@ -83,27 +84,20 @@ def sliding_ends(linkage: Linkage) -> dict[str, SlidingEnd] | str:
     return out
 
 
-def own_loads(linkage: Linkage, end: SlidingEnd) -> tuple[float, Vec]:
-    """The member's own loads F, each at the fraction t of the way from the pinned end to the
-    sliding end (its point loads, and its weight at its centre of mass): Σ t·F·e, the stretch
-    they add × E·A/L (e the drawn axis from the pinned end to the sliding end); and Σ c·F,
-    whose part along the axis the mean of the end tensions adds to the spring's (c = 0 at
-    the pinned end, 1 at the sliding end, ½ between), taken along the axis where it is read."""
-    member = end.member
+def own_load_terms(linkage: Linkage, end: SlidingEnd) -> tuple[float, Vec]:
+    """The member's own loads F (:func:`mechcheck.analytic.linkage_elastic.own_loads`), each
+    at t from the pinned end to the sliding end: Σ t·F·e, the stretch they add × E·A/L (e the
+    drawn axis from the pinned end to the sliding end); and Σ c·F, whose part along the
+    axis the mean of the end tensions adds to the spring's (c = ½ between the ends, t for a
+    point load at an end: 1 at the sliding end, 0 at the pinned one), taken along the axis
+    where it is read."""
     (fx, fy), (ex, ey) = linkage.points[end.far], linkage.points[end.end]
     length = math.hypot(ex - fx, ey - fy)
     ux, uy = (ex - fx) / length, (ey - fy) / length
-    gx, gy = linkage.gravity
-    forces = [(load.at, load.force) for load in linkage.loads if load.link == member.name]
-    forces += [(m.com, (m.mass * gx, m.mass * gy)) for m in linkage.masses
-               if m.link == member.name]
     stretching, mean_x, mean_y = 0.0, 0.0, 0.0
-    for (px, py), (lx, ly) in forces:
-        t = min(max(((px - fx) * ux + (py - fy) * uy) / length, 0.0), 1.0)
-        stretching += t * (lx * ux + ly * uy)
-        at_end = math.dist((px, py), (ex, ey)) <= 1e-12 * linkage.scale
-        at_pin = math.dist((px, py), (fx, fy)) <= 1e-12 * linkage.scale
-        c = 1.0 if at_end else 0.0 if at_pin else 0.5
+    for load in own_loads(linkage, end.member, end.far):
+        (lx, ly), c = load.force, 0.5 if load.inside else load.t
+        stretching += load.t * (lx * ux + ly * uy)
         mean_x, mean_y = mean_x + c * lx, mean_y + c * ly
     return stretching, (mean_x, mean_y)
 
@@ -144,7 +138,7 @@ class MemberEnd:
     """A built sliding end: the ``groove`` and ``spring`` (body a the member, body b the
     other link), whether the other link is the joint's links[1] (``on_b``), and what the
     member's own loads add to the spring's tension in its N, along the axis (``mean_share``,
-    :func:`own_loads`)."""
+    :func:`own_load_terms`)."""
 
     joint: str
     member: str
@@ -177,7 +171,7 @@ class MemberEnd:
 def build_end(model: LinkageModel, end: SlidingEnd) -> MemberEnd:
     """The groove along the member's axis and the spring (E·A/L, damped critically for the
     fictitious mass; rest length L plus the stretch of the member's own loads,
-    :func:`own_loads`) of one sliding end."""
+    :func:`own_load_terms`) of one sliding end."""
     linkage, member = model.linkage, end.member
     j = end.joint
     other = j.links[1] if j.links[0] == member.name else j.links[0]
@@ -190,6 +184,6 @@ def build_end(model: LinkageModel, end: SlidingEnd) -> MemberEnd:
                                 (fx + reach * ux, fy + reach * uy), (ex, ey))
     k = stiffness(linkage, member)
     damper = 2.0 * math.sqrt(k * model.settings.fictitious_mass)
-    stretching, mean = own_loads(linkage, end)
+    stretching, mean = own_load_terms(linkage, end)
     spring = pymunk.DampedSpring(a, b, (fx, fy), (ex, ey), length + stretching / k, k, damper)
     return MemberEnd(j.name, member.name, groove, spring, other == j.links[1], mean)
