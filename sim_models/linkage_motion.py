@@ -52,8 +52,8 @@ def unmodelled(linkage: Linkage, built: Collection[str], simulator: str,
                 f"(axial_stiffness of {', '.join(m.name for m in linkage.elastic_links)}), and "
                 f"the {simulator} model's bodies are rigid here (a constraint solve at a fixed "
                 "pose, or a driven run): at the drawn pose nothing stretches to decide them, "
-                "and the stretched pose would have to come from the analytic answer itself; a "
-                "held structure settled by simulation stretches them")
+                "and the stretched pose would have to come from the analytic answer itself; the "
+                f"'{simulator.lower()}' backend stretches them in a held structure, settled")
     return None
 
 
