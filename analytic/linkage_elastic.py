@@ -101,9 +101,10 @@ def own_loads(linkage: Linkage, member: Link, start: str) -> list[OwnLoad]:
     def along(at: tuple[float, float]) -> float:
         return float(np.clip(np.dot(np.asarray(at) - a, d) / np.dot(d, d), 0.0, 1.0))
 
-    out = [OwnLoad(along(load.at), load.force,
-                   min(np.hypot(*(np.asarray(load.at) - a)), np.hypot(*(np.asarray(load.at) - b)))
-                   > tol)
+    def between_ends(at: tuple[float, float]) -> bool:
+        return min(np.hypot(*(np.asarray(at) - a)), np.hypot(*(np.asarray(at) - b))) > tol
+
+    out = [OwnLoad(along(load.at), load.force, between_ends(load.at))
            for load in linkage.loads if load.link == member.name]
     gx, gy = linkage.gravity
     out += [OwnLoad(along(m.com), (m.mass * gx, m.mass * gy), True)

@@ -62,7 +62,7 @@ def unmodelled(linkage: Linkage, built: Collection[str], simulator: str,
 #: equilibrium on the stretched members, the analytic one that of small displacements; they
 #: differ by a few times the strain, which the tolerance policy allows for (its
 #: small-displacement bound, ``mechcheck.tolerance.STRAIN_FACTOR``). Above 1e-3 the
-#: displacements are no longer small: the neglected terms reach the percent, and a steel
+#: displacements are no longer small: the bound reaches half a percent, and a steel
 #: member (E = 210 GPa) would be past its yield stress (about 210 MPa at that strain).
 STRAIN_LIMIT = 1e-3
 
