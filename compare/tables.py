@@ -80,6 +80,7 @@ def comparison_rows(case: Case, reference: Solution, other: Solution) -> list[di
     """One row per quantity both solutions report, with the policy's tolerance."""
     scales = kind_scales(case, reference)
     kind = case_kind(case, float(reference.diagnostics.get("condition_number", 0.0)))
+    strain = float(reference.diagnostics.get("max_strain", 0.0))
     rows: list[dict[str, object]] = []
     for q in ordered(set(reference.values) & set(other.values)):
         ref, val, unit = reference.values[q], other.values[q], reference.unit(q)
@@ -87,7 +88,7 @@ def comparison_rows(case: Case, reference: Solution, other: Solution) -> list[di
         if unit == "deg":
             abs_err = abs(math.remainder(val - ref, math.tau))  # angles wrap
         rel_err = abs_err / error_scale(unit, scales)
-        tol = tolerance_for(case, other.backend, q, kind, kind_of_unit(unit))
+        tol = tolerance_for(case, other.backend, q, kind, kind_of_unit(unit), strain)
         rows.append({
             "case": case.name, "quantity": q, "backend": other.backend,
             "value": table_value(q, val, unit), "reference": table_value(q, ref, unit),

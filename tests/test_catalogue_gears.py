@@ -346,3 +346,115 @@ def test_mechcheck_run_passes_the_file_on_every_backend(stem: str, tmp_path: Pat
     result = CliRunner().invoke(app, ["run", "-q", str(CATALOGUE / f"{stem}.toml"),
                                       "-o", str(tmp_path)])
     assert result.exit_code == 0, result.output
+
+
+# -- the over-constrained structure: its exact equilibrium, the small-displacement bound -----
+def exact_equilibrium(p: dict[str, np.ndarray]) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+    """The bracket's equilibrium on its stretched geometry, with no linearisation: the free
+    nodes where each bar, a spring N = (E·A/L)·(ℓ − L) along its own deformed line ℓ, with
+    half its weight at each end, balances the hoist; solved by least squares (scipy) on the
+    free nodes' positions. The nodes' positions and each bar's N."""
+    from scipy.optimize import least_squares
+
+    def placed(u: np.ndarray) -> dict[str, np.ndarray]:
+        return {**p, **{node: p[node] + u[2 * k:2 * k + 2] for k, node in enumerate(FREE)}}
+
+    def tension(at: dict[str, np.ndarray], bar: str) -> tuple[float, np.ndarray]:
+        i, j, area, _ = BARS[bar]
+        rest, d = float(np.hypot(*(p[j] - p[i]))), at[j] - at[i]
+        length = float(np.hypot(*d))
+        return E_STEEL * area * 1e-6 * (length - rest) / rest, d / length
+
+    def unbalanced(u: np.ndarray) -> np.ndarray:
+        at = placed(u)
+        net = {node: np.zeros(2) for node in FREE}
+        net["D"] += HOIST
+        for bar, (i, j, _, mass) in BARS.items():
+            n, e = tension(at, bar)
+            for end, pull in ((i, n * e), (j, -n * e)):
+                if end in net:
+                    net[end] += pull + np.array([0.0, -0.5 * G * mass])
+        return np.concatenate([net[node] for node in FREE]) / abs(HOIST[1])
+
+    fit = least_squares(unbalanced, np.zeros(2 * len(FREE)), x_scale=1e-4, xtol=1e-15,
+                        ftol=1e-15, gtol=1e-15)
+    assert np.max(np.abs(unbalanced(fit.x))) < 1e-12
+    at = placed(fit.x)
+    return at, {bar: tension(at, bar)[0] for bar in BARS}
+
+
+def exact_values(p: dict[str, np.ndarray]) -> dict[str, float]:
+    """The exact equilibrium as the backends name it: N_<bar>, each joint's F (on its
+    links[1], a bar: its pull −N·e at its first end, +N·e at its second, and half its weight
+    held up, along the deformed e), the free nodes' positions and each bar's angle turned
+    from the drawing (phi_<bar>)."""
+    at, tensions = exact_equilibrium(p)
+    table = table_of("over_constrained")
+    out = {f"N_{bar}": n for bar, n in tensions.items()}
+    for joint in table["joints"]:
+        bar = joint["links"][1]
+        i, j, _, mass = BARS[bar]
+        e = (at[j] - at[i]) / np.hypot(*(at[j] - at[i]))
+        pull = -tensions[bar] * e if joint["at"] == i else tensions[bar] * e
+        out[f"F_{joint['name']}_x"], out[f"F_{joint['name']}_y"] = pull + np.array([0.0, 0.5 * G * mass])
+    for node in FREE:
+        out[f"x_{node}"], out[f"y_{node}"] = at[node]
+    for bar, (i, j, _, _) in BARS.items():
+        drawn, now = p[j] - p[i], at[j] - at[i]
+        out[f"phi_{bar}"] = math.atan2(cross(drawn, now), float(drawn @ now))
+    return out
+
+
+def over_constrained() -> Case:
+    (case,) = mechcheck.load_cases(CATALOGUE / "over_constrained.toml")
+    assert isinstance(case, Case)
+    return case
+
+
+def relative_errors(values: dict[str, float], reference: dict[str, float], scale: float,
+                    length: float) -> dict[str, float]:
+    """Each quantity of ``reference`` as the comparison measures it: forces against the
+    largest reference force, positions against the bracket's size, angles against 1 rad."""
+    def size(q: str) -> float:
+        return scale if q[0] in "FN" else length if q[0] in "xy" else 1.0
+    return {q: abs(values[q] - v) / size(q) for q, v in reference.items()}
+
+
+def test_the_linear_answer_is_within_the_small_displacement_bound_of_the_exact_one() -> None:
+    """The analytic answer (equilibrium on the drawn geometry, small displacements) against the
+    exact equilibrium on the stretched bars: forces, node positions and bar angles differ by
+    more than the settled tolerance (so the comparison needs the bound), by less than
+    STRAIN_FACTOR × max_strain (the policy's small-displacement bound)."""
+    from mechcheck.tolerance import STRAIN_FACTOR
+
+    case = over_constrained()
+    linear = mechcheck.solve(case)
+    exact = exact_values(metres(table_of("over_constrained")))
+    scale = max(abs(v) for q, v in linear.values.items() if q[0] in "FN")
+    errors = relative_errors(linear.values, exact, scale, case.linkage.scale)
+    strain = float(linear.diagnostics["max_strain"])
+    worst = max(errors, key=errors.__getitem__)
+    assert errors[worst] > rule("mujoco", "force", "static").rtol, (worst, errors[worst])
+    assert errors[worst] <= STRAIN_FACTOR * strain, (worst, errors[worst], strain)
+    for kind in "FNxyp":   # every kind of quantity is within it, not only the worst
+        assert max(e for q, e in errors.items() if q[0] == kind) <= STRAIN_FACTOR * strain, kind
+
+
+@pytest.mark.parametrize("backend", ["mujoco", "pymunk"])
+def test_each_simulator_settles_to_the_exact_equilibrium(backend: str) -> None:
+    """Each simulator's settled bracket, measured from its own springs and constraints, is the
+    exact equilibrium within the settled tolerance, and so the linear answer within the
+    policy's small-displacement bound (every quantity the analytic backend reports)."""
+    from mechcheck.testing import assert_solution_close
+
+    case = over_constrained()
+    if backend not in mechcheck.available_backends():
+        pytest.skip(f"{backend} is not installed")
+    settled = mechcheck.solve(case, backend)
+    assert settled.status == "ok", settled.message
+    exact = exact_values(metres(table_of("over_constrained")))
+    scale = max(abs(v) for q, v in exact.items() if q[0] in "FN")
+    errors = relative_errors(settled.values, exact, scale, case.linkage.scale)
+    tol = rule(backend, "force", "static")
+    assert max(errors.values()) <= tol.rtol, max(errors.items(), key=lambda kv: kv[1])
+    assert_solution_close(case, settled, complete=True)

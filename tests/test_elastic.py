@@ -8,6 +8,7 @@ decide the forces."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +17,7 @@ import pytest
 import mechcheck
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.joint_kinds import REVOLUTE
-from mechcheck.analytic.linkage import Joint, Link, Linkage, PointLoad
+from mechcheck.analytic.linkage import Joint, Link, Linkage, LinkMass, PointLoad
 from mechcheck.analytic.values import CaseError
 from mechcheck.tolerance import rule
 
@@ -41,9 +42,11 @@ def bars(stiffness: dict[str, float | None]) -> Linkage:
                    loads=(PointLoad(f"bar{names[0]}", NODE, LOAD),))
 
 
-def displacement_method(stiffness: dict[str, float]) -> dict[str, float]:
-    """The seed's method: the node's displacement from the bars' stiffnesses, then each bar's
-    tension (E·A/L)·e·u, e the unit vector from the wall to the node."""
+def displacement_method(stiffness: dict[str, float],
+                        load: tuple[float, float] = LOAD) -> dict[str, float]:
+    """The seed's method: the node's displacement from the bars' stiffnesses under the node's
+    ``load``, then each bar's tension (E·A/L)·e·u, e the unit vector from the wall to the
+    node."""
     k_node = np.zeros((2, 2))
     units = {}
     for w, ea in stiffness.items():
@@ -52,12 +55,33 @@ def displacement_method(stiffness: dict[str, float]) -> dict[str, float]:
         e = d / length
         units[w] = (e, ea / length)
         k_node += ea / length * np.outer(e, e)
-    u = np.linalg.solve(k_node, LOAD)
+    u = np.linalg.solve(k_node, load)
     return {w: k * float(e @ u) for w, (e, k) in units.items()}
 
 
 def solved(linkage: Linkage) -> mechcheck.Solution:
     return mechcheck.solve(Case("bars", linkage))
+
+
+def along_bar(w: str, t: float) -> tuple[float, float]:
+    """The point a fraction t of the way along bar ``w`` from the wall to the node."""
+    (ax, ay), (dx, dy) = WALL[w], NODE
+    return ax + t * (dx - ax), ay + t * (dy - ay)
+
+
+def loaded_bar_method(stiffness: dict[str, float], w: str, t: float,
+                      force: tuple[float, float]) -> dict[str, float]:
+    """The displacement method with a force on bar ``w`` a fraction t along it from the wall:
+    by the lever rule t·F bears on the node (the rest on the wall), so the node moves by
+    K u = LOAD + t·F and each bar stretches by e·u. The loaded bar's tension is N₁ on the wall
+    side of the force and N₁ − F·e beyond it, so its stretch is ∫N dx/(E·A) with ∫N dx/L =
+    N₁ − (1 − t)·F·e, and its N, the mean of its end tensions, N₁ − ½·F·e, is (E·A/L)·e·u −
+    (t − ½)·F·e."""
+    out = displacement_method(stiffness, (LOAD[0] + t * force[0], LOAD[1] + t * force[1]))
+    d = np.subtract(NODE, WALL[w])
+    e = d / np.hypot(*d)
+    out[w] -= (t - 0.5) * float(e @ np.asarray(force))
+    return out
 
 
 @pytest.mark.parametrize("stiffness", [
@@ -82,6 +106,30 @@ def test_redundant_bars_share_the_load_as_the_displacement_method_says(
     assert abs(fx + LOAD[0]) <= 1e-12 * 1000.0 and abs(fy + LOAD[1]) <= 1e-12 * 1000.0
     strain = max(abs(expected[w]) / stiffness[w] for w in stiffness)
     assert solution.diagnostics["max_strain"] == pytest.approx(strain, rel=1e-9)
+
+
+@pytest.mark.parametrize("t", [0.25, 0.5, 0.8])
+@pytest.mark.parametrize("as_weight", [True, False], ids=["weight", "point-load"])
+def test_a_bar_loaded_between_its_ends_stretches_by_its_whole_tension(t: float,
+                                                                     as_weight: bool) -> None:
+    """A 300 N force on bar B (along the bar, mostly: it changes its tension most), as a
+    point load or as the weight of a 30.58 kg bar with its centre of mass there, a fraction t
+    along it: every N_<bar> is the displacement method's with the force's lever-rule share
+    at the node (:func:`loaded_bar_method`)."""
+    force = (300.0, 0.0) if not as_weight else (0.0, -300.0)
+    stiffness = {"A": 2.0e7, "B": 1.0e7, "C": 3.0e7}
+    linkage = bars(dict(stiffness))
+    at = along_bar("B", t)
+    if as_weight:
+        linkage = replace(linkage, gravity=(0.0, -9.81),
+                          masses=(LinkMass("barB", 300.0 / 9.81, at, 0.0),))
+    else:
+        linkage = replace(linkage, loads=(*linkage.loads, PointLoad("barB", at, force)))
+    solution = solved(linkage)
+    assert solution.status == "ok", solution.message
+    for w, tension in loaded_bar_method(stiffness, "B", t, force).items():
+        assert solution.values[f"N_bar{w}"] == pytest.approx(tension, rel=RTOL,
+                                                             abs=RTOL * 1000.0), w
 
 
 def test_rigid_bars_take_everything_from_an_elastic_one() -> None:

@@ -23,6 +23,7 @@ from mechcheck.sim_models.mujoco.linkage_members import (
     member_ends,
     set_member_stiffness,
     split_members,
+    stretch_excess_along,
 )
 from mechcheck.sim_models.mujoco.linkage_mesh import MeshLine, mesh_of, site_names, tendon_name
 from mechcheck.sim_models.mujoco.linkage_model import (
@@ -78,6 +79,8 @@ class RigModel:
         #: Each split member's near and far end (drawn), by name.
         self.member_ends = {m.name: member_ends(m, self.tree.parent_joint(m.name).joint.at,
                                                 linkage.points) for m in self.members}
+        #: What each split member's equality force exceeds its N by (its own loads).
+        self.member_excess = np.array([stretch_excess_along(linkage, m) for m in self.members])
         self.data = mujoco.MjData(self.model)
         self.scale = linkage.scale
         self.units: dict[str, str] | None = quantity_units(linkage)

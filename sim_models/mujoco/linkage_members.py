@@ -11,7 +11,10 @@ then gives, at rest, the force s/((1 − d)·w)·(L − L₀), w the tendon's in
 ``tendon_invweight0`` and d the impedance (dmin = dmax), solved implicitly (the stretch
 mode is as if its mass were m/(1 − d)). ``s`` is set after compiling, once w is known
 (:func:`set_member_stiffness`), so the force is E·A/L per metre of stretch. The member's
-tension N is minus that equality's force (efc_force).
+tension N is minus that equality's force (efc_force), which is ∫N dx/L, less what that
+exceeds the mean of the tensions just inside the two ends by where the member carries loads
+of its own away from its middle (:func:`stretch_excess_along`): the mean is its
+``N_<link>``.
 
 Only redundant linkages are split: elsewhere statics alone decides the forces, and the
 model stays as it is.
@@ -25,6 +28,7 @@ import mujoco
 import numpy as np
 
 from mechcheck.analytic.linkage import Link, Linkage
+from mechcheck.analytic.linkage_elastic import stretch_excess
 
 #: Impedance of a member's equality (MuJoCo's largest, mjMAXIMP): the stretch mode moves
 #: as if its mass were 1/(1 − d) = 1e4 times larger, which keeps it stable at the
@@ -52,6 +56,14 @@ def far_mass(member: Link, length: float, timestep: float) -> float:
 def split_members(linkage: Linkage) -> tuple[Link, ...]:
     """The members built as two bodies: the elastic links of a redundant linkage."""
     return linkage.elastic_links if linkage.redundant else ()
+
+
+def stretch_excess_along(linkage: Linkage, member: Link) -> float:
+    """What the member's equality force (∫N dx/L) exceeds its ``N_<link>`` by, along its
+    drawn axis (:func:`mechcheck.analytic.linkage_elastic.stretch_excess`; the axis turns by
+    the strain, which moves this by that fraction of it)."""
+    a, b = (np.asarray(linkage.points[p]) for p in member.points)
+    return float((b - a) @ stretch_excess(linkage, member)) / float(np.hypot(*(b - a)))
 
 
 def far_body_name(link: str) -> str:

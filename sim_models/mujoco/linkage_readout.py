@@ -153,8 +153,9 @@ class RigReadout(RigModel):
 
     def _member_columns(self, s: Snapshot) -> dict[str, Array]:
         """Each split member's tension N (:mod:`.linkage_members`): minus its tendon
-        equality's force (the force along the tendon's length, which a tension shortens)."""
-        forces = -s.efc_force[:, self.member_rows]
+        equality's force (the force along the tendon's length, which a tension shortens),
+        less what that exceeds N by where the member carries loads off its middle."""
+        forces = -s.efc_force[:, self.member_rows] - self.member_excess
         return {f"N_{member.name}": forces[:, k] for k, member in enumerate(self.members)}
 
     def _mesh_columns(self, s: Snapshot) -> dict[str, Array]:

@@ -10,6 +10,15 @@ stiffness E·A/L, carries the force along it. The member stays straight and stre
 (−impulse/dt, tension +), and the joint's reaction the groove's impulse plus the spring's.
 The joint turns freely in the groove, so it is still a revolute joint.
 
+A member's own loads (its weight at its centre of mass, forces between its ends) make its
+tension vary along it, and the spring carries the tension at the sliding end only. The
+member's stretch is ∫N dx/(E·A): a load F at the fraction t of the way from the pinned end
+to the sliding end adds t·F·e to the spring's tension over the whole length (e the axis
+from the pinned end to the sliding end), so the spring's rest length is L plus that stretch
+(:func:`own_load_terms`). Its ``N_<link>`` is the mean of the tensions just inside the two
+ends, the analytic engine's: the spring's plus F·e for a point load at the sliding end and
+½·F·e for a weight or a load between the ends.
+
 Chipmunk applies a spring's force explicitly, so a stiff member needs a short step:
 :data:`STEP_FRACTION` × sqrt(m/k) for the fictitious mass m and the stiffest member's k.
 The spring's damper (critical for the fictitious mass) damps the members' modes; at rest it
@@ -26,6 +35,7 @@ import pymunk
 
 from mechcheck.analytic.joint_kinds import REVOLUTE
 from mechcheck.analytic.linkage import Joint, Link, Linkage
+from mechcheck.analytic.linkage_elastic import own_loads
 from mechcheck.sim_models.pymunk._fast import Cell, impulse_cells, read
 from mechcheck.sim_models.pymunk.joint_kinds import GROOVE_REACH
 from mechcheck.sim_models.pymunk.settings import SolverSettings
@@ -60,17 +70,8 @@ def modelled(linkage: Linkage) -> bool:
 
 def sliding_ends(linkage: Linkage) -> dict[str, SlidingEnd] | str:
     """Per joint name, the member end that slides there; or why some member has no end to
-    slide (each needs an end with a single undriven revolute joint, not another member's),
-    or carries a load or a mass of its own."""
-    own = [m.name for m in linkage.elastic_links if _loaded_between_ends(linkage, m)]
-    if own:
-        # The spring carries the tension at the sliding end; a member with loads of its own
-        # (its weight) is stretched by its mean tension, which differs from that by half
-        # their axial part: the stretches, and so the shares of a redundant load, would not
-        # be the analytic model's.
-        return (f"the elastic member {own[0]} carries a mass or a load between its ends: the "
-                "pymunk model stretches a member by the tension at one end, the analytic one by "
-                "its mean; apply the loads at the nodes, or check it with the analytic backend")
+    slide (each needs an end with a single undriven revolute joint, not another member's).
+    """
     driven = {d.joint for d in linkage.drivers}
     out: dict[str, SlidingEnd] = {}
     for member in linkage.elastic_links:
@@ -83,12 +84,22 @@ def sliding_ends(linkage: Linkage) -> dict[str, SlidingEnd] | str:
     return out
 
 
-def _loaded_between_ends(linkage: Linkage, member: Link) -> bool:
-    """The member carries a mass, or a load away from its two end points."""
-    ends = [linkage.points[p] for p in member.points]
-    at_an_end = [any(math.dist(load.at, end) <= 1e-12 * linkage.scale for end in ends)
-                 for load in linkage.loads if load.link == member.name]
-    return any(m.link == member.name for m in linkage.masses) or not all(at_an_end)
+def own_load_terms(linkage: Linkage, end: SlidingEnd) -> tuple[float, Vec]:
+    """The member's own loads F (:func:`mechcheck.analytic.linkage_elastic.own_loads`), each
+    at t from the pinned end to the sliding end: Σ t·F·e, the stretch they add × E·A/L (e the
+    drawn axis from the pinned end to the sliding end); and Σ c·F, whose part along the
+    axis the mean of the end tensions adds to the spring's (c = ½ between the ends, t for a
+    point load at an end: 1 at the sliding end, 0 at the pinned one), taken along the axis
+    where it is read."""
+    (fx, fy), (ex, ey) = linkage.points[end.far], linkage.points[end.end]
+    length = math.hypot(ex - fx, ey - fy)
+    ux, uy = (ex - fx) / length, (ey - fy) / length
+    stretching, mean_x, mean_y = 0.0, 0.0, 0.0
+    for load in own_loads(linkage, end.member, end.far):
+        (lx, ly), c = load.force, 0.5 if load.inside else load.t
+        stretching += load.t * (lx * ux + ly * uy)
+        mean_x, mean_y = mean_x + c * lx, mean_y + c * ly
+    return stretching, (mean_x, mean_y)
 
 
 def free_end(linkage: Linkage, member: Link, taken: set[str]) -> SlidingEnd | None:
@@ -125,13 +136,16 @@ def member_settings(linkage: Linkage, settings: SolverSettings) -> SolverSetting
 @dataclass(frozen=True)
 class MemberEnd:
     """A built sliding end: the ``groove`` and ``spring`` (body a the member, body b the
-    other link), and whether the other link is the joint's links[1] (``on_b``)."""
+    other link), whether the other link is the joint's links[1] (``on_b``), and what the
+    member's own loads add to the spring's tension in its N, along the axis (``mean_share``,
+    :func:`own_load_terms`)."""
 
     joint: str
     member: str
     groove: pymunk.GrooveJoint
     spring: pymunk.DampedSpring
     on_b: bool
+    mean_share: Vec = (0.0, 0.0)
 
     @property
     def cells(self) -> tuple[Cell, ...]:
@@ -140,7 +154,8 @@ class MemberEnd:
 
     def reactions(self, dt: float) -> dict[str, float]:
         """F_<joint> (by links[0] on links[1]) of the last step: the groove's impulse plus
-        the spring's along its line, / ``dt``."""
+        the spring's along its line, / ``dt``; and N_<member>, the spring's tension plus
+        ``mean_share`` along the member's axis now (the spring's line)."""
         gx, gy = read(self.cells)
         a = self.spring.a.local_to_world(self.spring.anchor_a)
         b = self.spring.b.local_to_world(self.spring.anchor_b)
@@ -148,12 +163,15 @@ class MemberEnd:
         push = self.spring.impulse          # on the other link, along n
         sign = 1.0 if self.on_b else -1.0
         return {f"F_{self.joint}_x": sign * (gx + push * n.x) / dt,
-                f"F_{self.joint}_y": sign * (gy + push * n.y) / dt}
+                f"F_{self.joint}_y": sign * (gy + push * n.y) / dt,
+                f"N_{self.member}": -push / dt + self.mean_share[0] * n.x
+                + self.mean_share[1] * n.y}
 
 
 def build_end(model: LinkageModel, end: SlidingEnd) -> MemberEnd:
-    """The groove along the member's axis and the spring (rest length L, E·A/L, damped
-    critically for the fictitious mass) of one sliding end."""
+    """The groove along the member's axis and the spring (E·A/L, damped critically for the
+    fictitious mass; rest length L plus the stretch of the member's own loads,
+    :func:`own_load_terms`) of one sliding end."""
     linkage, member = model.linkage, end.member
     j = end.joint
     other = j.links[1] if j.links[0] == member.name else j.links[0]
@@ -166,5 +184,6 @@ def build_end(model: LinkageModel, end: SlidingEnd) -> MemberEnd:
                                 (fx + reach * ux, fy + reach * uy), (ex, ey))
     k = stiffness(linkage, member)
     damper = 2.0 * math.sqrt(k * model.settings.fictitious_mass)
-    spring = pymunk.DampedSpring(a, b, (fx, fy), (ex, ey), length, k, damper)
-    return MemberEnd(j.name, member.name, groove, spring, other == j.links[1])
+    stretching, mean = own_load_terms(linkage, end)
+    spring = pymunk.DampedSpring(a, b, (fx, fy), (ex, ey), length + stretching / k, k, damper)
+    return MemberEnd(j.name, member.name, groove, spring, other == j.links[1], mean)
