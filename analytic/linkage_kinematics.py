@@ -446,6 +446,8 @@ def solve_pose(linkage: Linkage, values: ArrayLike | None = None,
     acc = np.broadcast_to(np.array([drv.acceleration for drv in linkage.drivers])
                           if accelerations is None else np.asarray(accelerations, dtype=float), (n, d))
     q, locked = positions(linkage, vals)
+    if not (vel.any() or acc.any()):
+        return _at_rest(linkage, vals, q, locked)
     joints_rows = linkage.constraint_rows
     with np.errstate(all="ignore"):
         _, jac = constraint_system(linkage, np.nan_to_num(q), vals)
@@ -459,3 +461,13 @@ def solve_pose(linkage: Linkage, values: ArrayLike | None = None,
     qdot[bad] = np.nan
     qddot[bad] = np.nan
     return LinkagePose(linkage, vals, q, qdot, qddot, locked)
+
+
+def _at_rest(linkage: Linkage, vals: Array, q: Array, locked: Array) -> LinkagePose:
+    """The pose with every driver at rest: J·q̇ = 0 and J·q̈ = −J̇·q̇ = 0 have the solution
+    zero at every pose that assembles (the two solves would give it, up to the sign of a
+    zero), NaN at one that does not."""
+    bad = ~np.all(np.isfinite(q), axis=1)
+    qdot = np.zeros(q.shape)
+    qdot[bad] = np.nan
+    return known_assembled(LinkagePose(linkage, vals, q, qdot, qdot.copy(), locked), ~bad)
