@@ -91,7 +91,23 @@ class LinkagePose:
 
     def point(self, link: str, drawn: ArrayLike) -> tuple[Array, Array, Array]:
         """Global position, velocity and acceleration of a point fixed to ``link`` that was
-        at ``drawn`` in the drawn pose."""
+        at ``drawn`` in the drawn pose (read-only). A few poses keep each point asked for:
+        the statics of one pose asks for a joint's point several times (its frame, its
+        coordinate, its reported force), and each computation is a dozen calls."""
+        if self.q.shape[0] > linalg.FEW_POSES or not isinstance(drawn, tuple):
+            return self._point(link, drawn)
+        key = (link, drawn)
+        found = self.points_asked.get(key)
+        if found is None:
+            found = self.points_asked[key] = _read_only(self._point(link, drawn))
+        return found
+
+    @cached_property
+    def points_asked(self) -> dict[tuple[str, tuple[float, ...]], tuple[Array, Array, Array]]:
+        """The points :meth:`point` keeps, by link and drawn point."""
+        return {}
+
+    def _point(self, link: str, drawn: ArrayLike) -> tuple[Array, Array, Array]:
         p0 = np.asarray(drawn, dtype=float)
         t, phi = self.link_state(link, self.q)
         v, omega = self.link_state(link, self.qdot)
@@ -108,6 +124,8 @@ class LinkagePose:
 
     def position(self, link: str, drawn: ArrayLike) -> Array:
         """:meth:`point`'s position alone (N, 2): the same numbers, without the rates."""
+        if isinstance(drawn, tuple) and (link, drawn) in self.points_asked:
+            return self.points_asked[link, drawn][0]
         p0 = np.asarray(drawn, dtype=float)
         t, phi = self.link_state(link, self.q)
         k = link_column(self.linkage, link)
@@ -148,6 +166,13 @@ class LinkagePose:
     def assembled(self) -> NDArray[np.bool_]:
         """Which poses the linkage reaches (asked for by every verdict: computed once)."""
         return np.all(np.isfinite(self.q), axis=1)
+
+
+def _read_only(arrays: tuple[Array, Array, Array]) -> tuple[Array, Array, Array]:
+    """``arrays``, which are kept and handed out again, made read-only."""
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
 
 
 def known_assembled(pose: LinkagePose, assembled: NDArray[np.bool_]) -> LinkagePose:

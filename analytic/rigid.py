@@ -9,6 +9,7 @@ exist (:mod:`.joint_kinds` does); the engine's modules and the kinds both build 
 
 from __future__ import annotations
 
+import functools
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -18,7 +19,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic.linalg import Batched
+from mechcheck.analytic.linalg import FEW_POSES, Batched
 from mechcheck.analytic.values import GROUND
 
 if TYPE_CHECKING:
@@ -73,6 +74,25 @@ def _pair(x: Array, y: Array) -> Array:
     out[..., 0] = x
     out[..., 1] = y
     return out
+
+
+def unit_axes(n: int) -> tuple[Array, Array]:
+    """e_x and e_y at n poses, each (n, 2), read-only: kept for a few poses (every pin's
+    reaction is written along them), made anew for many."""
+    return _kept_axes(n) if n <= FEW_POSES else _axes(n)
+
+
+def _axes(n: int) -> tuple[Array, Array]:
+    ones, zeros = np.ones(n), np.zeros(n)
+    return np.stack([ones, zeros], axis=1), np.stack([zeros, ones], axis=1)
+
+
+@functools.lru_cache(maxsize=FEW_POSES)
+def _kept_axes(n: int) -> tuple[Array, Array]:
+    ex, ey = _axes(n)
+    ex.flags.writeable = False
+    ey.flags.writeable = False
+    return ex, ey
 
 
 def dot(a: Array, b: Array) -> Array:
@@ -309,18 +329,18 @@ class ForceLayout:
         cols.flags.writeable = False
         return cols
 
-    def force_on(self, k: Batched, link: str, col: int, direction: Array, point: Array,
-                 sign: float) -> None:
-        """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
-        r = self.row(link)
-        if r < 0:
-            return
-        # The three entries (force, and its moment about the origin) in one product.
+    def force_pair(self, k: Batched, links: tuple[str, str], col: int, direction: Array,
+                   point: Array) -> None:
+        """Column ``col`` times ``direction`` (N, 2) acting on links[1] at ``point``, and
+        reversed on links[0] (a joint's reaction): its three entries per link, the force and
+        its moment about the origin, computed once for both (negation is exact)."""
         entries = np.empty((3, direction.shape[0]))
         entries[:2] = direction.T
         entries[2] = cross(point, direction)
-        entries *= sign
-        k.add_rows(r, col, entries)
+        for link, values in ((links[1], entries), (links[0], -entries)):
+            r = self.row(link)
+            if r >= 0:
+                k.add_rows(r, col, values)
 
     def couple_on(self, k: Batched, link: str, col: int, sign: float) -> None:
         r = self.row(link)
