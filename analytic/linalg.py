@@ -170,7 +170,7 @@ class Batched:
                             dtype=np.float64)
         # The poses last in memory, as the many poses' dense() has them: reductions along
         # a row (norms, products) round alike only in the same layout.
-        return np.moveaxis(summed.reshape(self.rows, self.cols, self.poses), 2, 0)
+        return summed.reshape(self.rows, self.cols, self.poses).transpose(2, 0, 1)
 
     def at(self, pose: int) -> sparse.csc_matrix:
         """The sparse matrix at one pose, duplicates summed."""
@@ -299,15 +299,25 @@ def condition_of_dense(m: Array) -> Array:
 
 
 def _condition_dense(m: Array) -> Array:
-    out = np.full(m.shape[0], np.inf)
     if 0 in m.shape[1:]:
         return np.ones(m.shape[0])
+    if m.shape[0] == 1:     # one pose: its matrix alone, in a third of the calls
+        return np.array([_condition_one(m[0])])
+    out = np.full(m.shape[0], np.inf)
     finite = np.all(np.isfinite(m), axis=(1, 2))
     if finite.any():
         s = np.linalg.svd(m[finite], compute_uv=False)
         with np.errstate(divide="ignore", invalid="ignore"):
             out[finite] = np.where(s[:, -1] > 0.0, s[:, 0] / s[:, -1], np.inf)
     return out
+
+
+def _condition_one(m: Array) -> float:
+    """:func:`_condition_dense` of one matrix: the same SVD, the same quotient."""
+    if not np.isfinite(m).all():
+        return math.inf
+    s = np.linalg.svd(m, compute_uv=False)
+    return float(s[0] / s[-1]) if s[-1] > 0.0 else math.inf
 
 
 def _condition_sparse(m: sparse.csc_matrix) -> float:

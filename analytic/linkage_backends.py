@@ -27,6 +27,7 @@ from mechcheck.analytic.linkage_forces import (
 )
 from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, perp, solve_batched, solve_pose
 from mechcheck.analytic.linkage_loads import known_vector
+from mechcheck.analytic.rigid import kept
 from mechcheck.analytic.solution import Solution, Status
 from mechcheck.analytic.values import CaseError
 
@@ -42,7 +43,12 @@ class CoulombRefused(ValueError):
 
 
 def quantity_units(linkage: Linkage) -> dict[str, str]:
-    """The table unit of every quantity a linkage reports (LINKAGES.md "What comes out")."""
+    """The table unit of every quantity a linkage reports (LINKAGES.md "What comes out"):
+    derived once per linkage (:func:`.rigid.kept`), a copy of its own to each caller."""
+    return dict(kept(linkage, "quantity units", lambda: _quantity_units(linkage)))
+
+
+def _quantity_units(linkage: Linkage) -> dict[str, str]:
     units: dict[str, str] = {}
     for name in linkage.points:
         units[f"x_{name}"] = units[f"y_{name}"] = "m"

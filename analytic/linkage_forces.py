@@ -178,8 +178,7 @@ def condition(pose: LinkagePose, k: Batched | Array) -> Array:
         return np.ones(entries.poses)
     layout = force_layout(linkage)
     cols = layout.unknown_lengths
-    rows = np.ones(layout.rows)
-    rows[2::3] = 1.0 / linkage.scale
+    rows = layout.row_scales
     if entries.small and entries.distinct:
         return _condition_small(entries, rows, cols)
     first = entries.scaled(np.broadcast_to(rows, (entries.poses, rows.size)), cols)
@@ -194,8 +193,7 @@ def _unit_rows(norms: Array) -> Array:
     pair = np.sqrt(0.5 * (norms[:, 0::3] ** 2 + norms[:, 1::3] ** 2))
     norms[:, 0::3] = pair
     norms[:, 1::3] = pair
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.asarray(np.where(norms > 0.0, 1.0 / norms, 1.0), dtype=np.float64)
+    return np.asarray(1.0 / np.where(norms > 0.0, norms, 1.0), dtype=np.float64)   # 1/1 is 1
 
 
 def _condition_small(entries: Batched, rows: Array, cols: Array) -> Array:
@@ -378,6 +376,8 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
 
 def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:
     """Every driver's velocity and acceleration zero: a static case."""
+    if velocities is None and accelerations is None:    # the case's own: no arrays needed
+        return not any(d.velocity or d.acceleration for d in linkage.drivers)
     own = [(d.velocity, d.acceleration) for d in linkage.drivers]
     v = np.asarray([v for v, _ in own] if velocities is None else velocities, dtype=float)
     a = np.asarray([a for _, a in own] if accelerations is None else accelerations, dtype=float)

@@ -108,6 +108,9 @@ class LinkagePose:
         return {}
 
     def _point(self, link: str, drawn: ArrayLike) -> tuple[Array, Array, Array]:
+        if self.at_rest:    # what the sums below give: +0 at every pose
+            position = self.position(link, drawn)
+            return position, np.zeros(position.shape), np.zeros(position.shape)
         p0 = np.asarray(drawn, dtype=float)
         t, phi = self.link_state(link, self.q)
         v, omega = self.link_state(link, self.qdot)
@@ -115,8 +118,6 @@ class LinkagePose:
         k = link_column(self.linkage, link)
         r = turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)
         position = t + r
-        if self.at_rest:    # what the sums below give: +0 at every pose
-            return position, np.zeros(position.shape), np.zeros(position.shape)
         across = perp(r)
         velocity = v + omega[:, None] * across
         acceleration = a + alpha[:, None] * across - (omega**2)[:, None] * r
@@ -166,6 +167,13 @@ class LinkagePose:
     def assembled(self) -> NDArray[np.bool_]:
         """Which poses the linkage reaches (asked for by every verdict: computed once)."""
         return np.all(np.isfinite(self.q), axis=1)
+
+
+def known_at_rest(pose: LinkagePose) -> LinkagePose:
+    """``pose``, whose rates its solver made +0 wherever it assembles (NaN elsewhere), with
+    :attr:`LinkagePose.at_rest` known without a pass over them."""
+    pose.__dict__["at_rest"] = bool(pose.assembled.all())   # what the cached property stores
+    return pose
 
 
 def _read_only(arrays: tuple[Array, Array, Array]) -> tuple[Array, Array, Array]:
@@ -495,4 +503,5 @@ def _at_rest(linkage: Linkage, vals: Array, q: Array, locked: Array) -> LinkageP
     bad = ~np.all(np.isfinite(q), axis=1)
     qdot = np.zeros(q.shape)
     qdot[bad] = np.nan
-    return known_assembled(LinkagePose(linkage, vals, q, qdot, qdot.copy(), locked), ~bad)
+    return known_at_rest(known_assembled(LinkagePose(linkage, vals, q, qdot, qdot.copy(), locked),
+                                         ~bad))

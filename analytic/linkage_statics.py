@@ -52,7 +52,12 @@ from mechcheck.analytic.linkage_assur import (
     place,
     reachable,
 )
-from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, known_assembled
+from mechcheck.analytic.linkage_kinematics import (
+    Array,
+    LinkagePose,
+    known_assembled,
+    known_at_rest,
+)
 from mechcheck.analytic.linkage_loads import spring_axis
 from mechcheck.analytic.resultant import Resultant
 from mechcheck.analytic.values import GROUND, Vec2
@@ -102,7 +107,7 @@ def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> S
         qdot[~inside] = np.nan
         qddot[~inside] = np.nan
     pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
-    return StaticResults(known_assembled(pose, inside), out, bound)
+    return StaticResults(known_at_rest(known_assembled(pose, inside)), out, bound)
 
 
 def _finite_rows(block: Array) -> NDArray[np.bool_]:

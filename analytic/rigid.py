@@ -317,6 +317,15 @@ class ForceLayout:
         return self.joint_unknowns + len(self.linkage.drivers)
 
     @cached_property
+    def row_scales(self) -> Array:
+        """(rows,): what makes each equilibrium row a force (1, and 1/L for a moment row, L
+        the linkage's size), read-only."""
+        rows = np.ones(self.rows)
+        rows[2::3] = 1.0 / self.linkage.scale
+        rows.flags.writeable = False
+        return rows
+
+    @cached_property
     def unknown_lengths(self) -> Array:
         """(columns,): the length that makes each unknown a force (1 for a force, the
         linkage's size for a couple; the kinds' ``reaction_lengths`` and ``length``)."""
