@@ -392,9 +392,9 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
     assert linkage.assur_plan is not None
     vals = np.array([[d.value for d in linkage.drivers]]) if values is None \
         else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, len(linkage.drivers))
-    # One pose (a case solved on its own) reports its exact condition number: the bound,
-    # which spares most poses of a sweep theirs, would be computed for nothing.
-    found = static_results(linkage.assur_plan, vals, bounded=vals.shape[0] > 1)
+    # The bound decides most poses' verdicts without their exact condition numbers, which
+    # are computed only if read (a Solution's diagnostics read them lazily).
+    found = static_results(linkage.assur_plan, vals)
     pose = found.pose
     exact = _ExactCondition(pose)
     singular = _singular_by_bound(pose, found.condition_bound, exact)

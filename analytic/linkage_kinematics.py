@@ -125,11 +125,16 @@ class LinkagePose:
 
     def position(self, link: str, drawn: ArrayLike) -> Array:
         """:meth:`point`'s position alone (N, 2): the same numbers, without the rates."""
-        if isinstance(drawn, tuple) and (link, drawn) in self.points_asked:
-            return self.points_asked[link, drawn][0]
+        k = link_column(self.linkage, link)
+        if isinstance(drawn, tuple) and k >= 0:     # as :func:`.rigid.turned`, in fewer calls
+            found = self.points_asked.get((link, drawn))
+            if found is not None:
+                return found[0]
+            ex, ey = self.turn(k)
+            return np.asarray(self.q[:, k:k + 2] + (ex * float(drawn[0]) + ey * float(drawn[1])),
+                              dtype=np.float64)
         p0 = np.asarray(drawn, dtype=float)
         t, phi = self.link_state(link, self.q)
-        k = link_column(self.linkage, link)
         return np.asarray(t + (turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)),
                           dtype=np.float64)
 

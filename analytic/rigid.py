@@ -76,23 +76,24 @@ def _pair(x: Array, y: Array) -> Array:
     return out
 
 
-def unit_axes(n: int) -> tuple[Array, Array]:
-    """e_x and e_y at n poses, each (n, 2), read-only: kept for a few poses (every pin's
+def unit_axes(n: int) -> Array:
+    """e_x and e_y at n poses, (2, n, 2), read-only: kept for a few poses (every pin's
     reaction is written along them), made anew for many."""
     return _kept_axes(n) if n <= FEW_POSES else _axes(n)
 
 
-def _axes(n: int) -> tuple[Array, Array]:
-    ones, zeros = np.ones(n), np.zeros(n)
-    return np.stack([ones, zeros], axis=1), np.stack([zeros, ones], axis=1)
+def _axes(n: int) -> Array:
+    out = np.zeros((2, n, 2))
+    out[0, :, 0] = 1.0
+    out[1, :, 1] = 1.0
+    return out
 
 
 @functools.lru_cache(maxsize=FEW_POSES)
-def _kept_axes(n: int) -> tuple[Array, Array]:
-    ex, ey = _axes(n)
-    ex.flags.writeable = False
-    ey.flags.writeable = False
-    return ex, ey
+def _kept_axes(n: int) -> Array:
+    out = _axes(n)
+    out.flags.writeable = False
+    return out
 
 
 def dot(a: Array, b: Array) -> Array:
@@ -338,18 +339,20 @@ class ForceLayout:
         cols.flags.writeable = False
         return cols
 
-    def force_pair(self, k: Batched, links: tuple[str, str], col: int, direction: Array,
-                   point: Array) -> None:
-        """Column ``col`` times ``direction`` (N, 2) acting on links[1] at ``point``, and
-        reversed on links[0] (a joint's reaction): its three entries per link, the force and
-        its moment about the origin, computed once for both (negation is exact)."""
-        entries = np.empty((3, direction.shape[0]))
-        entries[:2] = direction.T
-        entries[2] = cross(point, direction)
+    def force_pair(self, k: Batched, links: tuple[str, str], cols: tuple[int, ...],
+                   directions: Array, point: Array) -> None:
+        """Each column of ``cols`` times its direction (``directions`` (len(cols), N, 2))
+        acting on links[1] at ``point``, and reversed on links[0] (a joint's reaction): three
+        entries per column and link, the force and its moment about the origin, computed
+        once for every column and both links (negation is exact)."""
+        entries = np.empty((len(cols), 3, point.shape[0]))
+        entries[:, :2] = directions.transpose(0, 2, 1)
+        entries[:, 2] = cross(point, directions)
         for link, values in ((links[1], entries), (links[0], -entries)):
             r = self.row(link)
             if r >= 0:
-                k.add_rows(r, col, values)
+                for col, column in zip(cols, values, strict=True):
+                    k.add_rows(r, col, column)
 
     def couple_on(self, k: Batched, link: str, col: int, sign: float) -> None:
         r = self.row(link)

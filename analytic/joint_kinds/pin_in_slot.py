@@ -49,7 +49,7 @@ class PinInSlot(Prismatic):
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
         assert frame.n is not None
         (c0,) = layout.joint_columns(joint)
-        layout.force_pair(k, joint.links, c0, frame.n, frame.point)
+        layout.force_pair(k, joint.links, (c0,), frame.n[None], frame.point)
 
     def reaction_lengths(self, size: float) -> tuple[float, ...]:
         return (1.0,)

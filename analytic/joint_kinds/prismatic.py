@@ -92,7 +92,7 @@ class Prismatic(JointKind):
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
         assert frame.n is not None
         c0, c1 = layout.joint_columns(joint)
-        layout.force_pair(k, joint.links, c0, frame.n, frame.point)
+        layout.force_pair(k, joint.links, (c0,), frame.n[None], frame.point)
         for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
             layout.couple_on(k, link, c1, sign)
 
@@ -102,7 +102,7 @@ class Prismatic(JointKind):
     def exert(self, k: Batched, layout: ForceLayout, col: int, joint: Joint,
               frame: JointFrame) -> None:
         assert frame.u is not None
-        layout.force_pair(k, joint.links, col, frame.u, frame.point)
+        layout.force_pair(k, joint.links, (col,), frame.u[None], frame.point)
 
     def quantities(self, joint: Joint) -> dict[str, str]:
         return {f"F_{joint.name}_x": "N", f"F_{joint.name}_y": "N", f"M_{joint.name}": "N*m"}

@@ -69,10 +69,8 @@ class Revolute(JointKind):
         return JointFrame(pose.point(joint.links[1], pose.linkage.points[joint.at])[0], None, None)
 
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
-        ex, ey = unit_axes(frame.point.shape[0])
-        c0, c1 = layout.joint_columns(joint)
-        layout.force_pair(k, joint.links, c0, ex, frame.point)
-        layout.force_pair(k, joint.links, c1, ey, frame.point)
+        layout.force_pair(k, joint.links, layout.joint_columns(joint),
+                          unit_axes(frame.point.shape[0]), frame.point)
 
     def reaction_lengths(self, size: float) -> tuple[float, ...]:
         return (1.0, 1.0)
