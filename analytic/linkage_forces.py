@@ -62,7 +62,7 @@ def coefficient_entries(pose: LinkagePose) -> Batched:
     linkage = pose.linkage
     layout = force_layout(linkage)
     k = Batched(layout.rows, layout.columns, pose.q.shape[0])
-    frames = {j.name: j.kind.frame(pose, j) for j in linkage.joints}
+    frames = {j.name: pose.frame(j) for j in linkage.joints}
     for joint in linkage.joints:
         joint.kind.react(k, layout, joint, frames[joint.name])
     for index, driver in enumerate(linkage.drivers):
@@ -288,7 +288,7 @@ def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
     for link in linkage.moving_links:
         out[f"phi_{link}"] = pose.link_state(link, pose.q)[1]
     for joint in linkage.joints:
-        out[f"q_{joint.name}"] = pose.joint_coordinate(joint)[0]
+        out[f"q_{joint.name}"] = joint.kind.value(pose, joint)
     return out
 
 

@@ -42,6 +42,7 @@ from mechcheck.analytic.rigid import (
 )
 
 if TYPE_CHECKING:
+    from mechcheck.analytic.joint_kinds.base import JointFrame
     from mechcheck.analytic.linkage import Joint, Linkage
 
 #: Largest driver step of the continuation: 2° of rotation, or 2 % of the linkage's size
@@ -163,6 +164,21 @@ class LinkagePose:
         """φ, ω, α of ``link`` (rotation from the drawn pose)."""
         return (self.link_state(link, self.q)[1], self.link_state(link, self.qdot)[1],
                 self.link_state(link, self.qddot)[1])
+
+    def frame(self, joint: Joint) -> JointFrame:
+        """Where ``joint`` acts (its kind's :meth:`~.JointKind.frame`), kept for a few poses as
+        :meth:`point` keeps points: the matrix K and the reported forces both ask."""
+        if self.q.shape[0] > linalg.FEW_POSES:
+            return joint.kind.frame(self, joint)
+        found = self.frames_asked.get(joint.name)
+        if found is None:
+            found = self.frames_asked[joint.name] = joint.kind.frame(self, joint)
+        return found
+
+    @cached_property
+    def frames_asked(self) -> dict[str, JointFrame]:
+        """The frames :meth:`frame` keeps, by joint."""
+        return {}
 
     def joint_coordinate(self, joint: Joint) -> tuple[Array, Array, Array]:
         """q, q̇, q̈ of a joint: relative rotation (rad) or displacement along the axis (m)."""

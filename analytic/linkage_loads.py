@@ -11,13 +11,13 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic.linkage import LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.linkage_kinematics import LinkagePose
-from mechcheck.analytic.rigid import Array, ForceLayout
+from mechcheck.analytic.rigid import Array, ForceLayout, force_layout
 
 
 def known_vector(pose: LinkagePose) -> Array:
     """b (N, 3n): every force that does not depend on the unknowns, on each link."""
     linkage = pose.linkage
-    layout = ForceLayout(linkage)
+    layout = force_layout(linkage)
     n = pose.q.shape[0]
     b = np.zeros((n, layout.rows))
     for load in linkage.loads:

@@ -83,6 +83,12 @@ class Prismatic(JointKind):
         return (dot(u, d), dot(du, d) + dot(u, dd),
                 dot(ddu, d) + 2 * dot(du, dd) + dot(u, ddd))
 
+    def value(self, pose: LinkagePose, joint: Joint) -> Array:
+        i, j = joint.links
+        a0 = pose.linkage.points[joint.at]
+        u = rotate(pose.link_state(i, pose.q)[1], slot_axis(joint))
+        return dot(u, pose.position(j, a0) - pose.position(i, a0))
+
     # -- statics --------------------------------------------------------------------------
     def frame(self, pose: LinkagePose, joint: Joint) -> JointFrame:
         point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
@@ -113,7 +119,7 @@ class Prismatic(JointKind):
     def slide_force(self, pose: LinkagePose, joint: Joint, x: Array, along: Array) -> dict[str, Array]:
         """The force by links[0] on links[1]: the normal reaction x[:, 0] along n, and along
         u the Coulomb friction ``along`` and the viscous force."""
-        frame = self.frame(pose, joint)
+        frame = pose.frame(joint)
         assert frame.u is not None and frame.n is not None
         f = pose.linkage.friction
         if f is not None and f.viscous.get(joint.name, 0.0):

@@ -64,6 +64,10 @@ class Revolute(JointKind):
         (pi, wi, ai), (pj, wj, aj) = pose.angle(i), pose.angle(j)
         return pj - pi, wj - wi, aj - ai
 
+    def value(self, pose: LinkagePose, joint: Joint) -> Array:
+        i, j = joint.links
+        return pose.link_state(j, pose.q)[1] - pose.link_state(i, pose.q)[1]
+
     # -- statics --------------------------------------------------------------------------
     def frame(self, pose: LinkagePose, joint: Joint) -> JointFrame:
         return JointFrame(pose.point(joint.links[1], pose.linkage.points[joint.at])[0], None, None)
