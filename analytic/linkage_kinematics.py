@@ -134,6 +134,8 @@ class LinkagePose:
             ex, ey = self.turn(k)
             return np.asarray(self.q[:, k:k + 2] + (ex * float(drawn[0]) + ey * float(drawn[1])),
                               dtype=np.float64)
+        if isinstance(drawn, tuple):    # the ground's: 0 + R(0)·P0 is P0 with its zeros +0
+            return np.full((self.q.shape[0], 2), drawn, dtype=np.float64) + 0.0
         p0 = np.asarray(drawn, dtype=float)
         t, phi = self.link_state(link, self.q)
         return np.asarray(t + (turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)),

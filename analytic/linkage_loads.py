@@ -22,7 +22,7 @@ def known_vector(pose: LinkagePose) -> Array:
     b = np.zeros((n, layout.rows))
     for load in linkage.loads:
         at = pose.point(load.link, load.at)[0]
-        layout.add_force(b, load.link, np.broadcast_to(np.array(load.force), (n, 2)), at)
+        layout.add_force(b, load.link, np.full((n, 2), load.force), at)
         layout.add_couple(b, load.link, np.full(n, load.torque))
     g = np.array(linkage.gravity)
     for m in linkage.masses:
