@@ -405,6 +405,8 @@ def _walked_positions(linkage: Linkage, value: Array) -> tuple[Array, Array]:
         return q, locked
     drawn = value == 0.0
     q[drawn] = start[0]     # the drawing, closed: no path to walk
+    if drawn.all():     # a case solved at its drawn pose
+        return q, locked
     for side in (1.0, -1.0):
         rows = np.flatnonzero((side * value > 0.0) & ~drawn)
         if not rows.size:
@@ -497,13 +499,11 @@ def solve_pose(linkage: Linkage, values: ArrayLike | None = None,
     own = np.array([[drv.value for drv in linkage.drivers]]).reshape(1, d)
     vals = own if values is None else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, d)
     n = vals.shape[0]
-    vel = np.broadcast_to(np.array([drv.velocity for drv in linkage.drivers]) if velocities is None
-                          else np.asarray(velocities, dtype=float), (n, d))
-    acc = np.broadcast_to(np.array([drv.acceleration for drv in linkage.drivers])
-                          if accelerations is None else np.asarray(accelerations, dtype=float), (n, d))
+    rates = _driver_rates(linkage, n, velocities, accelerations)
     q, locked = positions(linkage, vals)
-    if not (vel.any() or acc.any()):
+    if rates is None:
         return _at_rest(linkage, vals, q, locked)
+    vel, acc = rates
     joints_rows = linkage.constraint_rows
     with np.errstate(all="ignore"):
         _, jac = constraint_system(linkage, np.nan_to_num(q), vals)
@@ -517,6 +517,20 @@ def solve_pose(linkage: Linkage, values: ArrayLike | None = None,
     qdot[bad] = np.nan
     qddot[bad] = np.nan
     return LinkagePose(linkage, vals, q, qdot, qddot, locked)
+
+
+def _driver_rates(linkage: Linkage, n: int, velocities: ArrayLike | None,
+                  accelerations: ArrayLike | None) -> tuple[Array, Array] | None:
+    """The drivers' velocities and accelerations (n, d); None where all are zero."""
+    if velocities is None and accelerations is None \
+            and not any(drv.velocity or drv.acceleration for drv in linkage.drivers):
+        return None     # the case's own drivers at rest: no arrays needed
+    d = len(linkage.drivers)
+    vel = np.broadcast_to(np.array([drv.velocity for drv in linkage.drivers]) if velocities is None
+                          else np.asarray(velocities, dtype=float), (n, d))
+    acc = np.broadcast_to(np.array([drv.acceleration for drv in linkage.drivers])
+                          if accelerations is None else np.asarray(accelerations, dtype=float), (n, d))
+    return None if not (vel.any() or acc.any()) else (vel, acc)
 
 
 def _at_rest(linkage: Linkage, vals: Array, q: Array, locked: Array) -> LinkagePose:
