@@ -27,7 +27,8 @@ from mechcheck.analytic.linkage_forces import (
 )
 from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, perp, solve_batched, solve_pose
 from mechcheck.analytic.linkage_loads import known_vector
-from mechcheck.analytic.solution import Solution, Status
+from mechcheck.analytic.rigid import kept
+from mechcheck.analytic.solution import Diagnostics, Later, Solution, Status
 from mechcheck.analytic.values import CaseError
 
 COULOMB_REFUSAL = ("the method applies only to linkages without Coulomb friction: friction "
@@ -42,7 +43,12 @@ class CoulombRefused(ValueError):
 
 
 def quantity_units(linkage: Linkage) -> dict[str, str]:
-    """The table unit of every quantity a linkage reports (LINKAGES.md "What comes out")."""
+    """The table unit of every quantity a linkage reports (LINKAGES.md "What comes out"):
+    derived once per linkage (:func:`.rigid.kept`), a copy of its own to each caller."""
+    return dict(kept(linkage, "quantity units", lambda: _quantity_units(linkage)))
+
+
+def _quantity_units(linkage: Linkage) -> dict[str, str]:
     units: dict[str, str] = {}
     for name in linkage.points:
         units[f"x_{name}"] = units[f"y_{name}"] = "m"
@@ -181,8 +187,10 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
     ``only`` keeps the force quantities a method gives (virtual work: the drivers' efforts).
     """
     linkage = case.linkage
-    diagnostics: dict[str, float | str] = {
-        "method": method, "condition_number": float(results.condition[index]),
+    # The condition number when first read (an SVD, as long as the rest of a static pose's
+    # solve): the verdicts below do not read it where its bound decides.
+    diagnostics: dict[str, float | str | Later] = {
+        "method": method, "condition_number": lambda: float(results.condition[index]),
         "dof": linkage.dof, "gruebler": linkage.gruebler, "wall_time_s": elapsed,
     }
     axial = {q: v[index:index + 1] for q, v in results.values.items() if q.startswith("N_")}
@@ -202,15 +210,15 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
         # An unstable pose is still the answer (its forces hold there), but the reader must
         # learn that the search found no stable one, and why.
         if results.stable[index] == 0.0 and verdict(case, results, index) is None:
-            return Solution(case.name, backend, values, diagnostics=diagnostics,
+            return Solution(case.name, backend, values, diagnostics=Diagnostics(diagnostics),
                             units=quantity_units(linkage),
                             message=unstable_reason(linkage, results.pose.drivers[index]))
     found = verdict(case, results, index)
     units = quantity_units(linkage)
     if found is not None:
         return Solution(case.name, backend, pose_only, status=found[0], message=found[1],
-                        diagnostics=diagnostics, units=units)
-    return Solution(case.name, backend, values, diagnostics=diagnostics, units=units)
+                        diagnostics=Diagnostics(diagnostics), units=units)
+    return Solution(case.name, backend, values, diagnostics=Diagnostics(diagnostics), units=units)
 
 
 #: Why a linkage without drivers cannot be swept.

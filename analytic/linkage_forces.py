@@ -62,7 +62,7 @@ def coefficient_entries(pose: LinkagePose) -> Batched:
     linkage = pose.linkage
     layout = force_layout(linkage)
     k = Batched(layout.rows, layout.columns, pose.q.shape[0])
-    frames = {j.name: j.kind.frame(pose, j) for j in linkage.joints}
+    frames = {j.name: pose.frame(j) for j in linkage.joints}
     for joint in linkage.joints:
         joint.kind.react(k, layout, joint, frames[joint.name])
     for index, driver in enumerate(linkage.drivers):
@@ -178,8 +178,7 @@ def condition(pose: LinkagePose, k: Batched | Array) -> Array:
         return np.ones(entries.poses)
     layout = force_layout(linkage)
     cols = layout.unknown_lengths
-    rows = np.ones(layout.rows)
-    rows[2::3] = 1.0 / linkage.scale
+    rows = layout.row_scales
     if entries.small and entries.distinct:
         return _condition_small(entries, rows, cols)
     first = entries.scaled(np.broadcast_to(rows, (entries.poses, rows.size)), cols)
@@ -194,8 +193,7 @@ def _unit_rows(norms: Array) -> Array:
     pair = np.sqrt(0.5 * (norms[:, 0::3] ** 2 + norms[:, 1::3] ** 2))
     norms[:, 0::3] = pair
     norms[:, 1::3] = pair
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.asarray(np.where(norms > 0.0, 1.0 / norms, 1.0), dtype=np.float64)
+    return np.asarray(1.0 / np.where(norms > 0.0, norms, 1.0), dtype=np.float64)   # 1/1 is 1
 
 
 def _condition_small(entries: Batched, rows: Array, cols: Array) -> Array:
@@ -290,7 +288,7 @@ def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
     for link in linkage.moving_links:
         out[f"phi_{link}"] = pose.link_state(link, pose.q)[1]
     for joint in linkage.joints:
-        out[f"q_{joint.name}"] = pose.joint_coordinate(joint)[0]
+        out[f"q_{joint.name}"] = joint.kind.value(pose, joint)
     return out
 
 
@@ -378,6 +376,8 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
 
 def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:
     """Every driver's velocity and acceleration zero: a static case."""
+    if velocities is None and accelerations is None:    # the case's own: no arrays needed
+        return not any(d.velocity or d.acceleration for d in linkage.drivers)
     own = [(d.velocity, d.acceleration) for d in linkage.drivers]
     v = np.asarray([v for v, _ in own] if velocities is None else velocities, dtype=float)
     a = np.asarray([a for _, a in own] if accelerations is None else accelerations, dtype=float)
@@ -392,9 +392,9 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
     assert linkage.assur_plan is not None
     vals = np.array([[d.value for d in linkage.drivers]]) if values is None \
         else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, len(linkage.drivers))
-    # One pose (a case solved on its own) reports its exact condition number: the bound,
-    # which spares most poses of a sweep theirs, would be computed for nothing.
-    found = static_results(linkage.assur_plan, vals, bounded=vals.shape[0] > 1)
+    # The bound decides most poses' verdicts without their exact condition numbers, which
+    # are computed only if read (a Solution's diagnostics read them lazily).
+    found = static_results(linkage.assur_plan, vals)
     pose = found.pose
     exact = _ExactCondition(pose)
     singular = _singular_by_bound(pose, found.condition_bound, exact)

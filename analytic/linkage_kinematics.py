@@ -42,6 +42,7 @@ from mechcheck.analytic.rigid import (
 )
 
 if TYPE_CHECKING:
+    from mechcheck.analytic.joint_kinds.base import JointFrame
     from mechcheck.analytic.linkage import Joint, Linkage
 
 #: Largest driver step of the continuation: 2° of rotation, or 2 % of the linkage's size
@@ -91,7 +92,26 @@ class LinkagePose:
 
     def point(self, link: str, drawn: ArrayLike) -> tuple[Array, Array, Array]:
         """Global position, velocity and acceleration of a point fixed to ``link`` that was
-        at ``drawn`` in the drawn pose."""
+        at ``drawn`` in the drawn pose (read-only). A few poses keep each point asked for:
+        the statics of one pose asks for a joint's point several times (its frame, its
+        coordinate, its reported force), and each computation is a dozen calls."""
+        if self.q.shape[0] > linalg.FEW_POSES or not isinstance(drawn, tuple):
+            return self._point(link, drawn)
+        key = (link, drawn)
+        found = self.points_asked.get(key)
+        if found is None:
+            found = self.points_asked[key] = _read_only(self._point(link, drawn))
+        return found
+
+    @cached_property
+    def points_asked(self) -> dict[tuple[str, tuple[float, ...]], tuple[Array, Array, Array]]:
+        """The points :meth:`point` keeps, by link and drawn point."""
+        return {}
+
+    def _point(self, link: str, drawn: ArrayLike) -> tuple[Array, Array, Array]:
+        if self.at_rest:    # what the sums below give: +0 at every pose
+            position = self.position(link, drawn)
+            return position, np.zeros(position.shape), np.zeros(position.shape)
         p0 = np.asarray(drawn, dtype=float)
         t, phi = self.link_state(link, self.q)
         v, omega = self.link_state(link, self.qdot)
@@ -99,8 +119,6 @@ class LinkagePose:
         k = link_column(self.linkage, link)
         r = turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)
         position = t + r
-        if self.at_rest:    # what the sums below give: +0 at every pose
-            return position, np.zeros(position.shape), np.zeros(position.shape)
         across = perp(r)
         velocity = v + omega[:, None] * across
         acceleration = a + alpha[:, None] * across - (omega**2)[:, None] * r
@@ -108,9 +126,18 @@ class LinkagePose:
 
     def position(self, link: str, drawn: ArrayLike) -> Array:
         """:meth:`point`'s position alone (N, 2): the same numbers, without the rates."""
+        k = link_column(self.linkage, link)
+        if isinstance(drawn, tuple) and k >= 0:     # as :func:`.rigid.turned`, in fewer calls
+            found = self.points_asked.get((link, drawn))
+            if found is not None:
+                return found[0]
+            ex, ey = self.turn(k)
+            return np.asarray(self.q[:, k:k + 2] + (ex * float(drawn[0]) + ey * float(drawn[1])),
+                              dtype=np.float64)
+        if isinstance(drawn, tuple):    # the ground's: 0 + R(0)·P0 is P0 with its zeros +0
+            return np.full((self.q.shape[0], 2), drawn, dtype=np.float64) + 0.0
         p0 = np.asarray(drawn, dtype=float)
         t, phi = self.link_state(link, self.q)
-        k = link_column(self.linkage, link)
         return np.asarray(t + (turned(self.turn(k), p0) if k >= 0 else rotate(phi, p0)),
                           dtype=np.float64)
 
@@ -140,6 +167,21 @@ class LinkagePose:
         return (self.link_state(link, self.q)[1], self.link_state(link, self.qdot)[1],
                 self.link_state(link, self.qddot)[1])
 
+    def frame(self, joint: Joint) -> JointFrame:
+        """Where ``joint`` acts (its kind's :meth:`~.JointKind.frame`), kept for a few poses as
+        :meth:`point` keeps points: the matrix K and the reported forces both ask."""
+        if self.q.shape[0] > linalg.FEW_POSES:
+            return joint.kind.frame(self, joint)
+        found = self.frames_asked.get(joint.name)
+        if found is None:
+            found = self.frames_asked[joint.name] = joint.kind.frame(self, joint)
+        return found
+
+    @cached_property
+    def frames_asked(self) -> dict[str, JointFrame]:
+        """The frames :meth:`frame` keeps, by joint."""
+        return {}
+
     def joint_coordinate(self, joint: Joint) -> tuple[Array, Array, Array]:
         """q, q̇, q̈ of a joint: relative rotation (rad) or displacement along the axis (m)."""
         return joint.kind.coordinate(self, joint)
@@ -148,6 +190,20 @@ class LinkagePose:
     def assembled(self) -> NDArray[np.bool_]:
         """Which poses the linkage reaches (asked for by every verdict: computed once)."""
         return np.all(np.isfinite(self.q), axis=1)
+
+
+def known_at_rest(pose: LinkagePose) -> LinkagePose:
+    """``pose``, whose rates its solver made +0 wherever it assembles (NaN elsewhere), with
+    :attr:`LinkagePose.at_rest` known without a pass over them."""
+    pose.__dict__["at_rest"] = bool(pose.assembled.all())   # what the cached property stores
+    return pose
+
+
+def _read_only(arrays: tuple[Array, Array, Array]) -> tuple[Array, Array, Array]:
+    """``arrays``, which are kept and handed out again, made read-only."""
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
 
 
 def known_assembled(pose: LinkagePose, assembled: NDArray[np.bool_]) -> LinkagePose:
@@ -349,6 +405,8 @@ def _walked_positions(linkage: Linkage, value: Array) -> tuple[Array, Array]:
         return q, locked
     drawn = value == 0.0
     q[drawn] = start[0]     # the drawing, closed: no path to walk
+    if drawn.all():     # a case solved at its drawn pose
+        return q, locked
     for side in (1.0, -1.0):
         rows = np.flatnonzero((side * value > 0.0) & ~drawn)
         if not rows.size:
@@ -441,11 +499,11 @@ def solve_pose(linkage: Linkage, values: ArrayLike | None = None,
     own = np.array([[drv.value for drv in linkage.drivers]]).reshape(1, d)
     vals = own if values is None else np.atleast_2d(np.asarray(values, dtype=float)).reshape(-1, d)
     n = vals.shape[0]
-    vel = np.broadcast_to(np.array([drv.velocity for drv in linkage.drivers]) if velocities is None
-                          else np.asarray(velocities, dtype=float), (n, d))
-    acc = np.broadcast_to(np.array([drv.acceleration for drv in linkage.drivers])
-                          if accelerations is None else np.asarray(accelerations, dtype=float), (n, d))
+    rates = _driver_rates(linkage, n, velocities, accelerations)
     q, locked = positions(linkage, vals)
+    if rates is None:
+        return _at_rest(linkage, vals, q, locked)
+    vel, acc = rates
     joints_rows = linkage.constraint_rows
     with np.errstate(all="ignore"):
         _, jac = constraint_system(linkage, np.nan_to_num(q), vals)
@@ -459,3 +517,28 @@ def solve_pose(linkage: Linkage, values: ArrayLike | None = None,
     qdot[bad] = np.nan
     qddot[bad] = np.nan
     return LinkagePose(linkage, vals, q, qdot, qddot, locked)
+
+
+def _driver_rates(linkage: Linkage, n: int, velocities: ArrayLike | None,
+                  accelerations: ArrayLike | None) -> tuple[Array, Array] | None:
+    """The drivers' velocities and accelerations (n, d); None where all are zero."""
+    if velocities is None and accelerations is None \
+            and not any(drv.velocity or drv.acceleration for drv in linkage.drivers):
+        return None     # the case's own drivers at rest: no arrays needed
+    d = len(linkage.drivers)
+    vel = np.broadcast_to(np.array([drv.velocity for drv in linkage.drivers]) if velocities is None
+                          else np.asarray(velocities, dtype=float), (n, d))
+    acc = np.broadcast_to(np.array([drv.acceleration for drv in linkage.drivers])
+                          if accelerations is None else np.asarray(accelerations, dtype=float), (n, d))
+    return None if not (vel.any() or acc.any()) else (vel, acc)
+
+
+def _at_rest(linkage: Linkage, vals: Array, q: Array, locked: Array) -> LinkagePose:
+    """The pose with every driver at rest: J·q̇ = 0 and J·q̈ = −J̇·q̇ = 0 have the solution
+    zero at every pose that assembles (the two solves would give it, up to the sign of a
+    zero), NaN at one that does not."""
+    bad = ~np.all(np.isfinite(q), axis=1)
+    qdot = np.zeros(q.shape)
+    qdot[bad] = np.nan
+    return known_at_rest(known_assembled(LinkagePose(linkage, vals, q, qdot, qdot.copy(), locked),
+                                         ~bad))

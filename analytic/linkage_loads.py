@@ -11,18 +11,18 @@ from numpy.typing import NDArray
 
 from mechcheck.analytic.linkage import LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.linkage_kinematics import LinkagePose
-from mechcheck.analytic.rigid import Array, ForceLayout
+from mechcheck.analytic.rigid import Array, ForceLayout, force_layout
 
 
 def known_vector(pose: LinkagePose) -> Array:
     """b (N, 3n): every force that does not depend on the unknowns, on each link."""
     linkage = pose.linkage
-    layout = ForceLayout(linkage)
+    layout = force_layout(linkage)
     n = pose.q.shape[0]
     b = np.zeros((n, layout.rows))
     for load in linkage.loads:
         at = pose.point(load.link, load.at)[0]
-        layout.add_force(b, load.link, np.broadcast_to(np.array(load.force), (n, 2)), at)
+        layout.add_force(b, load.link, np.full((n, 2), load.force), at)
         layout.add_couple(b, load.link, np.full(n, load.torque))
     g = np.array(linkage.gravity)
     for m in linkage.masses:

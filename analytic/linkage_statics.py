@@ -52,7 +52,12 @@ from mechcheck.analytic.linkage_assur import (
     place,
     reachable,
 )
-from mechcheck.analytic.linkage_kinematics import Array, LinkagePose, known_assembled
+from mechcheck.analytic.linkage_kinematics import (
+    Array,
+    LinkagePose,
+    known_assembled,
+    known_at_rest,
+)
 from mechcheck.analytic.linkage_loads import spring_axis
 from mechcheck.analytic.resultant import Resultant
 from mechcheck.analytic.values import GROUND, Vec2
@@ -74,10 +79,9 @@ class StaticResults:
     condition_bound: Array
 
 
-def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> StaticResults:
+def static_results(plan: AssurPlan, values: Array) -> StaticResults:
     """Statics at each driver value (N, 1): pose, reactions, efforts, springs, and the bound
-    from which :func:`.linkage_forces.solve_linkage` decides the singular verdicts (infinite
-    without ``bounded``: the exact condition numbers will be computed anyway)."""
+    from which :func:`.linkage_forces.solve_linkage` decides the singular verdicts."""
     linkage = plan.linkage
     value = np.ascontiguousarray(values[:, 0], dtype=float)
     n = value.shape[0]
@@ -95,14 +99,14 @@ def static_results(plan: AssurPlan, values: Array, *, bounded: bool = True) -> S
     for start in range(0, n, CHUNK):
         part = slice(start, min(start + CHUNK, n))
         chunk = _Chunk(plan, route, _chunk_values(value, part), constants)
-        chunk.write(out, q, locked, bound if bounded else None, part)
+        chunk.write(out, q, locked, bound, part)
         inside[part] = _finite_rows(q[part])   # while the chunk is in cache
     qdot, qddot = np.zeros(q.shape), np.zeros(q.shape)   # untouched pages cost nothing
     if not inside.all():
         qdot[~inside] = np.nan
         qddot[~inside] = np.nan
     pose = LinkagePose(linkage, np.asarray(values, dtype=float), q, qdot, qddot, locked)
-    return StaticResults(known_assembled(pose, inside), out, bound)
+    return StaticResults(known_at_rest(known_assembled(pose, inside)), out, bound)
 
 
 def _finite_rows(block: Array) -> NDArray[np.bool_]:
@@ -151,7 +155,7 @@ class _Chunk:
             found = self.carried[key] = on_body(self.placed.frames[link], p0)
         return found
 
-    def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array | None,
+    def write(self, out: dict[str, Array], q: Array, locked: Array, bound: Array,
               part: slice) -> None:
         linkage = self.linkage
         for name, p0 in linkage.points.items():
@@ -173,8 +177,7 @@ class _Chunk:
         for name, f in forces.items():
             out[name][part] = f
         locked[part] = self.locked
-        if bound is not None:
-            bound[part] = self.condition_bound()
+        bound[part] = self.condition_bound()
         nan = np.atleast_1d(~self.inside)
         if nan.any():   # a pose the path does not reach has no pose and no forces
             q[part][nan] = np.nan

@@ -9,6 +9,7 @@ exist (:mod:`.joint_kinds` does); the engine's modules and the kinds both build 
 
 from __future__ import annotations
 
+import functools
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -18,7 +19,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic.linalg import Batched
+from mechcheck.analytic.linalg import FEW_POSES, Batched
 from mechcheck.analytic.values import GROUND
 
 if TYPE_CHECKING:
@@ -72,6 +73,26 @@ def _pair(x: Array, y: Array) -> Array:
     out = np.empty((*np.shape(x), 2))
     out[..., 0] = x
     out[..., 1] = y
+    return out
+
+
+def unit_axes(n: int) -> Array:
+    """e_x and e_y at n poses, (2, n, 2), read-only: kept for a few poses (every pin's
+    reaction is written along them), made anew for many."""
+    return _kept_axes(n) if n <= FEW_POSES else _axes(n)
+
+
+def _axes(n: int) -> Array:
+    out = np.zeros((2, n, 2))
+    out[0, :, 0] = 1.0
+    out[1, :, 1] = 1.0
+    return out
+
+
+@functools.lru_cache(maxsize=FEW_POSES)
+def _kept_axes(n: int) -> Array:
+    out = _axes(n)
+    out.flags.writeable = False
     return out
 
 
@@ -297,6 +318,15 @@ class ForceLayout:
         return self.joint_unknowns + len(self.linkage.drivers)
 
     @cached_property
+    def row_scales(self) -> Array:
+        """(rows,): what makes each equilibrium row a force (1, and 1/L for a moment row, L
+        the linkage's size), read-only."""
+        rows = np.ones(self.rows)
+        rows[2::3] = 1.0 / self.linkage.scale
+        rows.flags.writeable = False
+        return rows
+
+    @cached_property
     def unknown_lengths(self) -> Array:
         """(columns,): the length that makes each unknown a force (1 for a force, the
         linkage's size for a couple; the kinds' ``reaction_lengths`` and ``length``)."""
@@ -309,18 +339,20 @@ class ForceLayout:
         cols.flags.writeable = False
         return cols
 
-    def force_on(self, k: Batched, link: str, col: int, direction: Array, point: Array,
-                 sign: float) -> None:
-        """Column ``col`` times ``direction`` (N, 2), acting on ``link`` at ``point``."""
-        r = self.row(link)
-        if r < 0:
-            return
-        # The three entries (force, and its moment about the origin) in one product.
-        entries = np.empty((3, direction.shape[0]))
-        entries[:2] = direction.T
-        entries[2] = cross(point, direction)
-        entries *= sign
-        k.add_rows(r, col, entries)
+    def force_pair(self, k: Batched, links: tuple[str, str], cols: tuple[int, ...],
+                   directions: Array, point: Array) -> None:
+        """Each column of ``cols`` times its direction (``directions`` (len(cols), N, 2))
+        acting on links[1] at ``point``, and reversed on links[0] (a joint's reaction): three
+        entries per column and link, the force and its moment about the origin, computed
+        once for every column and both links (negation is exact)."""
+        entries = np.empty((len(cols), 3, point.shape[0]))
+        entries[:, :2] = directions.transpose(0, 2, 1)
+        entries[:, 2] = cross(point, directions)
+        for link, values in ((links[1], entries), (links[0], -entries)):
+            r = self.row(link)
+            if r >= 0:
+                for col, column in zip(cols, values, strict=True):
+                    k.add_rows(r, col, column)
 
     def couple_on(self, k: Batched, link: str, col: int, sign: float) -> None:
         r = self.row(link)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Literal
@@ -112,6 +112,34 @@ def quantity_kind(quantity: str, unit: str | None = None) -> str:
     return kind_of_unit(unit or QUANTITY_UNITS[quantity][0])
 
 
+Later = Callable[[], "float | str"]
+
+
+class Diagnostics(Mapping[str, "float | str"]):
+    """Read-only diagnostics, some of them computed when first read (given as a function of
+    nothing): a number that costs as much as the solve that reports it (the analytic
+    condition number, an SVD) is computed for the reader who asks for it, exactly as it
+    would have been, and once."""
+
+    def __init__(self, entries: Mapping[str, float | str | Later]) -> None:
+        self._entries = dict(entries)
+
+    def __getitem__(self, key: str) -> float | str:
+        value = self._entries[key]
+        if callable(value):
+            value = self._entries[key] = value()
+        return value
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def __repr__(self) -> str:
+        return repr(dict(self))
+
+
 @dataclass(frozen=True)
 class Solution:
     """One backend's answer for one Case.
@@ -179,5 +207,7 @@ class Solution:
 
     def __post_init__(self) -> None:
         for name in ("values", "diagnostics", "units"):
-            object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
+            given = getattr(self, name)
+            if not isinstance(given, Diagnostics):   # read-only already
+                object.__setattr__(self, name, MappingProxyType(dict(given)))
         check_quantities(tuple(self.values), tuple(self.units))

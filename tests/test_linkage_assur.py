@@ -8,6 +8,7 @@ the law of cosines."""
 from __future__ import annotations
 
 import math
+import pickle
 from dataclasses import replace
 from typing import Any
 
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
 
+import mechcheck
 from mechcheck import load_cases
 from mechcheck.analytic.case import CaseError
 from mechcheck.analytic.linkage import Linkage
@@ -184,6 +186,26 @@ def test_the_condition_number_is_the_dense_one_when_asked_for() -> None:
     _, cond, _ = dense_statics(linkage, values)
     got = solve_linkage(linkage, values).condition
     assert np.allclose(got, cond, rtol=1e-9, atol=0.0)
+
+
+def test_a_case_solved_alone_reports_its_condition_number_and_verdict_as_a_sweep() -> None:
+    """A case solved on its own (its verdict from the bound, its condition number computed
+    when its diagnostics are read): at the locking four-bar's toggle, next to it and far
+    from it, the Solution's verdict is `singular` exactly where the condition number exceeds
+    1e8, the number is the one the same poses get in one sweep (to the bit), and a pickled
+    Solution carries it."""
+    case = next(c for c in load_cases(*builtin_case_files()) if c.name == "locking-fourbar")
+    linkage = static(case.linkage)
+    hi = path(linkage.assur_plan, np.radians([180.0])).hi  # type: ignore[arg-type]
+    values = (hi - np.array([0.0, 1e-15, 1e-9, 1e-3, 1.0]))[:, None]
+    swept = solve_linkage(linkage, values).condition
+    assert (swept > SINGULAR_CONDITION).any() and (swept < SINGULAR_CONDITION).any()
+    for value, expected in zip(values[:, 0], swept, strict=True):
+        driver = replace(linkage.drivers[0], value=float(value))
+        solution = mechcheck.solve(replace(case, geometry=replace(linkage, drivers=(driver,))))
+        assert (solution.status == "singular") == (expected > SINGULAR_CONDITION)
+        assert solution.diagnostics["condition_number"] == expected
+        assert pickle.loads(pickle.dumps(solution)).diagnostics["condition_number"] == expected
 
 
 SETTINGS = settings(max_examples=12, deadline=None,

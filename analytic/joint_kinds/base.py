@@ -144,6 +144,10 @@ class JointKind(ABC):
     def coordinate(self, pose: LinkagePose, joint: Joint) -> tuple[Array, Array, Array]:
         """q, q̇, q̈ of the joint at each pose."""
 
+    def value(self, pose: LinkagePose, joint: Joint) -> Array:
+        """q alone, the same numbers as :meth:`coordinate`'s (a kind may spare the rates)."""
+        return self.coordinate(pose, joint)[0]
+
     # -- statics --------------------------------------------------------------------------
     @abstractmethod
     def frame(self, pose: LinkagePose, joint: Joint) -> JointFrame:

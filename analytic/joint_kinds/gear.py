@@ -242,8 +242,7 @@ class Gear(JointKind):
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
         assert frame.u is not None
         (col,) = layout.joint_columns(joint)
-        for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
-            layout.force_on(k, link, col, frame.u, frame.point, sign)
+        layout.force_pair(k, joint.links, (col,), frame.u[None], frame.point)
 
     def reaction_lengths(self, size: float) -> tuple[float, ...]:
         return (1.0,)

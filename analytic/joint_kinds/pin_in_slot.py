@@ -49,8 +49,7 @@ class PinInSlot(Prismatic):
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
         assert frame.n is not None
         (c0,) = layout.joint_columns(joint)
-        for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
-            layout.force_on(k, link, c0, frame.n, frame.point, sign)
+        layout.force_pair(k, joint.links, (c0,), frame.n[None], frame.point)
 
     def reaction_lengths(self, size: float) -> tuple[float, ...]:
         return (1.0,)

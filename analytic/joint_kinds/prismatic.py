@@ -83,6 +83,12 @@ class Prismatic(JointKind):
         return (dot(u, d), dot(du, d) + dot(u, dd),
                 dot(ddu, d) + 2 * dot(du, dd) + dot(u, ddd))
 
+    def value(self, pose: LinkagePose, joint: Joint) -> Array:
+        i, j = joint.links
+        a0 = pose.linkage.points[joint.at]
+        u = rotate(pose.link_state(i, pose.q)[1], slot_axis(joint))
+        return dot(u, pose.position(j, a0) - pose.position(i, a0))
+
     # -- statics --------------------------------------------------------------------------
     def frame(self, pose: LinkagePose, joint: Joint) -> JointFrame:
         point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
@@ -92,8 +98,8 @@ class Prismatic(JointKind):
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
         assert frame.n is not None
         c0, c1 = layout.joint_columns(joint)
+        layout.force_pair(k, joint.links, (c0,), frame.n[None], frame.point)
         for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
-            layout.force_on(k, link, c0, frame.n, frame.point, sign)
             layout.couple_on(k, link, c1, sign)
 
     def reaction_lengths(self, size: float) -> tuple[float, ...]:
@@ -102,8 +108,7 @@ class Prismatic(JointKind):
     def exert(self, k: Batched, layout: ForceLayout, col: int, joint: Joint,
               frame: JointFrame) -> None:
         assert frame.u is not None
-        for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
-            layout.force_on(k, link, col, frame.u, frame.point, sign)
+        layout.force_pair(k, joint.links, (col,), frame.u[None], frame.point)
 
     def quantities(self, joint: Joint) -> dict[str, str]:
         return {f"F_{joint.name}_x": "N", f"F_{joint.name}_y": "N", f"M_{joint.name}": "N*m"}
@@ -114,7 +119,7 @@ class Prismatic(JointKind):
     def slide_force(self, pose: LinkagePose, joint: Joint, x: Array, along: Array) -> dict[str, Array]:
         """The force by links[0] on links[1]: the normal reaction x[:, 0] along n, and along
         u the Coulomb friction ``along`` and the viscous force."""
-        frame = self.frame(pose, joint)
+        frame = pose.frame(joint)
         assert frame.u is not None and frame.n is not None
         f = pose.linkage.friction
         if f is not None and f.viscous.get(joint.name, 0.0):

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechcheck.analytic.joint_kinds.base import JointFrame, JointKind
-from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion
+from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion, unit_axes
 from mechcheck.analytic.values import CaseError
 
 if TYPE_CHECKING:
@@ -64,18 +64,17 @@ class Revolute(JointKind):
         (pi, wi, ai), (pj, wj, aj) = pose.angle(i), pose.angle(j)
         return pj - pi, wj - wi, aj - ai
 
+    def value(self, pose: LinkagePose, joint: Joint) -> Array:
+        i, j = joint.links
+        return pose.link_state(j, pose.q)[1] - pose.link_state(i, pose.q)[1]
+
     # -- statics --------------------------------------------------------------------------
     def frame(self, pose: LinkagePose, joint: Joint) -> JointFrame:
         return JointFrame(pose.point(joint.links[1], pose.linkage.points[joint.at])[0], None, None)
 
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
-        n = frame.point.shape[0]
-        ones, zeros = np.ones(n), np.zeros(n)
-        ex, ey = np.stack([ones, zeros], axis=1), np.stack([zeros, ones], axis=1)
-        c0, c1 = layout.joint_columns(joint)
-        for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
-            layout.force_on(k, link, c0, ex, frame.point, sign)
-            layout.force_on(k, link, c1, ey, frame.point, sign)
+        layout.force_pair(k, joint.links, layout.joint_columns(joint),
+                          unit_axes(frame.point.shape[0]), frame.point)
 
     def reaction_lengths(self, size: float) -> tuple[float, ...]:
         return (1.0, 1.0)
