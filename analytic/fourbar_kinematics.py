@@ -39,7 +39,9 @@ def _cos_ratio(g: FourBarGeometry, cos12: Array, sin12: Array) -> Array:
     c = g.a1**2 + g.a2**2 + g.a4**2 - g.a3**2 - 2.0 * g.a1 * g.a2 * cos12
     a = -2.0 * g.a1 * g.a4 + 2.0 * g.a2 * g.a4 * cos12
     b = 2.0 * g.a2 * g.a4 * sin12
-    with np.errstate(divide="ignore", invalid="ignore"):  # a2 = a1 at φ12 = 0: no pose
+    # a2 = a1 at φ12 = 0 (hypot 0), or a hypot near the smallest double: no pose, an
+    # infinite or NaN ratio, and no warning.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         return c / np.hypot(a, b)
 
 
