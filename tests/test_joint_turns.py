@@ -13,8 +13,8 @@ import pytest
 from typer.testing import CliRunner
 
 import mechcheck
-from mechcheck.cli import app
 from mechcheck.analytic.case import Case
+from mechcheck.cli import app
 from mechcheck.run import RunResult
 from mechcheck.tables import comparison_rows, results_frame
 from mechcheck.tolerance import tolerance_for
