@@ -24,56 +24,19 @@ def invoke(args: list[str]) -> tuple[int, str, str]:
     return result.exit_code, result.stdout, result.stderr
 
 
-#: A slider-crank driven by its slide (mm): crank r = 40 on A0, rod l = 120, slider B on the
-#: x axis through A0, drawn with the crank upright: B = (√(120² − 40²), 0) = (113.137085, 0).
-#: Pushed out, it locks where crank and rod lie in line, s = r + l = 160 mm: a displacement
-#: of 160 − 113.137085 = 46.862915 mm from the drawing.
-SLIDE_DRIVEN = """
-[[case]]
-name = "slide-driven"
-mechanism = "linkage"
-length_unit = "mm"
-[case.points]
-A0 = [0.0, 0.0]
-A = [0.0, 40.0]
-B = [113.13708498984761, 0.0]
-[[case.links]]
-name = "ground"
-points = ["A0"]
-[[case.links]]
-name = "crank"
-points = ["A0", "A"]
-[[case.links]]
-name = "rod"
-points = ["A", "B"]
-[[case.links]]
-name = "slider"
-points = ["B"]
-[[case.joints]]
-name = "A0"
-kind = "revolute"
-links = ["ground", "crank"]
-at = "A0"
-[[case.joints]]
-name = "A"
-kind = "revolute"
-links = ["crank", "rod"]
-at = "A"
-[[case.joints]]
-name = "B"
-kind = "revolute"
-links = ["rod", "slider"]
-at = "B"
-[[case.joints]]
-name = "slide"
-kind = "prismatic"
-links = ["ground", "slider"]
-at = "B"
-axis = [1.0, 0.0]
-[[case.drivers]]
-joint = "slide"
-displacement = 100.0
-"""
+def slide_driven() -> str:
+    """Seed E2's slider-crank drawn as a linkage (crank a2 = 200, rod a3 = 800 mm, the slider
+    drawn at s14 = 897.76036716 mm; compare/cases/linkages/seed_e2_slider_crank.toml), driven
+    by its slide instead of its crank, 150 mm outward. It locks where crank and rod lie in
+    line, s = a2 + a3 = 1000 mm: a displacement of 1000 − 897.76036716 = 102.23963284 mm
+    from the drawing (inward: s = a3 − a2 = 600 mm, −297.76036716 mm)."""
+    path = next(p for p in builtin_case_files() if p.name == "seed_e2_slider_crank.toml")
+    first = "[[case]]" + path.read_text(encoding="utf-8").split("[[case]]")[1]
+    return (first.replace('name = "e2-linkage-frictionless"', 'name = "slide-driven"')
+            .replace('joint = "A0"\nrotation = 0.0', 'joint = "slide"\ndisplacement = 150.0'))
+
+
+SLIDE_DRIVEN = slide_driven()
 
 
 # -- the one-line summary -------------------------------------------------------------------
@@ -168,14 +131,16 @@ def test_validate_refuses_as_run_does(tmp_path: Path, text: str) -> None:
 
 def test_a_lock_is_quoted_in_the_files_millimetres(tmp_path: Path) -> None:
     """The lock of a slide driven past crank and rod in line is quoted in mm, at the hand
-    value 46.862915 mm (SLIDE_DRIVEN), not as 0.0468629 m."""
+    value 102.239633 mm (slide_driven), not as 0.102240 m."""
     path = tmp_path / "slide.toml"
     path.write_text(SLIDE_DRIVEN)
     solution = solve(load_cases(path)[0])
     assert solution.status == "no_solution"
-    assert "locks at displacement 46.8629" in solution.message and " mm of slide" in solution.message
+    assert "locks at displacement 102.2396" in solution.message, solution.message
+    assert " mm of slide" in solution.message
     code, out, _ = invoke(["theory", "case", str(path)])
-    assert code == 0 and "increasing: locks at +46.8629" in out and "-33.137085 mm" in out, out
+    assert code == 0 and "increasing: locks at +102.2396" in out, out
+    assert "decreasing: locks at -297.7603" in out, out
 
 
 def test_a_length_error_quotes_the_files_unit(tmp_path: Path) -> None:

@@ -19,61 +19,19 @@ from mechcheck.run import RunResult
 from mechcheck.tables import comparison_rows, results_frame
 from mechcheck.tolerance import tolerance_for
 
+from .test_linkage_file import FOUR_BAR_TEMPLATE
+
 #: The driver's rotation written in the file, degrees: more than a turn.
 TURNED_DEG = 400.0
 
 #: A Grashof crank-rocker (s + l = 40 + 140 < 100 + 120, the crank beside the ground), so
-#: its crank turns fully: drawn at θ12 = 0, B = (112, 96) closes |AB| = 120, |B0B| = 100.
-CRANK_ROCKER = f"""
-[[case]]
-name = "crank-turned-400"
-mechanism = "linkage"
-length_unit = "mm"
-[case.points]
-A0 = [0.0, 0.0]
+#: its crank turns fully: drawn at θ12 = 0, B = (112, 96) closes |AB| = 120, |B0B| = 100;
+#: D halfway along the rocker. The linkage test's four-bar format, driven 400°.
+CRANK_ROCKER = FOUR_BAR_TEMPLATE.replace("POINTS", """A0 = [0.0, 0.0]
 B0 = [140.0, 0.0]
 A = [40.0, 0.0]
 B = [112.0, 96.0]
-[[case.links]]
-name = "ground"
-points = ["A0", "B0"]
-[[case.links]]
-name = "crank"
-points = ["A0", "A"]
-[[case.links]]
-name = "coupler"
-points = ["A", "B"]
-[[case.links]]
-name = "rocker"
-points = ["B0", "B"]
-[[case.joints]]
-name = "A0"
-kind = "revolute"
-links = ["ground", "crank"]
-at = "A0"
-[[case.joints]]
-name = "A"
-kind = "revolute"
-links = ["crank", "coupler"]
-at = "A"
-[[case.joints]]
-name = "B"
-kind = "revolute"
-links = ["coupler", "rocker"]
-at = "B"
-[[case.joints]]
-name = "B0"
-kind = "revolute"
-links = ["ground", "rocker"]
-at = "B0"
-[[case.drivers]]
-joint = "A0"
-rotation = {TURNED_DEG}
-[[case.loads]]
-link = "rocker"
-at = "B"
-force = {{ x = 10.0, y = 0.0 }}
-"""
+D = [126.0, 48.0]""").replace("rotation = 0.0", f"rotation = {TURNED_DEG}")
 
 
 @pytest.fixture(scope="module")
