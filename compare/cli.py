@@ -15,7 +15,7 @@ import os
 import signal
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -23,6 +23,10 @@ from mechcheck import backends as registry
 from mechcheck.analytic.values import CaseError
 from mechcheck.executors import MAX_WORKERS_PER_CORE, ExecutorUnavailable, check_workers
 from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
+
+if TYPE_CHECKING:
+    from mechcheck.analytic.case import Case
+    from mechcheck.casefile import AnySpec
 
 # pandas, matplotlib, pydantic and the simulators are imported inside the commands
 # that need them, so that `mechcheck --help` and `mechcheck backends` start fast
@@ -49,6 +53,11 @@ def example_path(mechanism: str) -> Path:
     return Path(__file__).parent / "examples" / f"{mechanism}.toml"
 
 
+#: The case files of `run` and `validate`.
+CaseFiles = Annotated[list[Path] | None, typer.Argument(
+    help="Case files (TOML). None: the built-in suite (seed examples and more).")]
+
+
 def fail_input(message: str) -> typer.Exit:
     """One clear line on stderr, exit status 2."""
     typer.echo(f"mechcheck: error: {message}", err=True)
@@ -73,8 +82,7 @@ def progress_printer() -> Progress:
              "every backend and compare each number with the analytic solution; tables and a "
              "report.")
 def run_command(
-    files: Annotated[list[Path] | None, typer.Argument(
-        help="Case files (TOML). None: the built-in suite (seed examples and more).")] = None,
+    files: CaseFiles = None,
     backend: Annotated[list[str] | None, typer.Option(
         "--backend", "-b", help="Backend to check against analytic (repeatable). "
         f"Default: every available one of {', '.join(registry.REGISTRY)}.")] = None,
@@ -87,19 +95,14 @@ def run_command(
         help="Also write a JUnit XML file: one test case per comparison.")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
 ) -> None:
-    from mechcheck.casefile import builtin_case_files, load_specs
     from mechcheck.junit import junit_xml
     from mechcheck.output import OutputError, locked_folder, write_all
     from mechcheck.report import render
     from mechcheck.run import run
     from mechcheck.tables import diagnostics_frame, results_frame
 
-    paths = list(files) if files else builtin_case_files()
     verdicts = parse_fail_on(fail_on)
-    try:
-        specs = load_specs(paths)
-    except CaseError as error:
-        raise fail_input(str(error)) from None
+    _, specs = read_case_files(files)
     names = list(backend) if backend else registry.available()
     try:
         for name in names:
@@ -126,6 +129,18 @@ def run_command(
         raise fail_input(str(error)) from None
     typer.echo(f"{result.summary} -> {out}/report.md")
     raise typer.Exit(result.exit_status)
+
+
+def read_case_files(files: list[Path] | None) -> tuple[list[Path], list[tuple[Case, AnySpec]]]:
+    """The files read and their validated cases, as `run` and `validate` read them (no file:
+    the built-in suite); an unusable one is its one line and exit 2."""
+    from mechcheck.casefile import builtin_case_files, load_specs
+
+    paths = list(files) if files else builtin_case_files()
+    try:
+        return paths, load_specs(paths)
+    except CaseError as error:
+        raise fail_input(str(error)) from None
 
 
 def check_outputs(out: Path, junit: Path | None) -> None:
@@ -287,16 +302,9 @@ def new_command(
              "solving them: exit 0, or 2 with the one line `run` would give for the first "
              "unusable file, case and key.")
 def validate_command(
-    files: Annotated[list[Path] | None, typer.Argument(
-        help="Case files (TOML). None: the built-in suite.")] = None,
+    files: CaseFiles = None,
 ) -> None:
-    from mechcheck.casefile import builtin_case_files, load_specs
-
-    paths = list(files) if files else builtin_case_files()
-    try:
-        specs = load_specs(paths)   # exactly what `run` reads them with
-    except CaseError as error:
-        raise fail_input(str(error)) from None
+    paths, specs = read_case_files(files)   # exactly as `run` reads them
     n, m = len(specs), len(paths)
     typer.echo(f"{n} case{'s' * (n != 1)} in {m} file{'s' * (m != 1)}: valid")
 
