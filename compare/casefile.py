@@ -34,7 +34,7 @@ from mechcheck.analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
-from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP
+from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP, quantity_units
 from mechcheck.analytic.values import LENGTH_UNITS, lengths_quoted_in
 from mechcheck.linkage_file import LinkageCaseSpec, linkage_from_spec
 from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, needs_an_effect, validated
@@ -166,10 +166,24 @@ AnySpec = CaseSpec | LinkageCaseSpec
 
 def linkage_case(spec: LinkageCaseSpec, source: str = "") -> Case:
     """A ``mechanism = "linkage"`` table as a Case holding its Linkage."""
-    return Case(name=spec.name, geometry=linkage_from_spec(spec),
+    linkage = linkage_from_spec(spec)
+    if spec.seed is not None:
+        check_printed_keys(spec.seed.printed, quantity_units(linkage))
+    return Case(name=spec.name, geometry=linkage,
                 tolerance=tuple((f"{t.backend}:{t.quantity}", t.rtol, t.atol)
                                 for t in spec.tolerance),
                 source=source, length_unit=spec.length_unit)
+
+
+def check_printed_keys(printed: Iterable[str], quantities: Iterable[str]) -> None:
+    """A linkage's printed answers name its own quantities: the seed table gives each its
+    computed value and the unit its joint, link or spring has."""
+    known = set(quantities)
+    for key in printed:
+        if key not in known:
+            raise CaseError(f"unknown quantity {key!r} of this linkage: a printed answer names "
+                            "one of its quantities (Q_<driver joint>, F_<joint>_x, phi_<link>, "
+                            "q_<joint>, …)", key=f"seed.printed.{key}")
 
 
 def parse_cases(data: dict[str, Any], source: str) -> list[tuple[Case, AnySpec]]:

@@ -31,7 +31,8 @@ def slide_driven() -> str:
     line, s = a2 + a3 = 1000 mm: a displacement of 1000 − 897.76036716 = 102.23963284 mm
     from the drawing (inward: s = a3 − a2 = 600 mm, −297.76036716 mm)."""
     path = next(p for p in builtin_case_files() if p.name == "seed_e2_slider_crank.toml")
-    first = "[[case]]" + path.read_text(encoding="utf-8").split("[[case]]")[1]
+    # The first case, without its printed answer (Q_A0: A0 is no longer driven).
+    first = "[[case]]" + path.read_text(encoding="utf-8").split("[[case]]")[1].split("[case.seed]")[0]
     return (first.replace('name = "e2-linkage-frictionless"', 'name = "slide-driven"')
             .replace('joint = "A0"\nrotation = 0.0', 'joint = "slide"\ndisplacement = 150.0'))
 

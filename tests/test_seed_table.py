@@ -4,12 +4,15 @@ computed value in its own unit, and every case says what its printed answer is."
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
+from typer.testing import CliRunner
 
 from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import builtin_case_files, load_specs
+from mechcheck.cli import app
 from mechcheck.report import seed_rows
 from mechcheck.run import run
 from mechcheck.seeds import SeedRow, seed_row, seed_unit
@@ -85,3 +88,16 @@ def test_seed_row_reads_a_linkage_key_in_its_unit() -> None:
     row = seed_row(case, solve(case), "phi_bar", 34.2, "seed 002", "note")
     assert row.unit == "deg"
     assert row.computed == pytest.approx(math.degrees(math.atan(20.0 / (3.0 * 9.81))), abs=1e-6)
+
+
+def test_a_linkage_printed_key_it_does_not_have_is_refused(tmp_path: Path) -> None:
+    """A printed answer naming no quantity of the linkage (a driver on a joint it does not
+    drive) is refused in one line naming the key, rather than shown without a value."""
+    path = next(p for p in builtin_case_files() if p.name == "exam_q1_slider_bar.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text(path.read_text(encoding="utf-8").replace("printed = { phi_bar = 34.2 }",
+                                                             "printed = { Q_A = 1.0 }"))
+    result = CliRunner().invoke(app, ["validate", str(bad)])
+    lines = result.stderr.strip().splitlines()
+    assert result.exit_code == 2 and len(lines) == 1, result.stderr
+    assert "key 'seed.printed.Q_A'" in lines[0] and "case 'exam-q1-slider-bar'" in lines[0]
