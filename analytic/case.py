@@ -359,6 +359,8 @@ class Case:
     source : where the case came from (a file path), for messages only.
     names : how the linkage's results read under the preset's names
         (:class:`~mechcheck.analytic.presets.Renaming`); None for a linkage.
+    length_unit : the unit its file writes lengths in (a key of ``LENGTH_UNITS``), for
+        messages only: they quote lengths as the file wrote them.
     """
 
     name: str
@@ -367,6 +369,7 @@ class Case:
     tolerance: tuple[tuple[str, float, float], ...] = ()
     source: str = ""
     names: Renaming | None = field(default=None, compare=False, repr=False)
+    length_unit: str = field(default="m", compare=False)
 
     def __post_init__(self) -> None:
         try:

@@ -66,14 +66,15 @@ def _quantity_units(linkage: Linkage) -> dict[str, str]:
     return units
 
 
-def lock_message(linkage: Linkage, fraction: float, target: Array | None = None) -> str:
+def lock_message(linkage: Linkage, fraction: float, target: Array | None = None,
+                 length_unit: str = "m") -> str:
     """Where the drivers were when the linkage locked on their way to ``target`` (default:
-    the case's values), in the file's units."""
+    the case's values), in the file's units (degrees, ``length_unit``)."""
     parts = []
     values = [d.value for d in linkage.drivers] if target is None else target.tolist()
     for driver, full in zip(linkage.drivers, values, strict=True):
         kind = linkage.joint(driver.joint).kind
-        parts.append(f"{kind.describe(fraction * full)} of {driver.joint}")
+        parts.append(f"{kind.describe(fraction * full, length_unit)} of {driver.joint}")
     return "the linkage locks at " + ", ".join(parts) + " on the way from the drawn pose"
 
 
@@ -148,7 +149,7 @@ def _verdict_rules(case: Case, results: LinkageResults) -> list[Rule]:
         rules.append((~np.isfinite(results.stable), "no_solution", lambda i: (
             "no equilibrium pose of the free coordinates was found from the drawn pose")))
     rules.append((~pose.assembled, "no_solution", lambda i: lock_message(
-        linkage, float(pose.locked_at[i]), pose.drivers[i])))
+        linkage, float(pose.locked_at[i]), pose.drivers[i], case.length_unit)))
     if results.undecided is not None:
         rules.append((results.undecided, "indeterminate", lambda i: (
             f"the joints' constraints are redundant (rank {linkage.joint_rank} < "

@@ -155,7 +155,8 @@ def preset_case(name: str, geometry: PresetGeometry, theta12: float, branch: str
                 ground_angle: float = 0.0, drive_link: int = 2, gravity: Vec2 = (0.0, 0.0),
                 loads: tuple[Load, ...] = (), masses: tuple[Mass, ...] = (),
                 motion: Motion = STILL, friction: Friction | None = None,
-                tolerance: tuple[tuple[str, float, float], ...] = (), source: str = "") -> Case:
+                tolerance: tuple[tuple[str, float, float], ...] = (), source: str = "",
+                length_unit: str = "m") -> Case:
     """A four-bar or slider-crank case, its :class:`Preset` drawn as a linkage
     (:func:`drawn_case`). The arguments are the preset's (SI, radians) and the case's."""
     try:
@@ -163,16 +164,17 @@ def preset_case(name: str, geometry: PresetGeometry, theta12: float, branch: str
                         masses, motion, friction)
     except CaseError as error:
         raise error.located(case=name, file=source) from None
-    return drawn_case(preset, name, tolerance=tolerance, source=source)
+    return drawn_case(preset, name, tolerance=tolerance, source=source, length_unit=length_unit)
 
 
 def drawn_case(preset: Preset, name: str, *, tolerance: tuple[tuple[str, float, float], ...] = (),
-               source: str = "") -> Case:
+               source: str = "", length_unit: str = "m") -> Case:
     """The case of ``preset``: its linkage drawn at the preset's pose (none where the closed
     form does not assemble there) and read under the preset's names."""
     if not assembles(preset, preset.theta12)[0]:
-        return Case(name, None, preset, tolerance, source)
-    return Case(name, linkage_of(preset), preset, tolerance, source, Renaming.of(preset))
+        return Case(name, None, preset, tolerance, source, length_unit=length_unit)
+    return Case(name, linkage_of(preset), preset, tolerance, source, Renaming.of(preset),
+                length_unit)
 
 
 def redrawn(case: Case, **changes: Any) -> Case:
@@ -185,12 +187,14 @@ def redrawn(case: Case, **changes: Any) -> Case:
         preset = dataclasses.replace(preset_of(base), **changes)
     except CaseError as error:
         raise error.located(case=base.name, file=base.source) from None
-    return drawn_case(preset, base.name, tolerance=base.tolerance, source=base.source)
+    return drawn_case(preset, base.name, tolerance=base.tolerance, source=base.source,
+                      length_unit=base.length_unit)
 
 
 def as_linkage(case: Case) -> Case:
     """``case`` as a plain linkage case: its results in the linkage's own names."""
-    return Case(case.name, case.linkage, tolerance=case.tolerance, source=case.source)
+    return Case(case.name, case.linkage, tolerance=case.tolerance, source=case.source,
+                length_unit=case.length_unit)
 
 
 @dataclass(frozen=True)

@@ -91,15 +91,29 @@ def order_key(quantity: str) -> tuple[int, int, str]:
     return (1, family, quantity)
 
 
+#: The family of a linkage's joint coordinates (``q_<joint>``): they count whole turns.
+JOINT_COORDINATE = "q_"
+
+
+def wraps(quantity: str, unit: str) -> bool:
+    """Whether the tables wrap ``quantity`` to [−180°, 180°): every angle but a joint
+    coordinate. An angle of a link or of a four-bar's coupler names a direction, one way
+    whichever backend gives it; a joint coordinate says how far a joint has turned from the
+    drawn pose, and a driver turned 400° has turned 400°, not 40° (every backend counts the
+    turns: the analytic continuation and the simulators' hinges alike)."""
+    return unit == "deg" and not quantity.startswith(JOINT_COORDINATE)
+
+
 def table_values(quantity: str, values: ArrayLike, unit: str | None = None) -> np.ndarray:
     """Values as the tables show them: in table units (degrees for angles), angles wrapped
-    to [−180°, 180°) (CONVENTIONS.md), so that every backend spells one angle one way.
-    ``unit`` is needed for a linkage's quantities (see :meth:`Solution.unit`)."""
+    to [−180°, 180°) (CONVENTIONS.md) but joint coordinates, which keep their turns
+    (:func:`wraps`). ``unit`` is needed for a linkage's quantities (see
+    :meth:`Solution.unit`)."""
     import numpy as np  # here: `mechcheck --help` and the pytest plugin never need it
 
     unit = unit or QUANTITY_UNITS[quantity][0]
     out = np.asarray(values, dtype=float) * unit_factor(unit)
-    return (out + 180.0) % 360.0 - 180.0 if unit == "deg" else out
+    return (out + 180.0) % 360.0 - 180.0 if wraps(quantity, unit) else out
 
 
 def table_value(quantity: str, value: float, unit: str | None = None) -> float:
@@ -174,7 +188,8 @@ class Solution:
         return self.units.get(quantity) or QUANTITY_UNITS[quantity][0]
 
     def in_table_units(self) -> dict[str, float]:
-        """``values`` as the tables show them: N, N·m, m, and degrees wrapped to [−180°, 180°)."""
+        """``values`` as the tables show them: N, N·m, m, and degrees wrapped to [−180°, 180°)
+        (joint coordinates ``q_`` keep their turns)."""
         return {q: table_value(q, v, self.unit(q)) for q, v in self.values.items()}
 
     def __reduce__(self) -> tuple[type[Solution], tuple[object, ...]]:

@@ -96,10 +96,17 @@ def lengths_quoted_in(unit: str) -> Iterator[None]:
         _QUOTED_UNIT.reset(token)
 
 
-def length_text(metres: float) -> str:
-    """A length for a message, in the unit of the file being read (metres otherwise)."""
-    unit = _QUOTED_UNIT.get()
-    return f"{metres / LENGTH_UNITS[unit]:g} {unit}"
+#: Significant digits of a length a message quotes: a drawing in millimetres to four
+#: decimals has up to nine (1234.5678 mm), and a message that rounded them away would show
+#: two lengths a check tells apart (a gear's centre distance, to 1e-6 of it) as one.
+QUOTED_DIGITS = 9
+
+
+def length_text(metres: float, unit: str | None = None) -> str:
+    """A length for a message, in ``unit``, by default the unit of the file being read
+    (metres outside one), to :data:`QUOTED_DIGITS`."""
+    unit = unit or _QUOTED_UNIT.get()
+    return f"{metres / LENGTH_UNITS[unit]:.{QUOTED_DIGITS}g} {unit}"
 
 
 def finite(value: float, key: str, limit: float = MAX_MAGNITUDE) -> float:
@@ -134,10 +141,10 @@ def positive(value: float, key: str) -> float:
 
 
 def link_length(value: float, key: str) -> float:
-    value = positive(value, key)
+    value = finite(value, key)
     if value < MIN_LINK_LENGTH:
-        raise CaseError(f"must be at least {MIN_LINK_LENGTH:g} m (a micrometre), got {value:g} m",
-                        key=key)
+        bound = "> 0" if value <= 0.0 else f"at least {length_text(MIN_LINK_LENGTH)} (a micrometre)"
+        raise CaseError(f"must be {bound}, got {length_text(value)}", key=key)
     return value
 
 

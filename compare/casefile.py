@@ -34,7 +34,8 @@ from mechcheck.analytic.case import (
     Motion,
     SliderCrankGeometry,
 )
-from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP
+from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP, quantity_units
+from mechcheck.analytic.values import LENGTH_UNITS, lengths_quoted_in
 from mechcheck.linkage_file import LinkageCaseSpec, linkage_from_spec
 from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, needs_an_effect, validated
 
@@ -110,8 +111,14 @@ def _built(factory: Any, key: str, *args: Any, **kwargs: Any) -> Any:
 
 def case_from_spec(spec: CaseSpec, source: str = "") -> Case:
     """Convert one validated table (lengths to metres, degrees to radians) and draw it as
-    its linkage (:func:`~mechcheck.analytic.presets.preset_case`)."""
-    scale = 1e-3 if spec.length_unit == "mm" else 1.0
+    its linkage (:func:`~mechcheck.analytic.presets.preset_case`); its messages quote
+    lengths in the file's unit."""
+    with lengths_quoted_in(spec.length_unit):
+        return _preset_case(spec, source)
+
+
+def _preset_case(spec: CaseSpec, source: str) -> Case:
+    scale = LENGTH_UNITS[spec.length_unit]
 
     def pt(p: list[float]) -> tuple[float, float]:
         return (p[0] * scale, p[1] * scale)
@@ -149,7 +156,7 @@ def case_from_spec(spec: CaseSpec, source: str = "") -> Case:
         motion=_built(Motion, "", omega=spec.motion.omega, alpha=spec.motion.alpha),
         friction=friction,
         tolerance=tuple((f"{t.backend}:{t.quantity}", t.rtol, t.atol) for t in spec.tolerance),
-        source=source,
+        source=source, length_unit=spec.length_unit,
     )
 
 
@@ -159,10 +166,24 @@ AnySpec = CaseSpec | LinkageCaseSpec
 
 def linkage_case(spec: LinkageCaseSpec, source: str = "") -> Case:
     """A ``mechanism = "linkage"`` table as a Case holding its Linkage."""
-    return Case(name=spec.name, geometry=linkage_from_spec(spec),
+    linkage = linkage_from_spec(spec)
+    if spec.seed is not None:
+        check_printed_keys(spec.seed.printed, quantity_units(linkage))
+    return Case(name=spec.name, geometry=linkage,
                 tolerance=tuple((f"{t.backend}:{t.quantity}", t.rtol, t.atol)
                                 for t in spec.tolerance),
-                source=source)
+                source=source, length_unit=spec.length_unit)
+
+
+def check_printed_keys(printed: Iterable[str], quantities: Iterable[str]) -> None:
+    """A linkage's printed answers name its own quantities: the seed table gives each its
+    computed value and the unit its joint, link or spring has."""
+    known = set(quantities)
+    for key in printed:
+        if key not in known:
+            raise CaseError(f"unknown quantity {key!r} of this linkage: a printed answer names "
+                            "one of its quantities (Q_<driver joint>, F_<joint>_x, phi_<link>, "
+                            "q_<joint>, …)", key=f"seed.printed.{key}")
 
 
 def parse_cases(data: dict[str, Any], source: str) -> list[tuple[Case, AnySpec]]:

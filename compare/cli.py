@@ -1,5 +1,5 @@
-"""The ``mechcheck`` command line: ``run``, ``sweep``, ``study``, ``theory``,
-``reports`` and ``backends`` (see docs/cli.md).
+"""The ``mechcheck`` command line: ``run``, ``validate``, ``sweep``, ``study``, ``theory``,
+``reports``, ``new`` and ``backends`` (see docs/cli.md).
 
 ``mechcheck run FILE... [--backend NAME]... [--out DIR]`` writes
 ``results.csv``, ``comparison.csv``, ``diagnostics.csv``, ``report.md`` and
@@ -15,7 +15,7 @@ import os
 import signal
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -23,6 +23,10 @@ from mechcheck import backends as registry
 from mechcheck.analytic.values import CaseError
 from mechcheck.executors import MAX_WORKERS_PER_CORE, ExecutorUnavailable, check_workers
 from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
+
+if TYPE_CHECKING:
+    from mechcheck.analytic.case import Case
+    from mechcheck.casefile import AnySpec
 
 # pandas, matplotlib, pydantic and the simulators are imported inside the commands
 # that need them, so that `mechcheck --help` and `mechcheck backends` start fast
@@ -32,15 +36,26 @@ from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
 INTERNAL_ERROR = 3
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
-                  help="Validate planar force analysis against MuJoCo and pymunk.")
+                  help="Validate the force analysis of planar linkages (four-bars, "
+                       "slider-cranks, any linkage of revolute, prismatic, pin-in-slot and gear "
+                       "joints) against MuJoCo and pymunk.")
 
 
-#: The mechanisms `mechcheck new` has a commented example of (compare/examples/).
-EXAMPLES = ("four_bar", "slider_crank", "linkage")
+#: The templates `mechcheck new` prints (compare/examples/<name>.toml), with what each is.
+EXAMPLES = {
+    "four_bar": "a four-bar at its input angle θ12: loads, masses, motion, friction",
+    "slider_crank": "a slider-crank (offset, slide friction) at its input angle θ12",
+    "linkage": "any planar linkage drawn as points, links and joints, moved by its drivers",
+}
 
 
 def example_path(mechanism: str) -> Path:
     return Path(__file__).parent / "examples" / f"{mechanism}.toml"
+
+
+#: The case files of `run` and `validate`.
+CaseFiles = Annotated[list[Path] | None, typer.Argument(
+    help="Case files (TOML). None: the built-in suite (seed examples and more).")]
 
 
 def fail_input(message: str) -> typer.Exit:
@@ -63,10 +78,11 @@ def progress_printer() -> Progress:
     return show
 
 
-@app.command("run")
+@app.command("run", help="Solve every case (four-bars, slider-cranks, linkages) through "
+             "every backend and compare each number with the analytic solution; tables and a "
+             "report.")
 def run_command(
-    files: Annotated[list[Path] | None, typer.Argument(
-        help="Case files (TOML). None: the built-in suite (seed examples and more).")] = None,
+    files: CaseFiles = None,
     backend: Annotated[list[str] | None, typer.Option(
         "--backend", "-b", help="Backend to check against analytic (repeatable). "
         f"Default: every available one of {', '.join(registry.REGISTRY)}.")] = None,
@@ -79,20 +95,14 @@ def run_command(
         help="Also write a JUnit XML file: one test case per comparison.")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
 ) -> None:
-    """Run backends over case files and report agreement with the analytic solution."""
-    from mechcheck.casefile import builtin_case_files, load_specs
     from mechcheck.junit import junit_xml
     from mechcheck.output import OutputError, locked_folder, write_all
     from mechcheck.report import drawing_file, drawings, render
     from mechcheck.run import run
     from mechcheck.tables import diagnostics_frame, results_frame
 
-    paths = list(files) if files else builtin_case_files()
     verdicts = parse_fail_on(fail_on)
-    try:
-        specs = load_specs(paths)
-    except CaseError as error:
-        raise fail_input(str(error)) from None
+    _, specs = read_case_files(files)
     names = list(backend) if backend else registry.available()
     try:
         for name in names:
@@ -125,6 +135,18 @@ def run_command(
     raise typer.Exit(result.exit_status)
 
 
+def read_case_files(files: list[Path] | None) -> tuple[list[Path], list[tuple[Case, AnySpec]]]:
+    """The files read and their validated cases, as `run` and `validate` read them (no file:
+    the built-in suite); an unusable one is its one line and exit 2."""
+    from mechcheck.casefile import builtin_case_files, load_specs
+
+    paths = list(files) if files else builtin_case_files()
+    try:
+        return paths, load_specs(paths)
+    except CaseError as error:
+        raise fail_input(str(error)) from None
+
+
 def check_outputs(out: Path, junit: Path | None) -> None:
     """Refuse, before any computing and before anything is created, an ``--out`` or
     ``--junit`` that cannot be written."""
@@ -138,13 +160,17 @@ def check_outputs(out: Path, junit: Path | None) -> None:
         raise fail_input(str(error)) from None
 
 
-@app.command("sweep")
+@app.command("sweep", help="Move each case's driver over a range (θ12, or a linkage's first "
+             "driver) through every backend; resumable, Parquet output.")
 def sweep_command(
     files: Annotated[list[Path] | None, typer.Argument(
-        help="Case files (TOML); each case's own θ12 is replaced by the sweep's. "
-             "None: the built-in sweeps of the seed four-bar and slider-crank.")] = None,
+        help="Case files (TOML); each case's driver (a four-bar's or slider-crank's θ12, a "
+             "linkage's first driver) is moved over the sweep's grid. None: the built-in "
+             "sweeps of the seed four-bar and slider-crank.")] = None,
     theta12: Annotated[str, typer.Option(
-        help="Input angles START:STOP:STEP in degrees, STOP excluded.")] = "0:360:1",
+        help="A four-bar's or slider-crank's input angles θ12 START:STOP:STEP in degrees, "
+             "STOP excluded (and a linkage's driver values unless --driver is given).")] =
+        "0:360:1",
     driver: Annotated[str | None, typer.Option(
         help="For linkages: the first driver's values START:STOP:STEP from the drawn pose, "
              "in degrees (revolute) or mm (prismatic), STOP excluded; the other drivers keep "
@@ -170,7 +196,6 @@ def sweep_command(
         help="Draw each case's figure into figures/ and the report (--no-figures: neither, "
              "and an earlier run's figures of these cases are removed).")] = True,
 ) -> None:
-    """Sweep θ12 over a range for every case and backend; resumable, Parquet output."""
     from mechcheck.casefile import builtin_sweep_files, load_specs
     from mechcheck.output import OutputError
     from mechcheck.sweep import parse_range, plan
@@ -237,13 +262,12 @@ def study_command(
         typer.echo(line)
 
 
-@app.command("reports")
+@app.command("reports", help="Regenerate the committed reports: the built-in suite, seed "
+             "001's catalogue of linkages, the whole-cycle sweeps of the seed four-bar and "
+             "slider-crank through every backend, and the assumption studies.")
 def reports_command(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path("reports"),
 ) -> None:
-    """Regenerate the committed reports: the built-in suite, seed 001's catalogue, the
-    whole-cycle sweeps of the seed four-bar and slider-crank through every backend, and the
-    assumption studies."""
     from mechcheck.casefile import catalogue_case_files
     from mechcheck.studies import STUDIES
     from mechcheck.studies_report import run_studies
@@ -261,22 +285,36 @@ def reports_command(
     raise typer.Exit(max(codes))
 
 
-@app.command("new")
+@app.command("new", help="Print a commented example case file to start from: "
+             "mechcheck new linkage > my.toml. Without a template, list the templates.")
 def new_command(
-    mechanism: Annotated[str, typer.Argument(
-        help=f"The mechanism of the example: {', '.join(EXAMPLES)}.")],
+    template: Annotated[str | None, typer.Argument(
+        help=f"The template: {', '.join(EXAMPLES)}. None: list them.")] = None,
 ) -> None:
-    """Print a commented example case file to start from: mechcheck new four_bar > my.toml"""
-    if mechanism not in EXAMPLES:
-        raise fail_input(f"mechcheck new: unknown mechanism {mechanism!r}; "
+    if template is None:
+        for name, what in EXAMPLES.items():
+            typer.echo(f"{name:13s} {what}")
+        return
+    if template not in EXAMPLES:
+        raise fail_input(f"mechcheck new: unknown template {template!r}; "
                          f"choose from {', '.join(EXAMPLES)}")
-    typer.echo(example_path(mechanism).read_text(encoding="utf-8"), nl=False)
+    typer.echo(example_path(template).read_text(encoding="utf-8"), nl=False)
 
 
-@app.command("backends")
+@app.command("validate", help="Check case files (four-bars, slider-cranks, linkages) without "
+             "solving them: exit 0, or 2 with the one line `run` would give for the first "
+             "unusable file, case and key.")
+def validate_command(
+    files: CaseFiles = None,
+) -> None:
+    paths, specs = read_case_files(files)   # exactly as `run` reads them
+    n, m = len(specs), len(paths)
+    typer.echo(f"{n} case{'s' * (n != 1)} in {m} file{'s' * (m != 1)}: valid")
+
+
+@app.command("backends", help="List the backends: name, whether it is available here, the "
+             "tolerance family it is judged by and what it is.")
 def backends_command() -> None:
-    """List the backends: name, whether it is available here, the tolerance family it is
-    judged by and what it is."""
     for name, backend in registry.REGISTRY.items():
         missing = backend.missing_requirement()
         state = "available" if missing is None else f"unavailable ({missing} is not installed)"

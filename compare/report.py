@@ -26,7 +26,7 @@ from mechcheck.figures import figure_file
 from mechcheck.linkage_file import LinkageCaseSpec
 from mechcheck.output import file_stem
 from mechcheck.run import RunResult
-from mechcheck.seeds import SeedRow, derived_value
+from mechcheck.seeds import SeedRow, seed_row
 from mechcheck.tables import ordered, table_value
 from mechcheck.tolerance import policy_table
 
@@ -327,8 +327,7 @@ def seed_rows(result: RunResult, specs: Mapping[str, AnySpec]) -> list[SeedRow]:
             continue
         ref = next(s for s in result.solutions if s.case == case.name and s.backend == REFERENCE)
         for key, printed in spec.seed.printed.items():
-            out.append(SeedRow(case.name, key, printed, derived_value(case, ref, key),
-                               spec.seed.source, spec.seed.note))
+            out.append(seed_row(case, ref, key, printed, spec.seed.source, spec.seed.note))
     return out
 
 

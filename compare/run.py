@@ -19,7 +19,7 @@ from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
 from mechcheck.tables import COMPARISON_COLUMNS, comparison_detail
-from mechcheck.verdicts import DEFAULT_FAIL_ON, Progress
+from mechcheck.verdicts import DEFAULT_FAIL_ON, Progress, without_numbers
 
 
 @dataclass(frozen=True)
@@ -60,10 +60,14 @@ class RunResult:
 
     @property
     def summary(self) -> str:
-        """The run in one line, as the command line prints it."""
+        """The run in one line, as the command line prints it: what was compared, and every
+        backend verdict that gave no number (a PASS with none compared says why)."""
         word = "PASS" if self.exit_status == 0 else "FAIL"
         n = f"{len(self.cases)} case{'s' if len(self.cases) != 1 else ''}"
         verdicts = f"{len(self.failing_verdicts)} failing verdicts"
+        absent = without_numbers((s.status, s.case) for s in self.solutions)
+        if absent:
+            verdicts += f"; no numbers: {absent}"
         if self.nothing_compared:
             return f"{n}, nothing compared: {self.nothing_compared}; {verdicts} ({word})"
         return (f"{n}, {len(self.detail)} comparisons, {len(self.failed_comparisons)} outside "

@@ -37,7 +37,12 @@ from mechcheck.analytic.linkage_backends import (
     quantity_units,
 )
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution, kind_of_unit, table_values
-from mechcheck.analytic.values import MAX_ANGLE_DEG, MAX_DRIVER_ROTATION_DEG, MAX_DRIVER_TRAVEL
+from mechcheck.analytic.values import (
+    MAX_ANGLE_DEG,
+    MAX_DRIVER_ROTATION_DEG,
+    MAX_DRIVER_TRAVEL,
+    length_text,
+)
 from mechcheck.backends import REFERENCE, BackendUnavailable
 from mechcheck.output import OutputError, file_stem, write_all
 from mechcheck.run import POSE_VERDICTS, crash_message, finite_only, gated_message, non_finite_message
@@ -168,8 +173,10 @@ def check_driver_grid(case: Case, grid: np.ndarray, option: str) -> None:
         return
     bound = MAX_DRIVER_TRAVEL * case.linkage.scale * 1000.0
     if reach > bound * (1.0 + 1e-12):
-        raise ValueError(f"{option}: case '{case.name}': a displacement of {reach:g} mm of "
-                         f"{driver.joint}; a linkage's driver moves at most ±{bound:.6g} mm "
+        # The option is in mm whatever the file's unit (docs/cli.md), so it is quoted in mm.
+        raise ValueError(f"{option}: case '{case.name}': a displacement of "
+                         f"{length_text(reach * 1e-3, 'mm')} of {driver.joint}; a linkage's "
+                         f"driver moves at most ±{length_text(bound * 1e-3, 'mm')} "
                          f"({MAX_DRIVER_TRAVEL:g} × its size) from its drawn pose")
 
 

@@ -20,6 +20,7 @@ from mechcheck.output import OutputError, locked_folder, write_all
 from mechcheck.report import render_sweep, sweep_view_model
 from mechcheck.sweep import LocalExecutor, SweepTask, run_sweep
 from mechcheck.tables import sweep_comparison
+from mechcheck.verdicts import without_numbers
 
 
 def compare_sweep(cases: list[Case], results: pd.DataFrame,
@@ -145,8 +146,11 @@ def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
     failed = int((~comparison["passed"].astype(bool)).sum()) if len(comparison) else 0
     failing = int(statuses["status"].isin(fail_on).sum()) if len(statuses) else 0
     status = 1 if failed or failing else 0
+    absent = without_numbers(zip(statuses["status"].astype(str), statuses["case"].astype(str),
+                                 strict=True)) if len(statuses) else ""
     print(f"{len(cases)} case{'s' * (len(cases) != 1)} x {n_poses} poses, {len(comparison)} "
-          f"comparisons, {failed} outside tolerance, {failing} poses with a failing verdict; "
+          f"comparisons, {failed} outside tolerance, {failing} poses with a failing verdict"
+          f"{f' (poses without numbers: {absent})' if absent else ''}; "
           f"{outcome.executed} tasks run, "
           f"{outcome.reused} reused, {wall:.1f} s -> {out}/report.md "
           f"({'PASS' if status == 0 else 'FAIL'})")

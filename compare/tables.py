@@ -20,6 +20,7 @@ from mechcheck.analytic.solution import (
     order_key,
     table_value,
     unit_factor,
+    wraps,
 )
 from mechcheck.backends import REFERENCE
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, case_kind, of_tolerance, tolerance_for
@@ -85,8 +86,8 @@ def comparison_rows(case: Case, reference: Solution, other: Solution) -> list[di
     for q in ordered(set(reference.values) & set(other.values)):
         ref, val, unit = reference.values[q], other.values[q], reference.unit(q)
         abs_err = abs(val - ref)
-        if unit == "deg":
-            abs_err = abs(math.remainder(val - ref, math.tau))  # angles wrap
+        if wraps(q, unit):
+            abs_err = abs(math.remainder(val - ref, math.tau))  # a direction: modulo a turn
         rel_err = abs_err / error_scale(unit, scales)
         tol = tolerance_for(case, other.backend, q, kind, kind_of_unit(unit), strain)
         rows.append({
@@ -177,7 +178,10 @@ def sweep_comparison(case: Case, reference: pd.DataFrame, reference_status: pd.D
     scale = np.where(is_pose, np.where(is_angle, factor, length), scale)
     value = other["value"].to_numpy(dtype=float)[found]
     diff = value - ref_value[row]
-    diff = np.where(is_angle, (diff + 180.0) % 360.0 - 180.0, diff)
+    # Directions compare modulo a turn; joint coordinates count their turns (wraps).
+    wrapping = np.array([wraps(q, u) for q in names for u in units], dtype=bool).reshape(
+        len(names), len(units))[other_q, unit]
+    diff = np.where(wrapping, (diff + 180.0) % 360.0 - 180.0, diff)
     abs_err = np.abs(diff)
     rel_err = abs_err / scale
     status_poses = reference_status["theta12"].to_numpy(dtype=float)

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from mechcheck.analytic.values import CaseError
+from mechcheck.analytic.values import CaseError, length_text
 
 if TYPE_CHECKING:
     from mechcheck.analytic.case import Case
@@ -18,8 +18,9 @@ if TYPE_CHECKING:
 # that use them: this module is loaded for every `mechcheck` invocation, --help included.
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Mechanism theory of the seeds (mobility, Grashof, dead positions, "
-                       "transmission angle, slider-crank rotation).")
+                  help="Mechanism theory of linkages: mobility, Grashof class, dead "
+                       "positions, transmission angle, a slider-crank's full rotation, a "
+                       "linkage's driver ranges and locks.")
 
 #: The seed 001 mobility catalogue: (name, u, joints, spatial, printed S).
 MOBILITY_CATALOGUE = [
@@ -107,10 +108,12 @@ def describe(case: Case) -> list[str]:
                  f"at θ12 = {math.degrees(ext.theta12_at_max):.4f}°")
     if isinstance(g, FourBarGeometry):
         cls = theory.grashof(ground=g.a1, crank=g.a2, coupler=g.a3, rocker=g.a4)
-        lines.append(f"  Grashof: {cls.kind} (s + l = {cls.s_plus_l:g}, p + q = {cls.p_plus_q:g})")
+        lines.append(f"  Grashof: {cls.kind} (s + l = {length_text(cls.s_plus_l, case.length_unit)}, "
+                     f"p + q = {length_text(cls.p_plus_q, case.length_unit)})")
         if cls.kind == "crank-rocker" and cls.shortest == "crank":
             for lp in theory.limit_positions(case):
-                lines.append(f"  dead position ({lp.name}, |A0B| = {lp.distance:g} m): θ12 = "
+                lines.append(f"  dead position ({lp.name}, |A0B| = "
+                             f"{length_text(lp.distance, case.length_unit)}): θ12 = "
                              f"{math.degrees(lp.theta12):.4f}°, rocker θ14 = "
                              f"{math.degrees(lp.theta14):.4f}°")
     else:
@@ -119,8 +122,15 @@ def describe(case: Case) -> list[str]:
         lines.append(f"  crank turns fully: {'yes' if turns else 'no'} (a2 + |e| "
                      f"{'<' if turns else '>='} a3)")
         if turns:
-            lines.append(f"  stroke: {theory.slider_stroke(g):g} m")
+            lines.append(f"  stroke: {length_text(theory.slider_stroke(g), case.length_unit)}")
     return lines
+
+
+def _signed(rotates: bool, value: float, length_unit: str) -> str:
+    """A driver's value with its sign: degrees, or a length in the case file's unit."""
+    if rotates:
+        return f"{math.degrees(value):+.6f}°"
+    return ("+" if value >= 0.0 else "") + length_text(value, length_unit)
 
 
 def describe_linkage(case: Case) -> list[str]:
@@ -143,9 +153,9 @@ def describe_linkage(case: Case) -> list[str]:
              f"  drivers: {len(linkage.drivers)}; free coordinates: "
              f"{linkage.dof - len(linkage.drivers)}"]
     for r in theory.driver_ranges(linkage):
-        unit, f = ("°", math.degrees) if r.kind.rotates else (" m", float)
-        ends = [("locks at " + f"{f(v):+.6f}{unit}") if v is not None else
-                (f"no lock within {f(r.travel):g}{unit}") for v in (r.low, r.high)]
+        ends = [f"locks at {_signed(r.kind.rotates, v, case.length_unit)}" if v is not None else
+                f"no lock within {_signed(r.kind.rotates, r.travel, case.length_unit)[1:]}"
+                for v in (r.low, r.high)]
         full = r.kind.rotates and r.low is None and r.high is None
         lines.append(f"  driver {r.joint}: " + ("turns fully" if full else
                                                 f"decreasing: {ends[0]}; increasing: {ends[1]}"))
@@ -157,9 +167,10 @@ def describe_linkage(case: Case) -> list[str]:
     return lines
 
 
-@app.command("case")
+@app.command("case", help="Each case's theory: a four-bar's or slider-crank's Grashof class, "
+             "assembly range, dead positions and transmission extremes; a linkage's mobility, "
+             "driver ranges and locks.")
 def case_command(files: Annotated[list[Path], typer.Argument(help="Case files (TOML).")]) -> None:
-    """Grashof class, assembly range, dead positions and transmission extremes of each case."""
     from mechcheck.casefile import load_cases
 
     try:
@@ -227,11 +238,11 @@ def mobility_row(name: str, u: int, joints: str, spatial: bool, printed: int) ->
     return line, same and gruebler == printed and by_rank
 
 
-@app.command("catalogue")
+@app.command("catalogue", help="Seed 001's catalogue of mechanisms (mobility and Grashof "
+             "examples), recomputed: a planar row's mobility from its linkage case file where it "
+             "has one (Gruebler–Kutzbach and the rank of the constraint Jacobian), the others "
+             "from the table's counts.")
 def catalogue_command() -> None:
-    """The seed catalogue (mobility and Grashof examples of seed 001), recomputed: a planar
-    row's mobility from its case file where it has one (Gruebler–Kutzbach and the rank of
-    the constraint Jacobian), the others from the table's counts."""
     from mechcheck.analytic import theory
 
     bad = 0

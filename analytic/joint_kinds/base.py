@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion
+from mechcheck.analytic.values import length_text
 
 if TYPE_CHECKING:
     from mechcheck.analytic.linalg import Batched
@@ -100,11 +101,12 @@ class JointKind(ABC):
         (m): the size for an angle, 1 for a length (equations solved in lengths)."""
         return size if self.rotates else 1.0
 
-    def describe(self, value: float) -> str:
-        """A value of its coordinate (SI) as a message quotes it."""
+    def describe(self, value: float, length_unit: str = "m") -> str:
+        """A value of its coordinate (SI) as a message quotes it: degrees, or a length in
+        ``length_unit`` (the case file's)."""
         if self.rotates:
             return f"rotation {math.degrees(value):.6g}°"
-        return f"displacement {value:.6g} m"
+        return f"displacement {length_text(value, length_unit)}"
 
     # -- the case file ------------------------------------------------------------------
     @abstractmethod
