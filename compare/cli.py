@@ -36,7 +36,7 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
 
 
 #: The mechanisms `mechcheck new` has a commented example of (compare/examples/).
-EXAMPLES = ("four_bar", "slider_crank", "linkage")
+EXAMPLES = ("four_bar", "slider_crank", "linkage", "linkage_sketch")
 
 
 def example_path(mechanism: str) -> Path:
