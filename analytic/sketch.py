@@ -51,7 +51,7 @@ MET_RTOL = 1e-12
 #: The farthest a point may move from where it is sketched, as a fraction of the sketch's
 #: size (``Linkage.scale``, about its diameter): a hand sketch is within tens of percent, and
 #: a point that moves further has been carried to an assembly the sketch does not show.
-NEAR_SKETCH = 0.5
+NEAR_SKETCH = 0.25
 #: The smallest singular value of the assembly's equations, relative to the largest, that
 #: fixes the points firmly: below it (three points of one link on one line, a linkage folded
 #: at a toggle) a residual of 1e-16 leaves the points uncertain by more than 1e-10 of the size.
@@ -84,6 +84,8 @@ class _Equation:
     length: float | None = None
     normal: Vec2 = (0.0, 0.0)
     origin: Vec2 | None = None
+    #: A direction's angle (rad), as the file gives it: for messages.
+    angle: float = 0.0
 
     def value(self, at: Mapping[str, np.ndarray]) -> float:
         """The residual, with the points at ``at``."""
@@ -125,9 +127,8 @@ class _Equation:
         if self.length is not None:
             return (f"{first}–{second} comes to {length_text(float(np.hypot(d[0], d[1])) * size)}, "
                     f"not {length_text(self.length * size)}")
-        wanted = math.degrees(math.atan2(self.normal[0], -self.normal[1]))
         return (f"{first}→{second} points at {math.degrees(math.atan2(d[1], d[0])):.6g}°, "
-                f"not {wanted:.6g}°")
+                f"not {math.degrees(self.angle):.6g}°")
 
 
 def assembled(shape: Linkage, dimensions: Sequence[Dimension]) -> dict[str, Vec2]:
@@ -180,7 +181,7 @@ def _equation(shape: Linkage, d: Dimension, i: int, size: float) -> _Equation:
     if d.length is not None:
         return _Equation(key, d.points, length=d.length / size)
     assert d.angle is not None
-    return _Equation(key, d.points, normal=(-math.sin(d.angle), math.cos(d.angle)))
+    return _Equation(key, d.points, normal=(-math.sin(d.angle), math.cos(d.angle)), angle=d.angle)
 
 
 class _Sketch:
@@ -244,7 +245,7 @@ class _Sketch:
             jac = _jacobian(own, _generic(names), {name: k for k, name in enumerate(names)})
             dependent = first_dependent(jac)
             if dependent is not None:
-                raise CaseError(f"repeats what link {link.name!r}'s other dimensions already fix: "
+                raise CaseError(f"repeats what the other dimensions of link {link.name!r} already fix: "
                                 "remove it", key=own[dependent].key)
             angle = any(e.length is None for e in own)
             needed = 2 * len(names) - 3 + angle
@@ -284,11 +285,17 @@ class _Sketch:
             return self.points(self.sketched())
         x = least_squares(self.residuals, self.sketched(), jac=self.jacobian, method="lm",
                           xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+        r = self.residuals(x)
         for _ in range(POLISH_STEPS):
-            r = self.residuals(x)
-            if not np.abs(r).max(initial=0.0) > 1e-16:
+            if not np.abs(r).max() > 1e-16:
                 break
-            x = x - np.linalg.lstsq(self.jacobian(x), r, rcond=None)[0]
+            # A step kept only where it helps: a sketch that cannot assemble keeps the
+            # least-squares compromise, which the refusal quotes.
+            trial = x - np.linalg.lstsq(self.jacobian(x), r, rcond=None)[0]
+            r_trial = self.residuals(trial)
+            if not np.abs(r_trial).max() < np.abs(r).max():
+                break
+            x, r = trial, r_trial
         return self.points(x)
 
     def check_assembled(self, at: dict[str, np.ndarray]) -> None:
@@ -303,7 +310,7 @@ class _Sketch:
             moved = float(np.hypot(*(at[name] * self.size - np.array(self.shape.points[name]))))
             if moved > NEAR_SKETCH * self.size:
                 raise CaseError(f"moved {length_text(moved)} from where it is sketched to meet "
-                                f"the dimensions, more than {NEAR_SKETCH:g} of the sketch's size "
+                                f"the dimensions, more than {NEAR_SKETCH:g} × the sketch's size "
                                 f"({length_text(self.size)}): draw it nearer its place",
                                 key=f"points.{name}")
         sigma = np.linalg.svd(self.jacobian(np.concatenate([at[n] for n in self.free])),
