@@ -18,10 +18,10 @@ It must then meet every dimension to :data:`MET_RTOL` of itself, leave every poi
 
 Examples
 --------
-A crank O→A, 1 long at 90°, assembles A from a sketch that put it at (0.2, 0.8):
+A crank O→A, 1 long at 90°, assembles A from a sketch that put it at (0.1, 0.9):
 
 >>> from mechcheck.analytic.linkage import Joint, Link, Linkage
->>> shape = Linkage(points={"O": (0.0, 0.0), "A": (0.2, 0.8)},
+>>> shape = Linkage(points={"O": (0.0, 0.0), "A": (0.1, 0.9)},
 ...                 links=(Link("ground", ("O",)), Link("crank", ("O", "A"))),
 ...                 joints=(Joint("O", "revolute", ("ground", "crank"), "O"),))
 >>> a = assembled(shape, (Dimension(("O", "A"), length=1.0),

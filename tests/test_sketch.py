@@ -6,6 +6,7 @@ naming the dimension or link at fault."""
 
 from __future__ import annotations
 
+import doctest
 import math
 from pathlib import Path
 
@@ -172,6 +173,17 @@ def test_a_sketch_solves_as_the_same_linkage_written_exactly(tmp_path: Path) -> 
         assert got.values[quantity] == pytest.approx(value, rel=RTOL, abs=RTOL * scale), quantity
 
 
+def test_the_format_references_example_assembles_where_trigonometry_puts_it(tmp_path: Path) -> None:
+    """The sketched four-bar of docs/case-files.md reads, assembles at the hand
+    trigonometry's open pose, and gives the B it quotes."""
+    docs = (Path(__file__).parents[1] / "docs" / "case-files.md").read_text(encoding="utf-8")
+    block = docs.split('name = "sketched-four-bar"', 1)[1].split("```", 1)[0]
+    case = load_one(tmp_path, '[[case]]\nname = "sketched-four-bar"' + block)
+    by_hand = four_bar_by_hand(upper=True)
+    assert_points_close(drawn_mm(case.linkage), by_hand, A1)
+    assert "B at ({:.3f}, {:.3f}) mm".format(*by_hand["B"]) in " ".join(docs.split())
+
+
 def test_the_slider_crank_template_assembles_where_trigonometry_puts_it() -> None:
     """`mechcheck new linkage_sketch`'s offset slider-crank (crank 50 mm at 120°, rod 180 mm,
     slide 20 mm above O, K 100 mm from A and from B): A = 50(cos 120°, sin 120°), B on the
@@ -293,3 +305,11 @@ def test_the_impossible_triangle_names_one_of_its_own_sides(tmp_path: Path) -> N
     with pytest.raises(mechcheck.CaseError) as error:
         mechcheck.load_cases(path)
     assert error.value.key in ("dimensions[3]", "dimensions[4]", "dimensions[5]"), str(error.value)
+
+
+def test_the_modules_example_runs() -> None:
+    """The crank of the assembly module's docstring assembles at (0, 1), as it shows."""
+    from mechcheck.analytic import sketch
+
+    result = doctest.testmod(sketch)
+    assert result.attempted > 0 and result.failed == 0
