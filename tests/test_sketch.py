@@ -19,6 +19,9 @@ from mechcheck.analytic.linkage import Linkage
 from mechcheck.cli import app, example_path
 from mechcheck.tolerance import rule
 
+from .test_edges import assert_refused, case_file
+from .test_linkage_file import FOUR_BAR_TEMPLATE
+
 #: Coordinates and forces of one geometry found two ways (by hand, by the assembly): the
 #: policy's analytic rule, only rounding between them.
 RTOL = rule("analytic", "pose", "static").rtol
@@ -43,76 +46,22 @@ def four_bar_by_hand(upper: bool) -> dict[str, tuple[float, float]]:
     return {"A0": (0.0, 0.0), "B0": (A1, 0.0), "A": a, "B": b}
 
 
-FOUR_BAR = """
-[[case]]
-name = "NAME"
-mechanism = "linkage"
-length_unit = "mm"
-gravity = [0.0, -9.81]
-[case.points]
-POINTS
-[[case.links]]
-name = "ground"
-points = ["A0", "B0"]
-[[case.links]]
-name = "crank"
-points = ["A0", "A"]
-[[case.links]]
-name = "coupler"
-points = ["A", "B"]
-[[case.links]]
-name = "rocker"
-points = ["B0", "B"]
-[[case.joints]]
-name = "A0"
-kind = "revolute"
-links = ["ground", "crank"]
-at = "A0"
-[[case.joints]]
-name = "A"
-kind = "revolute"
-links = ["crank", "coupler"]
-at = "A"
-[[case.joints]]
-name = "B"
-kind = "revolute"
-links = ["coupler", "rocker"]
-at = "B"
-[[case.joints]]
-name = "B0"
-kind = "revolute"
-links = ["ground", "rocker"]
-at = "B0"
-[[case.drivers]]
-joint = "A0"
-rotation = 0.0
-velocity = -10.0
-[[case.loads]]
-link = "rocker"
-at = "B"
-force = { magnitude = 100.0, angle = 20.0 }
+#: A coupler mass on the four-bar of the linkage-file tests.
+COUPLER_MASS = """
 [[case.masses]]
 link = "coupler"
 mass = 0.5
 com = "A"
 inertia = 1.0e-3
-DIMENSIONS
 """
 
-FOUR_BAR_DIMENSIONS = f"""
-[[case.dimensions]]
-points = ["A0", "A"]
-length = {A2}
-[[case.dimensions]]
-points = ["A0", "A"]
-angle = {THETA}
-[[case.dimensions]]
-points = ["A", "B"]
-length = {A3}
-[[case.dimensions]]
-points = ["B0", "B"]
-length = {A4}
-"""
+def dimension(first: str, second: str, key: str, value: float) -> str:
+    """One ``[[case.dimensions]]`` entry: ``key`` is ``length`` or ``angle``."""
+    return f'\n[[case.dimensions]]\npoints = ["{first}", "{second}"]\n{key} = {value!r}\n'
+
+
+FOUR_BAR_DIMENSIONS = (dimension("A0", "A", "length", A2) + dimension("A0", "A", "angle", THETA)
+                       + dimension("A", "B", "length", A3) + dimension("B0", "B", "length", A4))
 
 #: Hand sketches: the ground exact, A and B roughly where the open (B above the ground
 #: line) and the crossed (B below it) assemblies put them.
@@ -125,8 +74,14 @@ def points_text(points: dict[str, tuple[float, float]]) -> str:
 
 
 def four_bar(name: str, points: dict[str, tuple[float, float]], dimensions: str = "") -> str:
-    return (FOUR_BAR.replace("NAME", name).replace("POINTS", points_text(points))
-            .replace("DIMENSIONS", dimensions))
+    """The linkage-file tests' four-bar with its rocker a bar B0–B loaded at B, under
+    gravity, with a coupler mass and the crank turning at −10 rad/s, at ``points``."""
+    return (FOUR_BAR_TEMPLATE.replace('name = "four-bar"', f'name = "{name}"')
+            .replace('points = ["B0", "B", "D"]', 'points = ["B0", "B"]')
+            .replace('at = "D"', 'at = "B"')
+            .replace('length_unit = "mm"', 'length_unit = "mm"\ngravity = [0.0, -9.81]')
+            .replace("rotation = 0.0", "rotation = 0.0\nvelocity = -10.0")
+            .replace("POINTS", points_text(points)) + COUPLER_MASS + dimensions)
 
 
 def load_one(tmp_path: Path, text: str) -> mechcheck.Case:
@@ -215,68 +170,52 @@ def test_the_sketch_template_passes_analytic_and_a_simulator(tmp_path: Path) -> 
 
 # -- refused ------------------------------------------------------------------------------
 
-TERNARY = FOUR_BAR_DIMENSIONS + """
-[[case.dimensions]]
-points = ["B0", "D"]
-length = 60.0
-"""
+def bad(dimensions: str, sketch: dict[str, tuple[float, float]] = OPEN_SKETCH,
+        rocker_point: tuple[float, float] | None = None) -> str:
+    """A four-bar sketch that must be refused; given ``rocker_point``, the rocker is a
+    triangle B0, B, D with D sketched there."""
+    text = four_bar("bad", sketch | ({} if rocker_point is None else {"D": rocker_point}),
+                    dimensions)
+    if rocker_point is None:
+        return text
+    return text.replace('name = "rocker"\npoints = ["B0", "B"]',
+                        'name = "rocker"\npoints = ["B0", "B", "D"]')
 
 
-def with_rocker_point(text: str) -> str:
-    """The four-bar's rocker made a triangle B0, B, D (D sketched beside it)."""
-    return (text.replace('name = "rocker"\npoints = ["B0", "B"]',
-                         'name = "rocker"\npoints = ["B0", "B", "D"]')
-            .replace('B = [120.0, 100.0]', 'B = [120.0, 100.0]\nD = [170.0, 60.0]'))
-
+#: The rocker made a triangle B0, B, D: one side short of rigid.
+TRIANGLE = FOUR_BAR_DIMENSIONS + dimension("B0", "D", "length", 60.0)
+D_BESIDE = (170.0, 60.0)
 
 BAD = [
-    ("a-link-not-rigid", with_rocker_point(four_bar("bad", OPEN_SKETCH, TERNARY)),
+    ("a-link-not-rigid", bad(TRIANGLE, rocker_point=D_BESIDE),
      "links[3]", "link 'rocker' is not rigid: its 3 points need 3 independent dimensions"),
-    ("a-triangle-that-cannot-close", with_rocker_point(four_bar("bad", OPEN_SKETCH, TERNARY + """
-[[case.dimensions]]
-points = ["B", "D"]
-length = 300.0
-""")), "dimensions[", "does not assemble"),
-    ("a-dimension-across-links", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS.replace(
-        'points = ["B0", "B"]', 'points = ["A0", "B"]')),
+    ("a-triangle-that-cannot-close",
+     bad(TRIANGLE + dimension("B", "D", "length", 300.0), rocker_point=D_BESIDE),
+     "dimensions[", "does not assemble"),
+    ("a-dimension-across-links", bad(FOUR_BAR_DIMENSIONS.replace('["B0", "B"]', '["A0", "B"]')),
      "dimensions[3].points", "'A0' and 'B' are on different links"),
-    ("a-dimension-on-the-ground", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS + """
-[[case.dimensions]]
-points = ["A0", "B0"]
-length = 140.0
-"""), "dimensions[4].points", "both on the ground"),
-    ("no-crank-angle", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS.replace(
-        "angle = 60.0", "length = 80.0")),
+    ("a-dimension-on-the-ground", bad(FOUR_BAR_DIMENSIONS + dimension("A0", "B0", "length", A1)),
+     "dimensions[4].points", "both on the ground"),
+    ("no-crank-angle", bad(FOUR_BAR_DIMENSIONS.replace("angle = 60.0", "length = 80.0")),
      "dimensions[1]", "repeats what the other dimensions of link 'crank'"),
-    ("a-free-coordinate-left", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS.replace(
-        '[[case.dimensions]]\npoints = ["A0", "A"]\nangle = 60.0\n', "")),
+    ("a-free-coordinate-left",
+     bad(FOUR_BAR_DIMENSIONS.replace(dimension("A0", "A", "angle", THETA), "")),
      "dimensions", "1 degree(s) of freedom"),
-    ("an-angle-too-many", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS + """
-[[case.dimensions]]
-points = ["B0", "B"]
-angle = 70.0
-"""), "dimensions[4]", "one dimension too many"),
-    ("a-rocker-too-short-to-reach", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS.replace(
-        "length = 120.0", "length = 20.0")),
+    ("an-angle-too-many", bad(FOUR_BAR_DIMENSIONS + dimension("B0", "B", "angle", 70.0)),
+     "dimensions[4]", "one dimension too many"),
+    ("a-rocker-too-short-to-reach", bad(FOUR_BAR_DIMENSIONS.replace("length = 120.0", "length = 20.0")),
      "dimensions[3]", "the sketch does not assemble"),
-    ("a-flat-triangle", with_rocker_point(four_bar("bad", OPEN_SKETCH, TERNARY.replace(
-        "length = 60.0", "length = 180.0") + """
-[[case.dimensions]]
-points = ["B", "D"]
-length = 60.0
-""")).replace("D = [170.0, 60.0]", "D = [120.0, 175.0]"),
+    ("a-flat-triangle", bad(FOUR_BAR_DIMENSIONS + dimension("B0", "D", "length", A4 + 60.0)
+                            + dimension("B", "D", "length", 60.0), rocker_point=(120.0, 175.0)),
      "dimensions'", "do not fix the points firmly"),
-    ("a-crank-sketched-the-other-way", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS.replace(
-        "angle = 60.0", "angle = 240.0")),
+    ("a-crank-sketched-the-other-way", bad(FOUR_BAR_DIMENSIONS.replace("angle = 60.0", "angle = 240.0")),
      "dimensions[1]", "A0→A points at 60°, not 240°"),
-    ("a-point-sketched-far-from-its-place", four_bar("bad", OPEN_SKETCH | {"B": (200.0, 60.0)},
-                                                     FOUR_BAR_DIMENSIONS),
+    ("a-point-sketched-far-from-its-place", bad(FOUR_BAR_DIMENSIONS, OPEN_SKETCH | {"B": (200.0, 60.0)}),
      "points.B", "draw it nearer its place"),
-    ("a-load-at-coordinates", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS).replace(
-        'at = "B"\nforce', 'at = [120.0, 100.0]\nforce'),
+    ("a-load-at-coordinates",
+     bad(FOUR_BAR_DIMENSIONS).replace('at = "B"\nforce', 'at = [120.0, 100.0]\nforce'),
      "loads[0].at", "in a sketch, name a point"),
-    ("length-and-angle", four_bar("bad", OPEN_SKETCH, FOUR_BAR_DIMENSIONS.replace(
-        "length = 80.0", "length = 80.0\nangle = 10.0")),
+    ("length-and-angle", bad(FOUR_BAR_DIMENSIONS.replace("length = 80.0", "length = 80.0\nangle = 10.0")),
      "dimensions[0]", "a length or an angle"),
 ]
 
@@ -285,15 +224,9 @@ length = 60.0
 def test_a_sketch_that_does_not_assemble_is_refused_in_one_line(
         tmp_path: Path, text: str, key: str, fragment: str) -> None:
     """Exit 2, one line naming the file, the case and the key, nothing written."""
-    path = tmp_path / "bad.toml"
-    path.write_text(text)
-    out = tmp_path / "out"
-    result = CliRunner().invoke(app, ["run", str(path), "-q", "--out", str(out)])
-    lines = result.stderr.strip().splitlines()
-    assert result.exit_code == 2, result.stderr
-    assert len(lines) == 1, result.stderr
-    assert str(path) in lines[0] and "case 'bad'" in lines[0], lines[0]
-    assert f"key '{key}" in lines[0] and fragment in lines[0], lines[0]
+    path, out = case_file(tmp_path, text, "bad.toml"), tmp_path / "out"
+    assert_refused(["run", str(path), "-q", "--out", str(out)],
+                   str(path), "case 'bad'", f"key '{key}", fragment)
     assert not out.exists()
 
 
