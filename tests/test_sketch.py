@@ -20,7 +20,9 @@ from mechcheck.cli import app, example_path
 from mechcheck.tolerance import rule
 
 from .test_edges import assert_refused, case_file
+from .test_gear import GEAR_FILE
 from .test_linkage_file import FOUR_BAR_TEMPLATE
+from .test_pin_in_slot import CASE_FILE as SLOTTED_LEVER
 
 #: Coordinates and forces of one geometry found two ways (by hand, by the assembly): the
 #: policy's analytic rule, only rounding between them.
@@ -246,3 +248,28 @@ def test_the_modules_example_runs() -> None:
 
     result = doctest.testmod(sketch)
     assert result.attempted > 0 and result.failed == 0
+
+
+@pytest.mark.parametrize(("text", "key", "fragment"), [
+    (GEAR_FILE + dimension("Pa", "Pb", "length", 150.0), "joints[2].kind",
+     "a gear joint cannot be sketched"),
+    (SLOTTED_LEVER + dimension("O2", "A", "length", 100.0), "joints[2].links",
+     "a pin_in_slot joint's guide (links[0]) is the ground"),
+], ids=["a-gear-mesh", "a-slot-in-a-moving-link"])
+def test_what_spans_two_links_is_not_sketched(tmp_path: Path, text: str, key: str,
+                                              fragment: str) -> None:
+    """A gear mesh (its centre distance set by its pitch radii) and a slot in a moving link
+    (its line turns with that link) are refused in a sketch, naming the joint."""
+    path = case_file(tmp_path, text, "bad.toml")
+    assert_refused(["run", str(path), "-q", "--out", str(tmp_path / "out")],
+                   str(path), f"key '{key}'", fragment)
+
+
+def test_a_sketch_drawn_elsewhere_assembles_moved_with_it(tmp_path: Path) -> None:
+    """The open sketch moved 5 m right and 3 m down (the ground with it) assembles at the
+    hand trigonometry's points moved the same: where a sketch sits changes nothing."""
+    shift = (5000.0, -3000.0)
+    moved = {n: (x + shift[0], y + shift[1]) for n, (x, y) in OPEN_SKETCH.items()}
+    case = load_one(tmp_path, four_bar("moved", moved, FOUR_BAR_DIMENSIONS))
+    by_hand = {n: (x + shift[0], y + shift[1]) for n, (x, y) in four_bar_by_hand(True).items()}
+    assert_points_close(drawn_mm(case.linkage), by_hand, A1)
