@@ -33,17 +33,19 @@ A crank O→A, 1 long at 90°, assembles A from a sketch that put it at (0.1, 0.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mechcheck.analytic import linalg
+from mechcheck.analytic.linalg import Batched
 from mechcheck.analytic.values import GROUND, CaseError, Vec2, length_text
 
 if TYPE_CHECKING:
-    from mechcheck.analytic.linkage import Joint, Linkage
+    from mechcheck.analytic.linkage import Joint, Link, Linkage
 
 #: A dimension is met when it is within this fraction of itself (an angle: within this
 #: many radians; a slide's line: within this fraction of the sketch's size).
@@ -139,6 +141,7 @@ def assembled(shape: Linkage, dimensions: Sequence[Dimension]) -> dict[str, Vec2
     and the rest play no part).
     """
     refuse_unsketchable(shape.joints)
+    refuse_too_large(shape.points, shape.links, len(dimensions))
     size = shape.scale
     sketch = _Sketch(shape, tuple(_equation(shape, d, i, size) for i, d in enumerate(dimensions)))
     sketch.check_links_rigid()
@@ -160,6 +163,24 @@ def refuse_unsketchable(joints: Sequence[Joint]) -> None:
             raise CaseError(f"in a sketch, a {joint.kind} joint's guide (links[0]) is the "
                             "ground, whose line is kept as sketched: write this linkage's points "
                             "exactly, without [[case.dimensions]]", key=f"joints[{i}].links")
+
+
+def _moving_points(points: Iterable[str], links: Sequence[Link]) -> list[str]:
+    """The points the ground does not carry: the sketch's unknowns."""
+    ground = {p for link in links if link.name == GROUND for p in link.points}
+    return [name for name in points if name not in ground]
+
+
+def refuse_too_large(points: Iterable[str], links: Sequence[Link], dimensions: int) -> None:
+    """A sketch beyond :data:`MAX_SKETCH_POINTS` moving points, or with more dimensions than
+    two for each of that many (more than can be independent), is refused before any work
+    that grows with its size."""
+    count = len(_moving_points(points, links))
+    if count > MAX_SKETCH_POINTS or dimensions > 2 * MAX_SKETCH_POINTS:
+        raise CaseError(f"a sketch assembles at most {MAX_SKETCH_POINTS} moving points with "
+                        f"{2 * MAX_SKETCH_POINTS} dimensions, this one has {count} and "
+                        f"{dimensions}: write a larger linkage's points exactly",
+                        key="dimensions")
 
 
 def _equation(shape: Linkage, d: Dimension, i: int, size: float) -> _Equation:
@@ -191,12 +212,7 @@ class _Sketch:
     def __init__(self, shape: Linkage, dimensions: tuple[_Equation, ...]) -> None:
         self.shape = shape
         self.size = shape.scale
-        ground = next(link for link in shape.links if link.name == GROUND)
-        self.free = [name for name in shape.points if name not in ground.points]
-        if len(self.free) > MAX_SKETCH_POINTS:
-            raise CaseError(f"a sketch assembles at most {MAX_SKETCH_POINTS} moving points, "
-                            f"this one has {len(self.free)}: write a larger linkage's points "
-                            "exactly", key="dimensions")
+        self.free = _moving_points(shape.points, shape.links)
         self.dimensions = dimensions
         self.equations = self._slide_lines() + dimensions
 
@@ -230,23 +246,28 @@ class _Sketch:
         at = self.points(x)
         return np.array([e.value(at) for e in self.equations])
 
-    def jacobian(self, x: np.ndarray) -> np.ndarray:
+    def jacobian(self, x: np.ndarray) -> Batched:
         return _jacobian(self.equations, self.points(x), self.index)
+
+    def dense_jacobian(self, x: np.ndarray) -> np.ndarray:
+        return self.jacobian(x).dense()[0]
 
     # -- what the dimensions fix --------------------------------------------------------
     def check_links_rigid(self) -> None:
         """Each moving link rigid by its own dimensions, none of them repeating the others."""
+        by_link: dict[str, list[_Equation]] = {}
+        for e in self.dimensions:
+            by_link.setdefault(self._link_of(e), []).append(e)
         for i, link in enumerate(self.shape.links):
             names = list(dict.fromkeys(link.points))
             if link.name == GROUND or len(names) < 2:
                 continue
-            own = [e for e in self.dimensions if set(e.points) <= set(names)
-                   and self._link_of(e) == link.name]
+            own = by_link.get(link.name, [])
             jac = _jacobian(own, _generic(names), {name: k for k, name in enumerate(names)})
             dependent = first_dependent(jac)
             if dependent is not None:
-                raise CaseError(f"repeats what the other dimensions of link {link.name!r} already fix: "
-                                "remove it", key=own[dependent].key)
+                raise CaseError(f"repeats what the other dimensions of link {link.name!r} "
+                                "already fix: remove it", key=own[dependent].key)
             angle = any(e.length is None for e in own)
             needed = 2 * len(names) - 3 + angle
             if len(own) < needed:
@@ -257,8 +278,13 @@ class _Sketch:
 
     def _link_of(self, e: _Equation) -> str:
         """The first moving link that carries both of a dimension's points."""
-        return next(link.name for link in self.shape.links
-                    if link.name != GROUND and set(e.points) <= set(link.points))
+        return next(name for name, points in self.carried.items()
+                    if name != GROUND and set(e.points) <= points)
+
+    @cached_property
+    def carried(self) -> dict[str, set[str]]:
+        """Each link's points, as a set."""
+        return {link.name: set(link.points) for link in self.shape.links}
 
     def check_determined(self) -> None:
         """The equations fix every moving point, none of them twice."""
@@ -269,7 +295,7 @@ class _Sketch:
             raise CaseError("one dimension too many: with the ground and the dimensions before "
                             "it, every point it touches is already fixed; remove it",
                             key=self.equations[dependent].key)
-        missing = jac.shape[1] - jac.shape[0]
+        missing = jac.cols - jac.rows
         if missing:
             raise CaseError(f"the dimensions leave the sketch {missing} degree(s) of freedom: "
                             "give the direction of each driven link with an angle, e.g. "
@@ -283,7 +309,7 @@ class _Sketch:
 
         if not self.free:
             return self.points(self.sketched())
-        x = least_squares(self.residuals, self.sketched(), jac=self.jacobian, method="lm",
+        x = least_squares(self.residuals, self.sketched(), jac=self.dense_jacobian, method="lm",
                           xtol=1e-15, ftol=1e-15, gtol=1e-15).x
         r = self.residuals(x)
         for _ in range(POLISH_STEPS):
@@ -291,7 +317,7 @@ class _Sketch:
                 break
             # A step kept only where it helps: a sketch that cannot assemble keeps the
             # least-squares compromise, which the refusal quotes.
-            trial = x - np.linalg.lstsq(self.jacobian(x), r, rcond=None)[0]
+            trial = x - linalg.solve(self.jacobian(x), r[None, :])[0]
             r_trial = self.residuals(trial)
             if not np.abs(r_trial).max() < np.abs(r).max():
                 break
@@ -313,9 +339,8 @@ class _Sketch:
                                 f"the dimensions, more than {NEAR_SKETCH:g} × the sketch's size "
                                 f"({length_text(self.size)}): draw it nearer its place",
                                 key=f"points.{name}")
-        sigma = np.linalg.svd(self.jacobian(np.concatenate([at[n] for n in self.free])),
-                              compute_uv=False)
-        if sigma.size and not sigma[-1] > FIRMNESS * sigma[0]:
+        jac = self.jacobian(np.concatenate([at[n] for n in self.free]))
+        if jac.cols and not linalg.condition(jac)[0] * FIRMNESS < 1.0:
             raise CaseError("the dimensions meet where they do not fix the points firmly "
                             "(three points of one link on one line, or links folded onto one "
                             "line at a toggle): write this pose's points exactly",
@@ -330,26 +355,29 @@ def _generic(names: Sequence[str]) -> dict[str, np.ndarray]:
 
 
 def _jacobian(equations: Sequence[_Equation], at: Mapping[str, np.ndarray],
-              index: Mapping[str, int]) -> np.ndarray:
-    """∂(equations)/∂(the points ``index`` numbers), with the points at ``at``."""
-    jac = np.zeros((len(equations), 2 * len(index)))
+              index: Mapping[str, int]) -> Batched:
+    """∂(equations)/∂(the points ``index`` numbers), with the points at ``at``, as entries
+    (a few per equation: a large sketch is solved sparse, :mod:`.linalg`)."""
+    jac = Batched(len(equations), 2 * len(index), 1)
     for r, e in enumerate(equations):
         for name, g in e.gradients(at):
             k = index.get(name)
             if k is not None:
-                jac[r, 2 * k:2 * k + 2] += g
+                jac.add(r, 2 * k, float(g[0]))
+                jac.add(r, 2 * k + 1, float(g[1]))
     return jac
 
 
-def first_dependent(rows: np.ndarray) -> int | None:
+def first_dependent(jac: Batched) -> int | None:
     """The first row that depends on the rows before it, or None (a bisection on the rank
     of the leading rows, which are independent up to that row and not beyond)."""
-    if not rows.shape[0] or np.linalg.matrix_rank(rows) == rows.shape[0]:
+    rows = jac.dense()[0] if jac.small else jac.at(0).tocsr()
+    if not jac.rows or linalg.rank(rows) == jac.rows:
         return None
-    independent, dependent = 0, rows.shape[0]   # leading rows: independent, not independent
+    independent, dependent = 0, jac.rows   # leading rows: independent, not independent
     while dependent - independent > 1:
         mid = (independent + dependent) // 2
-        if np.linalg.matrix_rank(rows[:mid]) == mid:
+        if linalg.rank(rows[:mid]) == mid:
             independent = mid
         else:
             dependent = mid

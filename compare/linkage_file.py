@@ -29,7 +29,7 @@ from mechcheck.analytic.linkage import (
     PointLoad,
     TorsionSpring,
 )
-from mechcheck.analytic.sketch import Dimension, assembled, refuse_unsketchable
+from mechcheck.analytic.sketch import Dimension, assembled, refuse_too_large, refuse_unsketchable
 from mechcheck.analytic.values import (
     LENGTH_UNITS,
     bounded_angle,
@@ -209,6 +209,7 @@ def _assembled(spec: LinkageCaseSpec, points: dict[str, Vec2], links: tuple[Link
     """A sketch's points (m) moved to meet its dimensions (:func:`.sketch.assembled`)."""
     scale = LENGTH_UNITS[spec.length_unit]
     refuse_unsketchable(joints)
+    refuse_too_large(points, links, len(spec.dimensions))
     dimensions = tuple(_dimension(d, f"dimensions[{i}]", scale) for i, d in enumerate(spec.dimensions))
     with lengths_quoted_in(spec.length_unit):
         return assembled(Linkage(points=points, links=links, joints=joints), dimensions)

@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 
 import mechcheck
 from mechcheck.analytic.linkage import Linkage
+from mechcheck.analytic.sketch import MAX_SKETCH_POINTS
 from mechcheck.cli import app, example_path
 from mechcheck.tolerance import rule
 
@@ -273,3 +274,36 @@ def test_a_sketch_drawn_elsewhere_assembles_moved_with_it(tmp_path: Path) -> Non
     case = load_one(tmp_path, four_bar("moved", moved, FOUR_BAR_DIMENSIONS))
     by_hand = {n: (x + shift[0], y + shift[1]) for n, (x, y) in four_bar_by_hand(True).items()}
     assert_points_close(drawn_mm(case.linkage), by_hand, A1)
+
+
+def chain(links: int) -> str:
+    """An open chain of ``links`` bars from the ground, each 1 m long along +x: a length and
+    an angle per bar."""
+    parts = ['[[case]]\nname = "chain"\nmechanism = "linkage"\n[case.points]']
+    parts += [f"P{i} = [{i}.0, 0.1]" for i in range(links + 1)]
+    parts.append('[[case.links]]\nname = "ground"\npoints = ["P0"]')
+    for i in range(1, links + 1):
+        parent = "ground" if i == 1 else f"b{i - 1}"
+        parts.append(f'[[case.links]]\nname = "b{i}"\npoints = ["P{i - 1}", "P{i}"]\n'
+                     f'[[case.joints]]\nname = "J{i}"\nkind = "revolute"\n'
+                     f'links = ["{parent}", "b{i}"]\nat = "P{i - 1}"')
+        parts.append(dimension(f"P{i - 1}", f"P{i}", "length", 1.0)
+                     + dimension(f"P{i - 1}", f"P{i}", "angle", 0.0))
+    return "\n".join(parts) + "\n"
+
+
+def test_a_sketch_too_large_to_assemble_is_refused_before_the_work(tmp_path: Path) -> None:
+    """A chain of 401 bars (401 moving points, one past the bound) is refused in one line,
+    naming the bound, before any decomposition that grows as the cube of its size."""
+    path = case_file(tmp_path, chain(MAX_SKETCH_POINTS + 1), "chain.toml")
+    assert_refused(["run", str(path), "-q", "--out", str(tmp_path / "out")], str(path),
+                   "key 'dimensions'", f"at most {MAX_SKETCH_POINTS} moving points")
+
+
+def test_a_small_chain_assembles_straight(tmp_path: Path) -> None:
+    """Three bars sketched 0.1 m above +x, each 1 m at 0°, assemble on the x axis at
+    x = 1, 2, 3 (the ground point P0 stays where it is sketched, at (0, 0.1))."""
+    case = load_one(tmp_path, chain(3))
+    got = {n: case.linkage.drawn(p) for n, p in case.linkage.points.items()}
+    for i in range(4):
+        assert got[f"P{i}"] == pytest.approx((float(i), 0.1), rel=0.0, abs=RTOL), i
