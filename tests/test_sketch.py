@@ -12,11 +12,12 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from hypothesis import assume, given, settings, strategies as st
 from typer.testing import CliRunner
 
 import mechcheck
-from mechcheck.analytic.linkage import Linkage
-from mechcheck.analytic.sketch import MAX_SKETCH_POINTS
+from mechcheck.analytic.linkage import Joint, Link, Linkage
+from mechcheck.analytic.sketch import MAX_SKETCH_POINTS, Dimension, assembled
 from mechcheck.cli import app, example_path
 from mechcheck.tolerance import rule
 
@@ -33,20 +34,21 @@ RTOL = rule("analytic", "pose", "static").rtol
 A1, A2, A3, A4, THETA = 140.0, 80.0, 100.0, 120.0, 60.0
 
 
-def four_bar_by_hand(upper: bool) -> dict[str, tuple[float, float]]:
+def four_bar_by_hand(upper: bool, a1: float = A1, a2: float = A2, a3: float = A3,
+                     a4: float = A4, theta: float = THETA) -> dict[str, tuple[float, float]]:
     """The four-bar's points by trigonometry: A on the crank's circle at θ, B where the
-    coupler's circle about A meets the rocker's about B0, the upper or the lower meeting."""
-    t = math.radians(THETA)
-    a = (A2 * math.cos(t), A2 * math.sin(t))
-    dx, dy = A1 - a[0], -a[1]
+    coupler's circle about A meets the rocker's about B0, on the left of the line A→B0
+    (``upper``: for E1, above the ground line) or on its right."""
+    t = math.radians(theta)
+    a = (a2 * math.cos(t), a2 * math.sin(t))
+    dx, dy = a1 - a[0], -a[1]
     d = math.hypot(dx, dy)
     ux, uy = dx / d, dy / d
-    along = (A3**2 - A4**2 + d**2) / (2 * d)        # from A towards B0, to the chord
-    half = math.sqrt(A3**2 - along**2)              # half the chord
-    mx, my = a[0] + along * ux, a[1] + along * uy
-    meetings = [(mx - half * uy, my + half * ux), (mx + half * uy, my - half * ux)]
-    b = max(meetings, key=lambda p: p[1]) if upper else min(meetings, key=lambda p: p[1])
-    return {"A0": (0.0, 0.0), "B0": (A1, 0.0), "A": a, "B": b}
+    along = (a3**2 - a4**2 + d**2) / (2 * d)        # from A towards B0, to the chord
+    half = math.sqrt(a3**2 - along**2)              # half the chord
+    side = 1.0 if upper else -1.0
+    b = (a[0] + along * ux - side * half * uy, a[1] + along * uy + side * half * ux)
+    return {"A0": (0.0, 0.0), "B0": (a1, 0.0), "A": a, "B": b}
 
 
 #: A coupler mass on the four-bar of the linkage-file tests.
@@ -307,3 +309,36 @@ def test_a_small_chain_assembles_straight(tmp_path: Path) -> None:
     got = {n: case.linkage.drawn(p) for n, p in case.linkage.points.items()}
     for i in range(4):
         assert got[f"P{i}"] == pytest.approx((float(i), 0.1), rel=0.0, abs=RTOL), i
+
+
+@settings(max_examples=40, deadline=None)
+@given(a2=st.floats(20.0, 100.0), a3=st.floats(60.0, 200.0), a4=st.floats(60.0, 200.0),
+       theta=st.floats(0.0, 360.0), upper=st.booleans(),
+       noise=st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4))
+def test_random_four_bar_sketches_assemble_where_trigonometry_puts_them(
+        a2: float, a3: float, a4: float, theta: float, upper: bool, noise: list[float]) -> None:
+    """Any four-bar (ground 140 mm) that assembles with its coupler and rocker at least 10 %
+    of the coupler from one line, sketched with A and B off by up to 5 % of the crank,
+    assembles at the hand trigonometry's points on the side of A→B0 the sketch shows."""
+    t = math.radians(theta)
+    d = math.hypot(A1 - a2 * math.cos(t), a2 * math.sin(t))
+    along = (a3**2 - a4**2 + d**2) / (2 * d)
+    assume(a3**2 - along**2 > (0.1 * a3) ** 2)
+    hand = four_bar_by_hand(upper, A1, a2, a3, a4, theta)
+    off = 0.05 * a2
+    sketch = hand | {"A": (hand["A"][0] + off * noise[0], hand["A"][1] + off * noise[1]),
+                     "B": (hand["B"][0] + off * noise[2], hand["B"][1] + off * noise[3])}
+    shape = Linkage(points={n: (x * 1e-3, y * 1e-3) for n, (x, y) in sketch.items()},
+                    links=tuple(Link(n, p) for n, p in FOUR_BAR_LINKS.items()),
+                    joints=tuple(Joint(n, "revolute", ends, n) for n, ends in FOUR_BAR_JOINTS.items()))
+    got = assembled(shape, (Dimension(("A0", "A"), length=a2 * 1e-3),
+                            Dimension(("A0", "A"), angle=t),
+                            Dimension(("A", "B"), length=a3 * 1e-3),
+                            Dimension(("B0", "B"), length=a4 * 1e-3)))
+    assert_points_close({n: (1e3 * x, 1e3 * y) for n, (x, y) in got.items()}, hand, A1)
+
+
+FOUR_BAR_LINKS = {"ground": ("A0", "B0"), "crank": ("A0", "A"), "coupler": ("A", "B"),
+                  "rocker": ("B0", "B")}
+FOUR_BAR_JOINTS = {"A0": ("ground", "crank"), "A": ("crank", "coupler"), "B": ("coupler", "rocker"),
+                   "B0": ("ground", "rocker")}
