@@ -42,7 +42,15 @@ import numpy as np
 
 from mechcheck.analytic import linalg
 from mechcheck.analytic.linalg import Batched
-from mechcheck.analytic.values import GROUND, CaseError, Vec2, length_text
+from mechcheck.analytic.values import (
+    GROUND,
+    MIN_LINK_LENGTH,
+    CaseError,
+    Vec2,
+    bounded_angle,
+    finite,
+    length_text,
+)
 
 if TYPE_CHECKING:
     from mechcheck.analytic.linkage import Joint, Link, Linkage
@@ -73,6 +81,16 @@ class Dimension:
     points: tuple[str, str]
     length: float | None = None
     angle: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.length is None) == (self.angle is None):
+            raise CaseError("give a length or an angle (one of them)")
+        if self.length is not None:
+            if finite(self.length, "length") < MIN_LINK_LENGTH:
+                raise CaseError(f"must be at least {length_text(MIN_LINK_LENGTH)} (a micrometre), "
+                                f"got {length_text(self.length)}", key="length")
+        else:
+            bounded_angle(float(self.angle or 0.0), "angle")
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,8 @@
 
 pydantic checks the structure (unknown and missing keys, types); the Linkage value checks
 the rules of LINKAGES.md and the bounds of every number itself (with lengths quoted in
-the file's unit). Lengths and points are converted from ``length_unit`` to
+the file's unit). A sketch's points (``[[case.dimensions]]``) are first moved to meet its
+dimensions (:mod:`mechcheck.analytic.sketch`). Lengths and points are converted from ``length_unit`` to
 metres and angles from degrees to radians here, at the border; velocities and
 accelerations are already SI (rad/s, m/s).
 """
@@ -30,13 +31,7 @@ from mechcheck.analytic.linkage import (
     TorsionSpring,
 )
 from mechcheck.analytic.sketch import Dimension, assembled, refuse_too_large, refuse_unsketchable
-from mechcheck.analytic.values import (
-    LENGTH_UNITS,
-    bounded_angle,
-    finite,
-    lengths_quoted_in,
-    link_length,
-)
+from mechcheck.analytic.values import LENGTH_UNITS, finite, lengths_quoted_in
 from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, needs_an_effect, validated
 
 #: A point name or [x, y], checked by :func:`linkage_from_spec` (pydantic would name the
@@ -210,20 +205,20 @@ def _assembled(spec: LinkageCaseSpec, points: dict[str, Vec2], links: tuple[Link
     scale = LENGTH_UNITS[spec.length_unit]
     refuse_unsketchable(joints)
     refuse_too_large(points, links, len(spec.dimensions))
-    dimensions = tuple(_dimension(d, f"dimensions[{i}]", scale) for i, d in enumerate(spec.dimensions))
     with lengths_quoted_in(spec.length_unit):
+        dimensions = tuple(_dimension(d, f"dimensions[{i}]", scale)
+                           for i, d in enumerate(spec.dimensions))
         return assembled(Linkage(points=points, links=links, joints=joints), dimensions)
 
 
 def _dimension(d: DimensionSpec, key: str, scale: float) -> Dimension:
     """A dimension in SI: a length in metres, an angle in radians."""
-    if (d.length is None) == (d.angle is None):
-        raise CaseError("give a length or an angle (one of them)", key=key)
-    names = (d.points[0], d.points[1])
-    if d.angle is not None:
-        return Dimension(names, angle=bounded_angle(math.radians(d.angle), f"{key}.angle"))
-    assert d.length is not None
-    return Dimension(names, length=link_length(d.length * scale, f"{key}.length"))
+    try:
+        return Dimension((d.points[0], d.points[1]),
+                         length=None if d.length is None else d.length * scale,
+                         angle=None if d.angle is None else math.radians(d.angle))
+    except CaseError as error:
+        raise error.located(key_prefix=key) from None
 
 
 def _joint(j: JointSpec, i: int, scale: float) -> Joint:

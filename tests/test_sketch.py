@@ -220,6 +220,10 @@ BAD = [
     ("a-load-at-coordinates",
      bad(FOUR_BAR_DIMENSIONS).replace('at = "B"\nforce', 'at = [120.0, 100.0]\nforce'),
      "loads[0].at", "in a sketch, name a point"),
+    ("a-negative-length", bad(FOUR_BAR_DIMENSIONS.replace("length = 80.0", "length = -80.0")),
+     "dimensions[0].length", "must be at least 0.001 mm (a micrometre), got -80 mm"),
+    ("an-angle-beyond-bounds", bad(FOUR_BAR_DIMENSIONS.replace("angle = 60.0", "angle = 1e9")),
+     "dimensions[1].angle", "must be within ±100000°"),
     ("length-and-angle", bad(FOUR_BAR_DIMENSIONS.replace("length = 80.0", "length = 80.0\nangle = 10.0")),
      "dimensions[0]", "a length or an angle"),
 ]
