@@ -4,9 +4,9 @@
 pydantic checks the structure (unknown and missing keys, types); the Linkage value checks
 the rules of LINKAGES.md and the bounds of every number itself (with lengths quoted in
 the file's unit). A sketch's points (``[[case.dimensions]]``) are first moved to meet its
-dimensions (:mod:`mechcheck.analytic.sketch`). Lengths and points are converted from ``length_unit`` to
-metres and angles from degrees to radians here, at the border; velocities and
-accelerations are already SI (rad/s, m/s).
+dimensions (:mod:`mechcheck.analytic.sketch`). Lengths and points are converted from
+``length_unit`` to metres and angles from degrees to radians here, at the border;
+velocities and accelerations are already SI (rad/s, m/s).
 """
 
 from __future__ import annotations
