@@ -46,6 +46,7 @@ EXAMPLES = {
     "four_bar": "a four-bar at its input angle θ12: loads, masses, motion, friction",
     "slider_crank": "a slider-crank (offset, slide friction) at its input angle θ12",
     "linkage": "any planar linkage drawn as points, links and joints, moved by its drivers",
+    "linkage_sketch": "a linkage sketched roughly, made exact by its lengths and angles",
 }
 
 

@@ -3,9 +3,10 @@
 
 pydantic checks the structure (unknown and missing keys, types); the Linkage value checks
 the rules of LINKAGES.md and the bounds of every number itself (with lengths quoted in
-the file's unit). Lengths and points are converted from ``length_unit`` to
-metres and angles from degrees to radians here, at the border; velocities and
-accelerations are already SI (rad/s, m/s).
+the file's unit). A sketch's points (``[[case.dimensions]]``) are first moved to meet its
+dimensions (:mod:`mechcheck.analytic.sketch`). Lengths and points are converted from
+``length_unit`` to metres and angles from degrees to radians here, at the border;
+velocities and accelerations are already SI (rad/s, m/s).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from mechcheck.analytic.linkage import (
     PointLoad,
     TorsionSpring,
 )
+from mechcheck.analytic.sketch import Dimension, assembled, refuse_too_large, refuse_unsketchable
 from mechcheck.analytic.values import LENGTH_UNITS, finite, lengths_quoted_in
 from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, needs_an_effect, validated
 
@@ -69,6 +71,15 @@ class DriverSpec(Strict):
     velocity: float = 0.0
     acceleration: float = 0.0
     sense: Literal["increasing", "decreasing"] | None = None
+
+
+class DimensionSpec(Strict):
+    """A sketch's dimension: the distance (length_unit) or direction (deg, CCW from +x) of
+    points[1] from points[0], two points of one link."""
+
+    points: Annotated[list[str], Field(min_length=2, max_length=2)]
+    length: float | None = None
+    angle: float | None = None
 
 
 class LinkageLoadSpec(Strict):
@@ -123,6 +134,8 @@ class LinkageCaseSpec(Strict):
     masses: list[LinkageMassSpec] = []
     springs: list[dict[str, Any]] = []
     friction: LinkageFrictionSpec | None = None
+    #: Given, the points are a sketch that these dimensions make exact (:mod:`.sketch`).
+    dimensions: list[DimensionSpec] = []
     description: str = ""
     seed: SeedSpec | None = None
     tolerance: list[ToleranceSpec] = []
@@ -132,12 +145,20 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
     """The Linkage of a validated table: lengths to metres, degrees to radians."""
     scale = LENGTH_UNITS[spec.length_unit]
     points = {name: (p[0] * scale, p[1] * scale) for name, p in spec.points.items()}
+    links = tuple(Link(link.name, tuple(link.points), link.axial_stiffness) for link in spec.links)
+    joints = tuple(_joint(j, i, scale) for i, j in enumerate(spec.joints))
+    if spec.dimensions:
+        points = _assembled(spec, points, links, joints)
 
     def where(ref: PointRef, key: str) -> Vec2:
         if isinstance(ref, str):
             if ref not in points:
                 raise CaseError(f"unknown point {ref!r}", key=key)
             return points[ref]
+        if spec.dimensions:
+            raise CaseError("in a sketch, name a point: coordinates would be the sketch's, not "
+                            "the assembled pose's (add the point to its link, with dimensions)",
+                            key=key)
         if not isinstance(ref, list) or len(ref) != 2:
             raise CaseError(f"must be a point name or [x, y], got {ref!r}", key=key)
         # Type and finiteness before scaling: true × 1e-3 would pass as a number.
@@ -162,8 +183,8 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
     with lengths_quoted_in(spec.length_unit):
         return Linkage(
             points=points,
-            links=tuple(Link(link.name, tuple(link.points), link.axial_stiffness) for link in spec.links),
-            joints=tuple(_joint(j, i, scale) for i, j in enumerate(spec.joints)),
+            links=links,
+            joints=joints,
             drivers=tuple(_driver(d, i, kinds, scale) for i, d in enumerate(spec.drivers)),
             loads=tuple(PointLoad(ld.link, where(ld.at, f"loads[{i}].at"),
                                   force_vector(ld.force, f"loads[{i}].force"), ld.torque)
@@ -176,6 +197,28 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
                 f.mu, {k: v * scale for k, v in f.pin_radius.items()}, dict(f.joint_mu),
                 dict(f.viscous)),
         )
+
+
+def _assembled(spec: LinkageCaseSpec, points: dict[str, Vec2], links: tuple[Link, ...],
+               joints: tuple[Joint, ...]) -> dict[str, Vec2]:
+    """A sketch's points (m) moved to meet its dimensions (:func:`.sketch.assembled`)."""
+    scale = LENGTH_UNITS[spec.length_unit]
+    refuse_unsketchable(joints)
+    refuse_too_large(points, links, len(spec.dimensions))
+    with lengths_quoted_in(spec.length_unit):
+        dimensions = tuple(_dimension(d, f"dimensions[{i}]", scale)
+                           for i, d in enumerate(spec.dimensions))
+        return assembled(Linkage(points=points, links=links, joints=joints), dimensions)
+
+
+def _dimension(d: DimensionSpec, key: str, scale: float) -> Dimension:
+    """A dimension in SI: a length in metres, an angle in radians."""
+    try:
+        return Dimension((d.points[0], d.points[1]),
+                         length=None if d.length is None else d.length * scale,
+                         angle=None if d.angle is None else math.radians(d.angle))
+    except CaseError as error:
+        raise error.located(key_prefix=key) from None
 
 
 def _joint(j: JointSpec, i: int, scale: float) -> Joint:

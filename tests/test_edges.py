@@ -440,7 +440,7 @@ def test_a_run_with_nothing_to_compare_says_so(tmp_path: Path) -> None:
 
 # -- 17. the format reference and a starting file -----------------------------------------
 
-@pytest.mark.parametrize("mechanism", ["four_bar", "slider_crank", "linkage"])
+@pytest.mark.parametrize("mechanism", ["four_bar", "slider_crank", "linkage", "linkage_sketch"])
 def test_mechcheck_new_writes_a_commented_example_that_runs(tmp_path: Path, mechanism: str) -> None:
     """`mechcheck new KIND > my.toml` gives a file that runs as it is, and whose commented-out
     optional keys are valid too once uncommented."""

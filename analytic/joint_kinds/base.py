@@ -53,6 +53,12 @@ class JointKind(ABC):
     drivable: ClassVar[bool] = True
     #: It takes Coulomb and viscous friction (``joint_mu``, ``viscous``).
     frictional: ClassVar[bool] = True
+    #: Its point ``at`` moves along a line fixed in links[0] (a slide): in a sketch
+    #: (:mod:`..sketch`) that line is kept where it is drawn, and ``at`` moves along it.
+    slides: ClassVar[bool] = False
+    #: A sketch may hold it (:mod:`..sketch`): a gear mesh may not, since its centre
+    #: distance is fixed by its pitch radii, across two links, which no dimension spans.
+    sketchable: ClassVar[bool] = True
 
     # -- as a value ---------------------------------------------------------------------
     def __eq__(self, other: object) -> bool:

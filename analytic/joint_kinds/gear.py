@@ -112,6 +112,7 @@ class Gear(JointKind):
     rotates = False
     pins = False
     drivable = False
+    sketchable = False
     frictional = False
 
     def checked(self, joint: Joint, links: Mapping[str, Link], key: str) -> Joint:

@@ -39,6 +39,7 @@ class Prismatic(JointKind):
     freedoms = 1
     rotates = False
     pins = False
+    slides = True
 
     def checked(self, joint: Joint, links: Mapping[str, Link], key: str) -> Joint:
         second = links[joint.links[1]]
