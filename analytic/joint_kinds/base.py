@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, ClassVar
 from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion
 
 if TYPE_CHECKING:
+    from mechcheck.analytic.joint_kinds.sketch import JointSketch, Placement
     from mechcheck.analytic.linalg import Batched
     from mechcheck.analytic.linkage import Joint, JointFriction, Link
     from mechcheck.analytic.linkage_kinematics import LinkagePose
@@ -171,6 +172,12 @@ class JointKind(ABC):
     def reported(self, pose: LinkagePose, joint: Joint, x: Array, along: Array) -> dict[str, Array]:
         """Its reported reactions from its unknowns x (N, rows) and the friction force
         along its axis (N,) (zero for a pin)."""
+
+    # -- drawing --------------------------------------------------------------------------
+    @abstractmethod
+    def sketch(self, joint: Joint, place: Placement) -> JointSketch:
+        """What a drawing of the linkage at the pose ``place`` shows of the joint, and where
+        its reaction acts (:mod:`.sketch`)."""
 
     # -- friction -------------------------------------------------------------------------
     def nonlinear_coefficient(self, joint: Joint) -> float:

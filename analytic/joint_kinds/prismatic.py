@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from mechcheck.analytic.joint_kinds.base import JointFrame, JointKind
+from mechcheck.analytic.joint_kinds.sketch import JointSketch, Placement, Slide, grounded, rotated
 from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion, dot, perp, rotate
 from mechcheck.analytic.values import CaseError, pair
 
@@ -39,6 +40,8 @@ class Prismatic(JointKind):
     freedoms = 1
     rotates = False
     pins = False
+    #: Its sliding link turns about the point on the axis (a pin in a slot), else not (a block).
+    turns_on_axis: ClassVar[bool] = False
 
     def checked(self, joint: Joint, links: Mapping[str, Link], key: str) -> Joint:
         second = links[joint.links[1]]
@@ -104,6 +107,13 @@ class Prismatic(JointKind):
         assert frame.u is not None
         for link, sign in ((joint.links[1], 1.0), (joint.links[0], -1.0)):
             layout.force_on(k, link, col, frame.u, frame.point, sign)
+
+    def sketch(self, joint: Joint, place: Placement) -> JointSketch:
+        # The axis is fixed in links[0]: it turns with that link.
+        assert joint.axis is not None   # checked(): every sliding joint has one
+        at = place.point(joint.at)
+        axis = rotated(place.turn(joint.links[0]), joint.axis)
+        return JointSketch((Slide(at, axis, self.turns_on_axis, grounded(joint.links)),), at)
 
     def quantities(self, joint: Joint) -> dict[str, str]:
         return {f"F_{joint.name}_x": "N", f"F_{joint.name}_y": "N", f"M_{joint.name}": "N*m"}
