@@ -23,13 +23,14 @@ import io
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.joint_kinds.sketch import JointSketch, Pin, PitchCircle, Slide, rotated
 from mechcheck.analytic.linkage import LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.solution import Solution
-from mechcheck.analytic.values import GROUND, Vec2
+from mechcheck.analytic.values import GROUND, CaseError, Vec2
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -215,14 +216,26 @@ def solved_pose(case: Case, solution: Solution) -> Pose:
 
 
 def bars(pose: Pose) -> Iterator[Bar]:
-    """Each moving rigid link through its points (a link of one point has its joints' marks
-    only)."""
+    """Each moving rigid link through its points and the points its loads, mass and springs
+    act at (a coupler point off the line of its pins makes it a plate); a link of one point
+    has its joints' marks only."""
     for link in pose.linkage.links:
         if link.name == GROUND or link.axial_stiffness is not None:
             continue
-        corners = tuple(dict.fromkeys(pose.point(p) for p in link.points))
+        corners = tuple(dict.fromkeys([*(pose.point(p) for p in link.points),
+                                       *attached(pose, link.name)]))
         if len(corners) >= 2:
             yield Bar(link.name, hull(corners))
+
+
+def attached(pose: Pose, link: str) -> Iterator[Vec2]:
+    """Where loads, the centre of mass and spring ends sit on ``link``, now."""
+    linkage = pose.linkage
+    yield from (pose.carried(link, ld.at) for ld in linkage.loads if ld.link == link)
+    yield from (pose.carried(link, m.com) for m in linkage.masses if m.link == link)
+    for spring in linkage.springs:
+        if isinstance(spring, LinearSpring):
+            yield from (pose.carried(link, at) for owner, at in spring.ends if owner == link)
 
 
 def hull(points: tuple[Vec2, ...]) -> tuple[Vec2, ...]:
@@ -374,6 +387,67 @@ def caption(arrows: Sequence[Arrow], reactions: Solution | None) -> str:
         largest = max(arrows, key=lambda a: math.hypot(*a.force))
         parts.append(f"arrows to one scale ({largest.label.split()[0] or 'largest'} the longest)")
     return "; ".join(parts)
+
+
+# -- the command line -----------------------------------------------------------------------
+class DrawingError(ValueError):
+    """A drawing that cannot be made as asked: the command line's one line."""
+
+
+#: What ``mechcheck draw`` writes, by the output's suffix.
+FORMATS: dict[str, Literal["png", "svg"]] = {".svg": "svg", ".png": "png"}
+
+
+def pick_case(path: Path, name: str | None) -> Case:
+    """The case called ``name`` in the file at ``path``, or its only case; a
+    :class:`~mechcheck.analytic.values.CaseError` naming the file otherwise."""
+    from mechcheck.casefile import load_cases
+
+    cases = load_cases(path)
+    names = ", ".join(c.name for c in cases)
+    if name is None:
+        if len(cases) > 1:
+            raise CaseError(f"holds {len(cases)} cases; choose one with --case: {names}",
+                            file=str(path))
+        return cases[0]
+    for case in cases:
+        if case.name == name:
+            return case
+    raise CaseError(f"no case {name!r}; its cases: {names}", file=str(path))
+
+
+def output_format(target: Path) -> Literal["png", "svg"]:
+    """The format a file name asks for; DrawingError for any other suffix."""
+    fmt = FORMATS.get(target.suffix.lower())
+    if fmt is None:
+        raise DrawingError(f"--out {target}: must end in .svg or .png")
+    return fmt
+
+
+def drawing_file(case: Case, fmt: Literal["png", "svg"], *, drawn: bool = False,
+                 backend: str = "analytic") -> bytes:
+    """The drawing ``mechcheck draw`` writes: ``case`` at analytic's pose with ``backend``'s
+    reactions, or (``drawn``) as its file draws it. DrawingError when a solve gives nothing
+    to draw, saying why."""
+    if case.geometry is None:
+        raise CaseError("does not assemble at its theta12: there is no pose to draw",
+                        case=case.name, file=case.source)
+    if drawn:
+        return saved(draw_case(case), fmt)
+    from mechcheck.run import solve_gated
+
+    pose = solve_gated("analytic", case)
+    forces = pose if backend == "analytic" else solve_gated(backend, case)
+    if not any(q.startswith("F_") and math.isfinite(v)
+               for q, v in linkage_values(case, forces).items()):
+        why = f"{forces.status}: {forces.message}" if forces.status != "ok" else \
+            "it reports no joint forces"
+        raise CaseError(f"backend {backend} gives no reactions to draw ({why})",
+                        case=case.name, file=case.source)
+    try:
+        return saved(draw_case(case, pose, reactions=forces), fmt)
+    except ValueError as error:   # analytic found no pose
+        raise CaseError(str(error), case=case.name, file=case.source) from None
 
 
 # -- rendering ----------------------------------------------------------------------------
@@ -642,6 +716,10 @@ class LabelPlacer:
         import numpy as np
 
         marks: list[tuple[Vec2, float]] = [(p, 6.0) for p in scene.points.values()]
+        # The ground's marks hang below their points: a box of their size, as samples.
+        w = GROUND_WIDTH * scene.extent
+        marks += [((x + dx * w, y - dy * w), 4.0) for x, y in scene.grounds
+                  for dx in (-0.6, -0.3, 0.0, 0.3, 0.6) for dy in (0.3, 0.6, 0.9)]
         segments = [(a.at, (a.at[0] + a.vector[0], a.at[1] + a.vector[1])) for a in scene.arrows]
         for bar in scene.bars:
             segments += list(zip(bar.corners, bar.corners[1:] + bar.corners[:1], strict=True))
