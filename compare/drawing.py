@@ -22,7 +22,7 @@ from __future__ import annotations
 import io
 import math
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -52,7 +52,9 @@ COIL_RADIUS = 0.035
 MARGIN = 0.08
 #: The default figure (inches) and resolution: the size every built-in case is checked at
 #: for overlapping labels (tests/test_drawing.py).
-FIGURE_SIZE = (8.0, 6.0)
+FIGURE_SIZE = (8.0, 5.5)
+#: The band above the drawing for the title and caption (inches).
+TITLE_BAND = 0.7
 DPI = 100
 FONT_SIZE = 8.0
 #: Label placement, in display pixels: the gap kept around each label, the step between
@@ -483,16 +485,54 @@ def saved(fig: Figure, fmt: Literal["png", "svg"]) -> bytes:
     return buffer.getvalue()
 
 
+#: The width (inches) of one panel of :func:`panels_png`, and the range of its height: as
+#: tall as the poses' common window needs at that width, within these bounds.
+PANEL_WIDTH = 4.6
+PANEL_HEIGHTS = (2.0, 5.0)
+
+
+def panels_png(panels: Sequence[tuple[Case, Solution, str]]) -> bytes:
+    """PNG bytes of several poses side by side (a sweep's cycle), each ``(case at the pose,
+    its solution, panel title)``: one force scale, one window, so that the panels compare.
+    A panel whose solution has no pose is left out."""
+    drawable = []
+    for case, solution, title in panels:
+        try:
+            drawable.append((case, solution, title, scene_of(case, solution, title=title)))
+        except ValueError:
+            continue
+    if not drawable:
+        return b""
+    extent = max(s.extent for *_, s in drawable)
+    largest = max((math.hypot(*a.force) for *_, s in drawable for a in s.arrows), default=0.0)
+    scale = ARROW_FRACTION * extent / largest if largest > 0.0 else 0.0
+    scenes = [scene_of(c, sol, force_scale=scale, title=t) for c, sol, t, _ in drawable]
+    limits = [s.limits() for s in scenes]
+    window = ((min(x[0] for x, _ in limits), max(x[1] for x, _ in limits)),
+              (min(y[0] for _, y in limits), max(y[1] for _, y in limits)))
+    (x0, x1), (y0, y1) = window
+    height = min(max(PANEL_WIDTH * (y1 - y0) / (x1 - x0), PANEL_HEIGHTS[0]), PANEL_HEIGHTS[1])
+    fig, axes = new_figure((PANEL_WIDTH * len(scenes), height), panels=len(scenes))
+    placer = LabelPlacer(fig)
+    placer.block(fig.suptitle("blue: loads; red: F_<joint>, by the joint's first link on its "
+                              "second; arrows to one scale in every panel",
+                              fontsize=FONT_SIZE + 1, y=1.0, va="top"))
+    for ax, scene in zip(axes, scenes, strict=True):
+        draw_scene(ax, replace(scene, caption=""), placer, window)
+    return saved(fig, "png")
+
+
 def new_figure(size: tuple[float, float], panels: int = 1) -> tuple[Figure, list[Axes]]:
-    """A figure of ``panels`` side by side, each without ticks or frame. Not pyplot's: no
-    display, and nothing global holds it once it is dropped."""
+    """A figure of ``panels`` side by side, each without ticks or frame, below a band of
+    :data:`TITLE_BAND` inches for the titles. Not pyplot's: no display, and nothing global
+    holds it once it is dropped."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=size, dpi=DPI)
+    fig = Figure(figsize=(size[0], size[1] + TITLE_BAND), dpi=DPI)
     FigureCanvasAgg(fig)
-    width = 1.0 / panels
-    axes = [fig.add_axes((k * width + 0.01, 0.03, width - 0.02, 0.85)) for k in range(panels)]
+    width, top = 1.0 / panels, size[1] / (size[1] + TITLE_BAND)
+    axes = [fig.add_axes((k * width + 0.01, 0.0, width - 0.02, top)) for k in range(panels)]
     for ax in axes:
         ax.set_axis_off()
     return fig, axes
@@ -513,6 +553,7 @@ def draw_scene(ax: Axes, scene: Scene, placer: LabelPlacer,
     ax.set_xlim(*limits[0])
     ax.set_ylim(*limits[1])
     ax.set_aspect("equal", adjustable="box")
+    ax.set_anchor("N")   # under the title band, whatever the drawing's shape
     ax.apply_aspect()
     ax.set_autoscale_on(False)
     unit = scene.extent

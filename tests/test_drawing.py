@@ -21,7 +21,9 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.joint_kinds.sketch import Pin, PitchCircle, Slide, rotated
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, catalogue_case_files, load_cases, parse_cases
-from mechcheck.drawing import LABEL_GID, draw_case, render, scene_of
+from mechcheck.drawing import LABEL_GID, draw_case, panels_png, render, scene_of
+from mechcheck.figures import cycle_panels
+from mechcheck.sweep import LocalExecutor, parse_range, plan, run_sweep
 from mechcheck.tolerance import rule
 from tests.test_edges import one_line, run_cli
 from tests.test_invariance import transformed
@@ -52,19 +54,26 @@ def close(a: tuple[float, float], b: tuple[float, float], size: float) -> bool:
 
 # -- the joints where the analysis puts them ------------------------------------------------
 
-def test_seed_fourbar_is_drawn_at_its_hand_closed_form(solved: dict[str, Any]) -> None:
-    """Seed E1 (a1 = 140, a2 = 80, a3 = 100, a4 = 120 mm, θ12 = 60°, open): A0 at the origin,
-    B0 at (a1, 0), A = a2·(cos θ12, sin θ12) and B = B0 + a4·(cos θ14, sin θ14) with θ14 from
-    the seed's closed form (CONVENTIONS.md, "Branches"), and each reaction arrow along the
-    solution's F_ij from its pin."""
-    case, solution = solved["seed-E1-as-stated"]
-    a1, a2, a3, a4, t12 = 0.140, 0.080, 0.100, 0.120, math.radians(60.0)
+def e1_points(t12: float) -> dict[str, tuple[float, float]]:
+    """Seed E1's pins at θ12 (rad), open branch: A0 at the origin, B0 at (a1, 0),
+    A = a2·(cos θ12, sin θ12), B = B0 + a4·(cos θ14, sin θ14) with θ14 from the seed's closed
+    form (CONVENTIONS.md, "Branches")."""
+    a1, a2, a3, a4 = 0.140, 0.080, 0.100, 0.120
     c = a1**2 + a2**2 + a4**2 - a3**2 - 2 * a1 * a2 * math.cos(t12)
     a = -2 * a1 * a4 + 2 * a2 * a4 * math.cos(t12)
     b = 2 * a2 * a4 * math.sin(t12)
     t14 = math.atan2(b, a) - math.acos(c / math.hypot(a, b))
-    expected = {"A0": (0.0, 0.0), "A": (a2 * math.cos(t12), a2 * math.sin(t12)),
-                "B0": (a1, 0.0), "B": (a1 + a4 * math.cos(t14), a4 * math.sin(t14))}
+    return {"A0": (0.0, 0.0), "A": (a2 * math.cos(t12), a2 * math.sin(t12)),
+            "B0": (a1, 0.0), "B": (a1 + a4 * math.cos(t14), a4 * math.sin(t14))}
+
+
+def test_seed_fourbar_is_drawn_at_its_hand_closed_form(solved: dict[str, Any]) -> None:
+    """Seed E1 (a1 = 140, a2 = 80, a3 = 100, a4 = 120 mm, θ12 = 60°, open) is drawn with its
+    pins at the hand closed form (:func:`e1_points`), and each reaction arrow along the
+    solution's F_ij from its pin."""
+    case, solution = solved["seed-E1-as-stated"]
+    a1 = 0.140
+    expected = e1_points(math.radians(60.0))
     scene = scene_of(case, solution)
     for name, point in expected.items():
         assert close(scene.points[name], point, a1), (name, scene.points[name], point)
@@ -80,6 +89,28 @@ def test_seed_fourbar_is_drawn_at_its_hand_closed_form(solved: dict[str, Any]) -
         assert arrow.force == force
         assert math.isclose(arrow.vector[0] * force[1], arrow.vector[1] * force[0],
                             abs_tol=RTOL * scene.extent * math.hypot(*force))
+
+
+def test_a_sweep_draws_its_cycle_at_evenly_spread_poses(tmp_path: Path) -> None:
+    """A sweep of seed E1 every 30° draws four poses from its own analytic rows: 180° is its
+    change point (singular, no forces), so of the eleven poses with forces (0°–150°,
+    210°–330°) the 0th, 2nd, 5th and 8th; each with its pins at the hand closed form and
+    the reactions a solve at that θ12 gives."""
+    case = load_cases(CASES_DIR / "cases" / "seeds.toml")[0]
+    outcome = run_sweep(plan([case], [], parse_range("0:360:30")), tmp_path, LocalExecutor())
+    panels = cycle_panels(case, outcome.read(), outcome.read(kind="status"))
+    assert [title for *_, title in panels] == ["θ12 = 0°", "θ12 = 60°", "θ12 = 150°",
+                                              "θ12 = 270°"]
+    for (at, solution, _), theta in zip(panels, (0.0, 60.0, 150.0, 270.0), strict=True):
+        scene = scene_of(at, solution)
+        for name, point in e1_points(math.radians(theta)).items():
+            assert close(scene.points[name], point, 0.14), (theta, name)
+        alone = scene_of(at, solve(at))
+        largest = max(math.hypot(*a.force) for a in alone.arrows)
+        for a, b in zip(scene.arrows, alone.arrows, strict=True):
+            assert a.label.split()[0] == b.label.split()[0]
+            assert math.dist(a.force, b.force) <= RTOL * largest, (theta, a.label)
+    assert panels_png(panels).startswith(b"\x89PNG")
 
 
 def linkage_names(solved: dict[str, Any]) -> list[str]:
