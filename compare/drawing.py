@@ -528,6 +528,7 @@ def new_figure(size: tuple[float, float], panels: int = 1) -> tuple[Figure, list
     holds it once it is dropped."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullLocator
 
     fig = Figure(figsize=(size[0], size[1] + TITLE_BAND), dpi=DPI)
     FigureCanvasAgg(fig)
@@ -535,6 +536,9 @@ def new_figure(size: tuple[float, float], panels: int = 1) -> tuple[Figure, list
     axes = [fig.add_axes((k * width + 0.01, 0.0, width - 0.02, top)) for k in range(panels)]
     for ax in axes:
         ax.set_axis_off()
+        # No ticks at all: an axis off still lays its ticks out for the title's position.
+        ax.xaxis.set_major_locator(NullLocator())
+        ax.yaxis.set_major_locator(NullLocator())
     return fig, axes
 
 
