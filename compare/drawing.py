@@ -144,21 +144,24 @@ class Scene:
 
     def limits(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """(x, y) ranges holding every point, circle and arrow, with a margin."""
-        xs, ys = [], []
-        for x, y in self.points.values():
-            xs.append(x)
-            ys.append(y)
-        for sketch in self.joints:
-            for mark in sketch.marks:
-                if isinstance(mark, PitchCircle):
-                    (cx, cy), r = mark.centre, mark.radius
-                    xs += [cx - r, cx + r]
-                    ys += [cy - r, cy + r]
-        for a in self.arrows:
-            xs.append(a.at[0] + a.vector[0])
-            ys.append(a.at[1] + a.vector[1])
+        tips = [(a.at[0] + a.vector[0], a.at[1] + a.vector[1]) for a in self.arrows]
+        xs, ys = reach([*self.points.values(), *tips], self.joints)
         pad = MARGIN * self.extent
         return (min(xs) - pad, max(xs) + pad), (min(ys) - pad, max(ys) + pad)
+
+
+def reach(points: Sequence[Vec2], sketches: Sequence[JointSketch]) -> tuple[list[float],
+                                                                              list[float]]:
+    """The x and y coordinates a drawing must hold: the points and each pitch circle's
+    left, right, bottom and top."""
+    xs, ys = [p[0] for p in points], [p[1] for p in points]
+    for sketch in sketches:
+        for mark in sketch.marks:
+            if isinstance(mark, PitchCircle):
+                (cx, cy), r = mark.centre, mark.radius
+                xs += [cx - r, cx + r]
+                ys += [cy - r, cy + r]
+    return xs, ys
 
 
 @dataclass(frozen=True)
@@ -326,13 +329,7 @@ def newtons(name: str, force: Vec2) -> str:
 
 def extent_of(pose: Pose, sketches: Sequence[JointSketch]) -> float:
     """The drawing's size: the larger side of the box round its points and pitch circles."""
-    xs = [p[0] for p in pose.points.values()]
-    ys = [p[1] for p in pose.points.values()]
-    for sketch in sketches:
-        for mark in sketch.marks:
-            if isinstance(mark, PitchCircle):
-                xs += [mark.centre[0] - mark.radius, mark.centre[0] + mark.radius]
-                ys += [mark.centre[1] - mark.radius, mark.centre[1] + mark.radius]
+    xs, ys = reach(list(pose.points.values()), sketches)
     return max(max(xs) - min(xs), max(ys) - min(ys))
 
 
