@@ -384,7 +384,7 @@ def caption(arrows: Sequence[Arrow], reactions: Solution | None) -> str:
         parts.append("red: F_<joint>, by the joint's first link on its second")
     if arrows:
         largest = max(arrows, key=lambda a: math.hypot(*a.force))
-        parts.append(f"arrows to one scale ({largest.label.split()[0] or 'largest'} the longest)")
+        parts.append(f"arrows to one scale (longest: {largest.label})")
     return "; ".join(parts)
 
 
