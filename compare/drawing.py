@@ -8,7 +8,7 @@ ground marks, springs, and load and reaction arrows scaled so that the largest f
 fixed fraction of the drawing's extent. :func:`render` draws a scene with matplotlib (Agg)
 and places the labels where their boxes overlap no other label (:class:`LabelPlacer`).
 Nothing in the picture depends on where the drawing sits or how large it is: every size is
-a fraction of the extent, every label offset is in points.
+a fraction of the extent, every label offset is in pixels of a figure of fixed size.
 
 >>> import mechcheck
 >>> from mechcheck.drawing import drawing_png
