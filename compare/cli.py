@@ -1,5 +1,5 @@
-"""The ``mechcheck`` command line: ``run``, ``validate``, ``sweep``, ``study``, ``theory``,
-``reports``, ``new`` and ``backends`` (see docs/cli.md).
+"""The ``mechcheck`` command line: ``run``, ``validate``, ``sweep``, ``draw``, ``study``,
+``theory``, ``reports``, ``new`` and ``backends`` (see docs/cli.md).
 
 ``mechcheck run FILE... [--backend NAME]... [--out DIR]`` writes
 ``results.csv``, ``comparison.csv``, ``diagnostics.csv``, ``report.md`` and
@@ -240,6 +240,42 @@ def parse_fail_on(text: str) -> tuple[str, ...]:
         raise fail_input(f"--fail-on: unknown verdict {unknown[0]!r}; choose from "
                          f"{', '.join(VERDICTS)} or 'none'")
     return verdicts
+
+
+@app.command("draw")
+def draw_command(
+    file: Annotated[Path, typer.Argument(help="A case file (TOML).")],
+    case: Annotated[str | None, typer.Option(
+        "--case", "-c", help="The case to draw (needed when the file holds several).")] = None,
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="The drawing to write: a .svg or .png file. "
+        "Default: <case>.svg in the current folder.")] = None,
+    drawn: Annotated[bool, typer.Option(
+        help="Draw the pose the file draws, without solving (no reactions).")] = False,
+    backend: Annotated[str | None, typer.Option(
+        "--backend", "-b", help="The backend whose joint reactions are drawn (default: "
+        "analytic). The pose is always analytic's.")] = None,
+) -> None:
+    """Draw a case's mechanism at its solved pose: links, joints, ground, springs, loads
+    and the joint reactions of one backend, to scale and labelled."""
+    from mechcheck.drawing import DrawingError, drawing_file, output_format, pick_case
+    from mechcheck.output import OutputError, check_writable_file, file_stem, write_all
+
+    try:
+        chosen = pick_case(file, case)
+        target = out if out is not None else Path(f"{file_stem(chosen.name)}.svg")
+        fmt = output_format(target)
+        if drawn and backend is not None:
+            raise DrawingError("--backend with --drawn: the drawn pose is not solved, so it "
+                               "has no reactions to draw")
+        if backend is not None:
+            registry.load(backend)
+        check_writable_file(target, "--out")
+        content = drawing_file(chosen, fmt, drawn=drawn, backend=backend or "analytic")
+        write_all(target.parent, {target.name: content})
+    except (CaseError, DrawingError, OutputError, registry.BackendUnavailable) as error:
+        raise fail_input(str(error)) from None
+    typer.echo(f"{chosen.name} -> {target}")
 
 
 @app.command("study")

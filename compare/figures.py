@@ -14,6 +14,7 @@ draws them with a fixed layout. Only the drawing imports matplotlib.
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -28,6 +29,8 @@ from mechcheck.tolerance import NEAR_SINGULAR_CONDITION
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+
+    from mechcheck.analytic.solution import Solution
 
 #: Figures never plot more points than this per curve: a 10⁶-pose sweep is thinned to
 #: each bucket's first, smallest, largest and last point (:func:`thin`), which at this
@@ -235,3 +238,45 @@ def _draw_lower(ax: Axes, plot: SweepPlot) -> None:
     ax.set_ylabel("transmission angle μ [deg]")
     ax.set_title("Transmission angle (dotted: 40° guideline)")
 
+
+
+#: Poses of the cycle drawn beside a sweep's curves, evenly spread over its poses with forces.
+DRAWN_POSES = 4
+
+
+def poses_file(case_name: str) -> str:
+    """The file name of a case's drawn poses, in the sweep's ``figures/``."""
+    return f"{file_stem(case_name)}-poses.png"
+
+
+def cycle_panels(case: Case, results: pd.DataFrame,
+                 status: pd.DataFrame) -> list[tuple[Case, Solution, str]]:
+    """The mechanism at :data:`DRAWN_POSES` poses of one case's sweep, from the reference's
+    own rows (each a Case at the pose, its Solution in SI and a panel title) for
+    :func:`mechcheck.drawing.panels_png`: poses where the reference has forces, spread
+    evenly over them."""
+    from mechcheck.analytic.presets import redrawn
+    from mechcheck.analytic.solution import Solution
+    from mechcheck.sweep import units_of
+
+    ref = status[(status["backend"] == REFERENCE) & (status["status"] == "ok")]
+    grid = np.sort(ref["theta12"].to_numpy(dtype=float))
+    if not grid.size:
+        return []
+    chosen = grid[np.unique(np.arange(DRAWN_POSES) * grid.size // DRAWN_POSES)]
+    rows = results[(results["backend"] == REFERENCE) & results["theta12"].isin(chosen)]
+    x_label = _names(case)[3]
+    units = units_of(case)
+    panels = []
+    for value in chosen:
+        mine = rows[rows["theta12"] == value]
+        values = {str(q): math.radians(v) if u == "deg" else float(v)
+                  for q, v, u in zip(mine["quantity"], mine["value"], mine["unit"], strict=True)}
+        at = redrawn(case, theta12=math.radians(value)) if case.is_preset else case
+        if at.geometry is None:
+            continue
+        solution = Solution(case.name, REFERENCE, values,
+                            units={q: units[q] for q in values if q in units})
+        panels.append((at, solution, f"{x_label.split(' [')[0]} = {value:g}"
+                                     f"{'°' if 'deg' in x_label else ' mm'}"))
+    return panels

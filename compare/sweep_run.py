@@ -2,19 +2,22 @@
 
 from __future__ import annotations
 
+import base64
 import shutil
 import sys
 import time
 from concurrent.futures import Executor, Future
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
 from mechcheck.analytic.case import Case
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
+from mechcheck.drawing import panels_png
 from mechcheck.executors import executor_for
-from mechcheck.figures import draw_sweep, figure_file, sweep_plot, warm_up
+from mechcheck.figures import cycle_panels, draw_sweep, figure_file, poses_file, sweep_plot, warm_up
 from mechcheck.junit import junit_sweep_xml
 from mechcheck.output import OutputError, locked_folder, write_all
 from mechcheck.report import render_sweep, sweep_view_model
@@ -52,15 +55,35 @@ def draw_figures(executor: Executor, cases: list[Case], results: pd.DataFrame,
         comparison[comparison["case"] == c.name])) for c in cases}
 
 
+def draw_poses(executor: Executor, cases: list[Case], results: pd.DataFrame,
+               statuses: pd.DataFrame) -> dict[str, Future[bytes]]:
+    """Each case's mechanism at a few poses of its cycle (PNG bytes, to come; empty where
+    the reference has no forces at any pose), drawn in the sweep's worker pool from the
+    reference's own rows (:func:`mechcheck.figures.cycle_panels`)."""
+    return {c.name: executor.submit(panels_png, cycle_panels(
+        c, results[results["case"] == c.name], statuses[statuses["case"] == c.name]))
+        for c in cases}
+
+
+def attach_poses(model: dict[str, Any], pngs: dict[str, bytes]) -> None:
+    """Put each case's drawn poses into the sweep report's view model: the file the
+    Markdown links, the bytes the HTML inlines."""
+    for view in model["cases"]:
+        png = pngs.get(view["name"])
+        view["poses"] = poses_file(view["name"]) if png else None
+        view["poses_b64"] = base64.b64encode(png).decode() if png else None
+
+
 def forget_figures(out: Path, cases: list[Case]) -> None:
     """Remove the cases' figures an earlier run drew (``--no-figures``): a report without
     them must not sit beside figures of other results."""
     for case in cases:
-        path = out / "figures" / figure_file(case.name)
-        try:
-            path.unlink(missing_ok=True)
-        except OSError as error:
-            raise OutputError(f"cannot remove {path}: {error.strerror or error}") from None
+        for name in (figure_file(case.name), poses_file(case.name)):
+            path = out / "figures" / name
+            try:
+                path.unlink(missing_ok=True)
+            except OSError as error:
+                raise OutputError(f"cannot remove {path}: {error.strerror or error}") from None
 
 
 def warm_figures(executor: Executor, figures: int) -> None:
@@ -127,15 +150,19 @@ def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
     results, statuses = outcome.read(), outcome.read(kind="status")
     comparison = compare_sweep(cases, results, statuses)
     drawing = draw_figures(executor, cases, results, statuses, comparison) if figures else {}
+    posing = draw_poses(executor, cases, results, statuses) if figures else {}
     comparison_buffer = comparison.to_parquet(index=False)  # while the figures are drawn
     pngs = {name: future.result() for name, future in drawing.items()}
+    poses = {name: png for name, future in posing.items() if (png := future.result())}
     model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, pngs,
                              title="mechcheck sweep report", n_poses=n_poses, wall_time_s=wall,
                              executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)
+    attach_poses(model, poses)
     markdown, page = render_sweep(model)
     files: dict[str, str | bytes] = {"report.md": markdown, "report.html": page}
     if figures:
-        write_all(out / "figures", {figure_file(name): png for name, png in pngs.items()})
+        write_all(out / "figures", {figure_file(name): png for name, png in pngs.items()}
+                  | {poses_file(name): png for name, png in poses.items()})
     else:
         forget_figures(out, cases)
     assert comparison_buffer is not None

@@ -21,6 +21,7 @@ from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion
 from mechcheck.analytic.values import length_text
 
 if TYPE_CHECKING:
+    from mechcheck.analytic.joint_kinds.sketch import JointSketch, Placement
     from mechcheck.analytic.linalg import Batched
     from mechcheck.analytic.linkage import Joint, JointFriction, Link
     from mechcheck.analytic.linkage_kinematics import LinkagePose
@@ -183,6 +184,12 @@ class JointKind(ABC):
     def reported(self, pose: LinkagePose, joint: Joint, x: Array, along: Array) -> dict[str, Array]:
         """Its reported reactions from its unknowns x (N, rows) and the friction force
         along its axis (N,) (zero for a pin)."""
+
+    # -- drawing --------------------------------------------------------------------------
+    @abstractmethod
+    def sketch(self, joint: Joint, place: Placement) -> JointSketch:
+        """What a drawing of the linkage at the pose ``place`` shows of the joint, and where
+        its reaction acts (:mod:`.sketch`)."""
 
     # -- friction -------------------------------------------------------------------------
     def nonlinear_coefficient(self, joint: Joint) -> float:

@@ -34,6 +34,7 @@ class PinInSlot(Prismatic):
     freedoms = 2
     rotates = False
     pins = False
+    turns_on_axis = True
 
     # -- kinematics ---------------------------------------------------------------------
     def constrain(self, c: Constraints, joint: Joint, row: int) -> None:

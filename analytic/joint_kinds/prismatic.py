@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from mechcheck.analytic.joint_kinds.base import JointFrame, JointKind
+from mechcheck.analytic.joint_kinds.sketch import JointSketch, Placement, Slide, grounded, rotated
 from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion, dot, perp, rotate
 from mechcheck.analytic.values import CaseError, pair
 
@@ -40,6 +41,8 @@ class Prismatic(JointKind):
     rotates = False
     pins = False
     slides = True
+    #: Its sliding link turns about the point on the axis (a pin in a slot), else not (a block).
+    turns_on_axis: ClassVar[bool] = False
 
     def checked(self, joint: Joint, links: Mapping[str, Link], key: str) -> Joint:
         second = links[joint.links[1]]
@@ -110,6 +113,13 @@ class Prismatic(JointKind):
               frame: JointFrame) -> None:
         assert frame.u is not None
         layout.force_pair(k, joint.links, (col,), frame.u[None], frame.point)
+
+    def sketch(self, joint: Joint, place: Placement) -> JointSketch:
+        # The axis is fixed in links[0]: it turns with that link.
+        assert joint.axis is not None   # checked(): every sliding joint has one
+        at = place.point(joint.at)
+        axis = rotated(place.turn(joint.links[0]), joint.axis)
+        return JointSketch((Slide(at, axis, self.turns_on_axis, grounded(joint.links)),), at)
 
     def quantities(self, joint: Joint) -> dict[str, str]:
         return {f"F_{joint.name}_x": "N", f"F_{joint.name}_y": "N", f"M_{joint.name}": "N*m"}
