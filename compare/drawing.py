@@ -3,7 +3,7 @@ reactions of one backend (``mechcheck draw``, the reports).
 
 A drawing is made in two steps. :func:`scene_of` computes the *scene*, plain frozen data in
 the case file's frame (metres, newtons): bars and plates through their links' points, each
-joint's marks as its kind sketches it (:meth:`~mechcheck.analytic.joint_kinds.JointKind.sketch`),
+joint's marks as its kind draws it (:meth:`~mechcheck.analytic.joint_kinds.JointKind.drawing`),
 ground marks, springs, and load and reaction arrows scaled so that the largest force is a
 fixed fraction of the drawing's extent. :func:`render` draws a scene with matplotlib (Agg)
 and places the labels where their boxes overlap no other label (:class:`LabelPlacer`).
@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.joint_kinds.sketch import JointSketch, Pin, PitchCircle, Slide, rotated
+from mechcheck.analytic.joint_kinds.drawing import JointDrawing, Pin, PitchCircle, Slide, rotated
 from mechcheck.analytic.linkage import LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import GROUND, CaseError, Vec2
@@ -130,7 +130,7 @@ class Scene:
 
     title: str
     bars: tuple[Bar, ...]
-    joints: tuple[JointSketch, ...]
+    joints: tuple[JointDrawing, ...]
     grounds: tuple[Vec2, ...]
     zigzags: tuple[Zigzag, ...]
     coils: tuple[Coil, ...]
@@ -150,7 +150,7 @@ class Scene:
         return (min(xs) - pad, max(xs) + pad), (min(ys) - pad, max(ys) + pad)
 
 
-def reach(points: Sequence[Vec2], sketches: Sequence[JointSketch]) -> tuple[list[float],
+def reach(points: Sequence[Vec2], sketches: Sequence[JointDrawing]) -> tuple[list[float],
                                                                               list[float]]:
     """The x and y coordinates a drawing must hold: the points and each pitch circle's
     left, right, bottom and top."""
@@ -166,7 +166,7 @@ def reach(points: Sequence[Vec2], sketches: Sequence[JointSketch]) -> tuple[list
 
 @dataclass(frozen=True)
 class Pose:
-    """A linkage at one pose (:class:`~mechcheck.analytic.joint_kinds.sketch.Placement`):
+    """A linkage at one pose (:class:`~mechcheck.analytic.joint_kinds.drawing.Placement`):
     its points in the file's frame (m) and each link's turn from the drawn pose (rad)."""
 
     linkage: Linkage
@@ -308,7 +308,7 @@ def couples(pose: Pose) -> Iterator[Couple]:
             yield Couple(f"{load.torque:.3g} N·m", pose.carried(load.link, load.at), load.torque)
 
 
-def reaction_forces(case: Case, pose: Pose, sketches: Mapping[str, JointSketch],
+def reaction_forces(case: Case, pose: Pose, sketches: Mapping[str, JointDrawing],
                     reactions: Solution) -> Iterator[Force]:
     """Each joint's ``F_<joint>`` (by its first link on its second) where it acts."""
     values = linkage_values(case, reactions)
@@ -327,7 +327,7 @@ def newtons(name: str, force: Vec2) -> str:
     return f"{name} {text} N".strip()
 
 
-def extent_of(pose: Pose, sketches: Sequence[JointSketch]) -> float:
+def extent_of(pose: Pose, sketches: Sequence[JointDrawing]) -> float:
     """The drawing's size: the larger side of the box round its points and pitch circles."""
     xs, ys = reach(list(pose.points.values()), sketches)
     return max(max(xs) - min(xs), max(ys) - min(ys))
@@ -349,7 +349,7 @@ def scene_of(case: Case, solution: Solution | None = None, *, reactions: Solutio
     """
     linkage = case.linkage
     pose = drawn_pose(linkage) if solution is None else solved_pose(case, solution)
-    sketches = {j.name: j.kind.sketch(j, pose) for j in linkage.joints}
+    sketches = {j.name: j.kind.drawing(j, pose) for j in linkage.joints}
     forces = list(load_forces(pose, linkage.gravity))
     source = reactions if reactions is not None else solution
     if source is not None:

@@ -18,7 +18,7 @@ from matplotlib.transforms import Bbox
 
 from mechcheck import solve
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.joint_kinds.sketch import Pin, PitchCircle, Slide, rotated
+from mechcheck.analytic.joint_kinds.drawing import Pin, PitchCircle, Slide, rotated
 from mechcheck.analytic.solution import Solution
 from mechcheck.casefile import builtin_case_files, catalogue_case_files, load_cases, parse_cases
 from mechcheck.drawing import LABEL_GID, draw_case, panels_png, render, scene_of

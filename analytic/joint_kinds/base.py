@@ -21,7 +21,7 @@ from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion
 from mechcheck.analytic.values import length_text
 
 if TYPE_CHECKING:
-    from mechcheck.analytic.joint_kinds.sketch import JointSketch, Placement
+    from mechcheck.analytic.joint_kinds.drawing import JointDrawing, Placement
     from mechcheck.analytic.linalg import Batched
     from mechcheck.analytic.linkage import Joint, JointFriction, Link
     from mechcheck.analytic.linkage_kinematics import LinkagePose
@@ -187,9 +187,9 @@ class JointKind(ABC):
 
     # -- drawing --------------------------------------------------------------------------
     @abstractmethod
-    def sketch(self, joint: Joint, place: Placement) -> JointSketch:
+    def drawing(self, joint: Joint, place: Placement) -> JointDrawing:
         """What a drawing of the linkage at the pose ``place`` shows of the joint, and where
-        its reaction acts (:mod:`.sketch`)."""
+        its reaction acts (:mod:`.drawing`)."""
 
     # -- friction -------------------------------------------------------------------------
     def nonlinear_coefficient(self, joint: Joint) -> float:

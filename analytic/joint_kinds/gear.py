@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechcheck.analytic.joint_kinds.base import JointFrame, JointKind
-from mechcheck.analytic.joint_kinds.sketch import JointSketch, PitchCircle, Placement
+from mechcheck.analytic.joint_kinds.drawing import JointDrawing, PitchCircle, Placement
 from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion, cross, dot, perp
 from mechcheck.analytic.values import CaseError, length_text
 
@@ -253,7 +253,7 @@ class Gear(JointKind):
               frame: JointFrame) -> None:
         raise AssertionError("a gear mesh is never driven (Linkage refuses it)")
 
-    def sketch(self, joint: Joint, place: Placement) -> JointSketch:
+    def drawing(self, joint: Joint, place: Placement) -> JointDrawing:
         """Both pitch circles; the tooth force acts at the pitch point Pa + σa·ra·e."""
         mesh = mesh_of(joint)
         (xa, ya), (xb, yb) = (place.point(c) for c in mesh.centres)
@@ -261,7 +261,7 @@ class Gear(JointKind):
         reach = mesh.signs[0] * mesh.pitch_radii[0] / rho
         circles = tuple(PitchCircle(place.point(c), r)
                         for c, r in zip(mesh.centres, mesh.pitch_radii, strict=True))
-        return JointSketch(circles, (xa + reach * (xb - xa), ya + reach * (yb - ya)))
+        return JointDrawing(circles, (xa + reach * (xb - xa), ya + reach * (yb - ya)))
 
     def quantities(self, joint: Joint) -> dict[str, str]:
         return {f"F_{joint.name}_{part}": "N" for part in ("x", "y", "t", "r")}

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 
 from mechcheck.analytic.joint_kinds.base import JointFrame, JointKind
-from mechcheck.analytic.joint_kinds.sketch import JointSketch, Placement, Slide, grounded, rotated
+from mechcheck.analytic.joint_kinds.drawing import JointDrawing, Placement, Slide, grounded, rotated
 from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion, dot, perp, rotate
 from mechcheck.analytic.values import CaseError, pair
 
@@ -114,12 +114,12 @@ class Prismatic(JointKind):
         assert frame.u is not None
         layout.force_pair(k, joint.links, (col,), frame.u[None], frame.point)
 
-    def sketch(self, joint: Joint, place: Placement) -> JointSketch:
+    def drawing(self, joint: Joint, place: Placement) -> JointDrawing:
         # The axis is fixed in links[0]: it turns with that link.
         assert joint.axis is not None   # checked(): every sliding joint has one
         at = place.point(joint.at)
         axis = rotated(place.turn(joint.links[0]), joint.axis)
-        return JointSketch((Slide(at, axis, self.turns_on_axis, grounded(joint.links)),), at)
+        return JointDrawing((Slide(at, axis, self.turns_on_axis, grounded(joint.links)),), at)
 
     def quantities(self, joint: Joint) -> dict[str, str]:
         return {f"F_{joint.name}_x": "N", f"F_{joint.name}_y": "N", f"M_{joint.name}": "N*m"}

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechcheck.analytic.joint_kinds.base import JointFrame, JointKind
-from mechcheck.analytic.joint_kinds.sketch import JointSketch, Pin, Placement
+from mechcheck.analytic.joint_kinds.drawing import JointDrawing, Pin, Placement
 from mechcheck.analytic.rigid import Array, Constraints, ForceLayout, Motion, unit_axes
 from mechcheck.analytic.values import CaseError
 
@@ -85,9 +85,9 @@ class Revolute(JointKind):
         layout.couple_on(k, joint.links[1], col, 1.0)
         layout.couple_on(k, joint.links[0], col, -1.0)
 
-    def sketch(self, joint: Joint, place: Placement) -> JointSketch:
+    def drawing(self, joint: Joint, place: Placement) -> JointDrawing:
         at = place.point(joint.at)
-        return JointSketch((Pin(at),), at)
+        return JointDrawing((Pin(at),), at)
 
     def quantities(self, joint: Joint) -> dict[str, str]:
         return {f"F_{joint.name}_x": "N", f"F_{joint.name}_y": "N"}

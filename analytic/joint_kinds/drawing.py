@@ -1,6 +1,6 @@
 """What a drawing shows of a joint at one pose: plain data, no plotting library.
 
-Each kind answers :meth:`~.base.JointKind.sketch` with a :class:`JointSketch`: the marks
+Each kind answers :meth:`~.base.JointKind.drawing` with a :class:`JointDrawing`: the marks
 that draw it (a pin, a slide or slot along its axis, the pitch circles of a gear pair) and
 the point its reaction acts at. Whoever renders the marks knows only these few shapes,
 never the kinds (``mechcheck.drawing``). Positions are metres in the case file's frame.
@@ -54,7 +54,7 @@ Mark = Pin | Slide | PitchCircle
 
 
 @dataclass(frozen=True)
-class JointSketch:
+class JointDrawing:
     """A joint's marks and where its reaction (``F_<joint>``) acts."""
 
     marks: tuple[Mark, ...]
