@@ -161,8 +161,19 @@ def quantity_worst(detail: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def case_drawing(case: Case, solution: Solution | None) -> bytes | None:
-    """A PNG of the mechanism at its pose, for the case's section; None: no drawing."""
-    return None
+    """A PNG of the mechanism at the reference's pose with its reactions, for the case's
+    section; as its file draws it where the reference gives no pose; None for a preset that
+    assembles nowhere (it has no linkage to draw)."""
+    from mechcheck.drawing import drawing_png
+
+    if case.geometry is None:
+        return None
+    if solution is not None:
+        try:
+            return drawing_png(case, solution)
+        except ValueError:   # no pose at this θ: the mechanism as its file draws it
+            pass
+    return drawing_png(case)
 
 
 def drawings(result: RunResult) -> dict[str, bytes]:
