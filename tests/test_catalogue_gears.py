@@ -458,3 +458,25 @@ def test_each_simulator_settles_to_the_exact_equilibrium(backend: str) -> None:
     tol = rule(backend, "force", "static")
     assert max(errors.values()) <= tol.rtol, max(errors.items(), key=lambda kv: kv[1])
     assert_solution_close(case, settled, complete=True)
+
+
+@pytest.mark.parametrize("stem", ["shaper", "gear_pair"])
+def test_a_sweep_of_a_pin_in_slot_or_a_gear_mesh_agrees_in_every_simulator(
+        stem: str, tmp_path: Path) -> None:
+    """The new kinds sweep as R/P linkages do: the shaper (a pin in a slot) and the gear
+    pair over a stretch of their drivers, each pose compared in both simulators' exact
+    solves within the policy; a disagreement would exit 1."""
+    from typer.testing import CliRunner
+
+    from mechcheck.cli import app
+
+    out = tmp_path / stem
+    result = CliRunner().invoke(app, [
+        "sweep", str(CATALOGUE / f"{stem}.toml"), "--driver", "0:40:10", "--workers", "0",
+        "-b", "virtual_work", "-b", "mujoco_solve", "-b", "pymunk_solve", "-q",
+        "--no-figures", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    import pandas as pd
+
+    compared = set(pd.read_parquet(out / "comparison.parquet")["backend"])
+    assert {"virtual_work", "mujoco_solve", "pymunk_solve"} <= compared, compared
