@@ -18,37 +18,64 @@ from mechcheck.figures import draw_sweep, figure_file, sweep_plot, warm_up
 from mechcheck.junit import junit_sweep_xml
 from mechcheck.output import OutputError, locked_folder, write_all
 from mechcheck.report import render_sweep, sweep_view_model
-from mechcheck.sweep import LocalExecutor, SweepTask, run_sweep
+from mechcheck.sweep import LocalExecutor, SweepTask, driver_axis, run_sweep
 from mechcheck.tables import sweep_comparison
 
 
 def compare_sweep(cases: list[Case], results: pd.DataFrame,
                   statuses: pd.DataFrame) -> pd.DataFrame:
     """Every non-reference backend's poses against the reference, all cases (``results``
-    and ``statuses``: the sweep's tables, :meth:`~mechcheck.sweep.SweepOutcome.read`)."""
+    and ``statuses``: the sweep's tables, :meth:`~mechcheck.sweep.SweepOutcome.read`).
+
+    Only a backend's poses with forces (status ``ok``) are compared: a pose with a verdict
+    keeps its pose quantities (where the simulator came to rest), and comparing those
+    position by position would count one unsettled pose as a dozen failures."""
     frames = []
     for case in cases:
         mine = results[results["case"] == case.name]
         ref = mine[mine["backend"] == REFERENCE]
-        ref_status = statuses[(statuses["case"] == case.name)
-                              & (statuses["backend"] == REFERENCE)]
+        own = statuses[statuses["case"] == case.name]
+        ref_status = own[own["backend"] == REFERENCE]
         backends = sorted({str(b) for b in mine["backend"].unique()} - {REFERENCE})
         if backends:  # all at once, each backend's rows together, in name order
-            others = pd.concat([mine[mine["backend"] == b] for b in backends])
+            others = pd.concat([ok_rows(mine[mine["backend"] == b], own[own["backend"] == b])
+                                for b in backends])
             frames.append(sweep_comparison(case, ref, ref_status, others))
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
         columns=["case", "theta12", "quantity", "backend", "value", "reference", "abs_err",
                  "rel_err", "tolerance", "passed", "case_kind"])
 
 
+def ok_rows(rows: pd.DataFrame, status: pd.DataFrame) -> pd.DataFrame:
+    """One backend's result rows at the poses where its status is ``ok``."""
+    return rows[rows["theta12"].isin(status.loc[status["status"] == "ok", "theta12"])]
+
+
+def failed_poses(comparison: pd.DataFrame) -> int:
+    """The poses (case, backend, pose) with at least one comparison outside tolerance: a
+    pose counts once, however many of its quantities failed."""
+    if not len(comparison):
+        return 0
+    failed = comparison[~comparison["passed"].astype(bool)]
+    return len(failed[["case", "backend", "theta12"]].drop_duplicates())
+
+
 def draw_figures(executor: Executor, cases: list[Case], results: pd.DataFrame,
-                 statuses: pd.DataFrame, comparison: pd.DataFrame) -> dict[str, Future[bytes]]:
+                 statuses: pd.DataFrame, comparison: pd.DataFrame,
+                 axes: dict[str, tuple[str, str]] | None = None) -> dict[str, Future[bytes]]:
     """Each case's figure (PNG bytes, to come), drawn in the sweep's worker pool: this
     process only reduces the tables to the thinned curves
-    (:func:`mechcheck.figures.sweep_plot`)."""
+    (:func:`mechcheck.figures.sweep_plot`); ``axes``: each case's axis (:func:`sweep_axes`)."""
+    labels = {name: label for name, (label, _) in (axes or {}).items()}
     return {c.name: executor.submit(draw_sweep, sweep_plot(
         c, results[results["case"] == c.name], statuses[statuses["case"] == c.name],
-        comparison[comparison["case"] == c.name])) for c in cases}
+        comparison[comparison["case"] == c.name], labels.get(c.name))) for c in cases}
+
+
+def sweep_axes(tasks: list[SweepTask]) -> dict[str, tuple[str, str]]:
+    """Each case's sweep axis as (label, unit): ``displacement of cyl, mm``, never θ12 for a
+    linkage (:func:`~mechcheck.sweep.driver_axis`)."""
+    return {t.case.name: (driver_axis(t.case, t.unit), t.unit) for t in tasks}
 
 
 def forget_figures(out: Path, cases: list[Case]) -> None:
@@ -125,12 +152,15 @@ def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
     # third of a resumed sweep's comparing).
     results, statuses = outcome.read(), outcome.read(kind="status")
     comparison = compare_sweep(cases, results, statuses)
-    drawing = draw_figures(executor, cases, results, statuses, comparison) if figures else {}
+    axes = sweep_axes(tasks)
+    drawing = draw_figures(executor, cases, results, statuses, comparison, axes) \
+        if figures else {}
     comparison_buffer = comparison.to_parquet(index=False)  # while the figures are drawn
     pngs = {name: future.result() for name, future in drawing.items()}
     model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, pngs,
                              title="mechcheck sweep report", n_poses=n_poses, wall_time_s=wall,
-                             executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)
+                             executed=outcome.executed, reused=outcome.reused, fail_on=fail_on,
+                             axes=axes)
     markdown, page = render_sweep(model)
     files: dict[str, str | bytes] = {"report.md": markdown, "report.html": page}
     if figures:
@@ -142,11 +172,11 @@ def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
     write_all(out, files)
     if junit is not None:
         write_all(junit.parent, {junit.name: junit_sweep_xml(comparison, statuses, fail_on, wall)})
-    failed = int((~comparison["passed"].astype(bool)).sum()) if len(comparison) else 0
+    failed = failed_poses(comparison)
     failing = int(statuses["status"].isin(fail_on).sum()) if len(statuses) else 0
     status = 1 if failed or failing else 0
     print(f"{len(cases)} case{'s' * (len(cases) != 1)} x {n_poses} poses, {len(comparison)} "
-          f"comparisons, {failed} outside tolerance, {failing} poses with a failing verdict; "
+          f"comparisons, {failed} poses outside tolerance, {failing} poses with a failing verdict; "
           f"{outcome.executed} tasks run, "
           f"{outcome.reused} reused, {wall:.1f} s -> {out}/report.md "
           f"({'PASS' if status == 0 else 'FAIL'})")
