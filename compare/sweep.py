@@ -503,8 +503,10 @@ def is_done(parts_dir: Path, task: SweepTask) -> bool:
 
 
 def run_sweep(tasks: Sequence[SweepTask], parts_dir: Path, executor: Executor, *,
-              progress: Callable[[int, int], None] | None = None) -> SweepOutcome:
-    """Run the tasks not yet done, writing each part the moment it arrives.
+              progress: Callable[[int, int], None] | None = None,
+              finished: Callable[[SweepTask, bytes], None] | None = None) -> SweepOutcome:
+    """Run the tasks not yet done, writing each part the moment it arrives; ``finished``
+    is told each task as it is written, with its status part (Parquet bytes).
 
     An interrupted sweep keeps every part already written; running the same
     sweep again executes only the missing tasks.
@@ -523,6 +525,8 @@ def run_sweep(tasks: Sequence[SweepTask], parts_dir: Path, executor: Executor, *
         results_path, status_path = part_paths(parts_dir, task)
         write_all(results_path.parent, {results_path.name: results})
         write_all(status_path.parent, {status_path.name: status})
+        if finished:
+            finished(task, status)
         done_poses += len(task.theta12_deg)
         if progress:
             progress(done_poses, total_poses)

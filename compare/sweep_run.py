@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 import time
@@ -18,7 +19,7 @@ from mechcheck.figures import draw_sweep, figure_file, sweep_plot, warm_up
 from mechcheck.junit import junit_sweep_xml
 from mechcheck.output import OutputError, locked_folder, write_all
 from mechcheck.report import render_sweep, sweep_view_model
-from mechcheck.sweep import LocalExecutor, SweepTask, driver_axis, run_sweep
+from mechcheck.sweep import LocalExecutor, SweepTask, driver_axis, is_done, run_sweep
 from mechcheck.tables import sweep_comparison
 
 
@@ -98,6 +99,39 @@ def warm_figures(executor: Executor, figures: int) -> None:
             executor.submit(warm_up)
 
 
+class Remaining:
+    """What is left of a sweep, in seconds: each unfinished task's poses at its backend's
+    measured cost per pose (the ``wall_time_s`` its finished tasks reported; a backend not
+    yet measured at the dearest measured so far), shared among ``workers``. A driven pymunk
+    pose can cost a thousand settled MuJoCo poses: counting poses alike misleads."""
+
+    def __init__(self, tasks: list[SweepTask], workers: int) -> None:
+        self.left = {id(t): t for t in tasks}
+        self.workers = max(1, workers)
+        self.cost: dict[str, float] = {}
+
+    def finished(self, task: SweepTask, status: bytes) -> None:
+        import io
+
+        self.left.pop(id(task), None)
+        spent = pd.read_parquet(io.BytesIO(status), columns=["wall_time_s"])["wall_time_s"]
+        if len(spent) and float(spent.sum()) > 0.0:
+            self.cost[task.backend] = float(spent.sum()) / len(spent)
+
+    def backend(self) -> str:
+        """The backend of the earliest unfinished task: the one the workers are on."""
+        return next(iter(self.left.values())).backend if self.left else ""
+
+    def seconds(self) -> float | None:
+        """The estimate, or None before any cost is measured."""
+        if not self.cost:
+            return None
+        dearest = max(self.cost.values())
+        work = sum(len(t.theta12_deg) * self.cost.get(t.backend, dearest)
+                   for t in self.left.values())
+        return work / self.workers
+
+
 def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask], n_poses: int,
                       out: Path, *, workers: int | None, dask: str | None,
                       fail_on: tuple[str, ...], junit: Path | None, quiet: bool,
@@ -115,30 +149,40 @@ def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask],
         if fresh:
             for folder in ("results", "status"):
                 shutil.rmtree(out / folder, ignore_errors=True)
+        parallel = 1 if workers == 0 else workers or os.cpu_count() or 1
         return _sweep_and_report(executor, specs, tasks, n_poses, out, fail_on=fail_on,
-                                 junit=junit, quiet=quiet, figures=figures)
+                                 junit=junit, quiet=quiet, figures=figures,
+                                 parallel=min(parallel, max(len(tasks), 1)))
 
 
 def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
                       tasks: list[SweepTask], n_poses: int, out: Path, *,
                       fail_on: tuple[str, ...], junit: Path | None, quiet: bool,
-                      figures: bool) -> int:
+                      figures: bool, parallel: int = 1) -> int:
     cases = [c for c, _ in specs]
     start = time.perf_counter()
     bar = None
+    remaining = Remaining([t for t in tasks if not is_done(out, t)], parallel)
     if not quiet:
         from tqdm import tqdm  # only for the progress bar
 
-        bar = tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True)
+        # tqdm's own estimate assumes every pose costs the same: ours weighs them.
+        bar = tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True,
+                   bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} poses [{elapsed}{postfix}]")
 
     def progress(done: int, total: int) -> None:
         if bar is not None:
             bar.total = total
             bar.n = done
+            left = remaining.seconds()
+            bar.set_postfix_str(
+                f"on {remaining.backend() or '-'}, "
+                + (f"≈{tqdm.format_interval(left)} left" if left is not None
+                   else "measuring the cost per pose"), refresh=False)
             bar.refresh()
 
     try:
-        outcome = run_sweep(tasks, out, executor, progress=progress)
+        outcome = run_sweep(tasks, out, executor, progress=progress, finished=remaining.finished)
     except OutputError as error:
         raise OutputError(f"{error} (the parts already finished are kept: the same command "
                           "resumes from them)") from None
