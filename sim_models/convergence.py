@@ -115,6 +115,13 @@ class Convergence:
                 and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL
                 and self.solver_disagreement <= SOLVER_AGREEMENT_RTOL)
 
+    @property
+    def solver_only_failed(self) -> bool:
+        """Whether the iteration rule is the only one that did not hold."""
+        return (self.lead_disagreement <= LEAD_AGREEMENT_RTOL
+                and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL
+                and not self.solver_disagreement <= SOLVER_AGREEMENT_RTOL)
+
     def verdict(self) -> str:
         """Why the run is not converged (empty when it is)."""
         if not self.lead_disagreement <= LEAD_AGREEMENT_RTOL:
