@@ -227,6 +227,8 @@ def test_scissor_lift_hard_poses_settle(extension: float) -> None:
     agrees_with_analytic(got, reference)
 
 
+# Slow tier: four rungs of driven runs, about 40 s on an idle machine.
+@pytest.mark.slow
 def test_the_turning_whitworth_at_its_hardest_pose_gets_a_driven_number() -> None:
     """At 210° (condition number about 250) pymunk's driven reading of the Whitworth turning
     at 10 rad/s moved by 1.3e-4 of the forces when its last step was solved again with more
