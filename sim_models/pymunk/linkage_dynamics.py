@@ -364,21 +364,15 @@ def driver_rates(model: LinkageModel) -> Array:
 #: forces when its last step was solved again at 1600 (the rule: 1e-4); at 6400, 1.4e-8.
 ITERATIONS = (100, 400, 1600, 6400)
 #: Past this many iterations a step, a further rung runs only where the iteration rule is
-#: the only one that failed (the Whitworth above), or the solve did not hold the linkage
-#: on its assembly: a rung of 6400 costs about as much as the three before it, and more
-#: iterations are what those ask for.
+#: the only one that failed (the Whitworth above): a rung of 6400 costs about as much as
+#: the three before it, and more iterations are what that rule asks for.
 PLAIN_ITERATIONS = 1600
 
 
-def more_iterations_may_help(out: Convergence, end: DriveEnd, iterations: int,
-                             scale: float) -> bool:
+def more_iterations_may_help(out: Convergence, iterations: int) -> bool:
     """Whether the next rung of :data:`ITERATIONS` is worth running after a run at
-    ``iterations`` that did not converge (``out``) or left its assembly (``end``, in a
-    linkage of size ``scale``): below :data:`PLAIN_ITERATIONS` always; from there on where
-    the iteration rule alone failed, or the solve did not hold the linkage on its
-    assembly."""
-    return (iterations < PLAIN_ITERATIONS or out.solver_only_failed
-            or bool(left_assembly(end.drift, scale)))
+    ``iterations`` that did not converge (``out``)."""
+    return iterations < PLAIN_ITERATIONS or out.solver_only_failed
 
 
 def build(case: Case, scale: float, dt: float, iterations: int,
@@ -464,7 +458,7 @@ def drive_linkage(case: Case, results: LinkageResults) -> Solution:
         out = converge(read, limit, DRIVEN.dt, scale, runs, units)
         out.solver_disagreement = last[0].solver_disagreement
         steps += out.total_steps
-        if out.converged or not more_iterations_may_help(out, last[0], iterations, scale):
+        if out.converged or not more_iterations_may_help(out, iterations):
             break
     out.total_steps = steps
     return driven_solution(case, results, out, last[0], runs, iterations,
