@@ -141,9 +141,11 @@ def sweep_settle_run(model: LinkageModel, prime_at: Array | None) -> Run:
     return held_settle_run(model)
 
 
-#: A settled run of free coordinates that came to rest farther than this × the linkage's size
-#: from the analytic equilibrium found another equilibrium: the settling itself ends well
-#: within 1e-6 of the size of it (a held linkage: :data:`~.linkage.ASSEMBLY_DRIFT`).
+#: A settled run of free coordinates (or of elastic members, which deflect by their strain)
+#: that came to rest farther than this × the linkage's size from the analytic pose found
+#: another equilibrium: the bound driven runs use for leaving an assembly
+#: (:data:`~mechcheck.sim_models.convergence.DRIVEN_DRIFT`). A held rigid linkage is held
+#: to :data:`~.linkage.ASSEMBLY_DRIFT`.
 FREE_BRANCH_DRIFT = DRIVEN_DRIFT
 
 
