@@ -93,7 +93,6 @@ class SlowMode:
         self._ratios: list[float] = []
         self._anchor: np.ndarray | None = None
         self._since = 0
-        self._last_net = np.inf
 
     def observe(self) -> None:
         """Read the impulses of the step just taken; carry them to the slow mode's limit if
@@ -121,16 +120,10 @@ class SlowMode:
         if self._anchor is None or self._since < RATIO_STEPS + window:
             return
         net = x - self._anchor
-        size = float(np.abs(net).max())
-        if self.noise * np.abs(x).max() < size < self._last_net:
+        if np.abs(net).max() > self.noise * np.abs(x).max():
             shrink = self.contraction ** window
-            self._last_net = size
             self._carry(x + net * (shrink / (1.0 - shrink)))
         else:
-            # Rounding, or a window that changed no less than the one before: the mode is
-            # not shrinking by the measured ρ (the settling's own slow mode next to a change
-            # point is not the fixed-pose map's), and extrapolating it would make it grow
-            # without bound (the scissor lift 0.28 m up its stroke: impulses overflowed).
             self._since, self._anchor = 0, None
 
     def _extrapolate(self, x: np.ndarray, difference: np.ndarray, rho: float) -> np.ndarray:
