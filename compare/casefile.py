@@ -322,10 +322,12 @@ def load_cases(*paths: str | Path) -> list[Case]:
 
 
 def builtin_case_files() -> list[Path]:
-    """The case files shipped with the package: the seed examples, the suite and the
-    built-in linkages (``cases/linkages/``)."""
+    """The case files shipped with the package: the seed examples, the suite, the
+    built-in linkages (``cases/linkages/``) and three users' own mechanisms, kept as
+    regression cases with their hand checks (``cases/users/``)."""
     cases = Path(__file__).parent / "cases"
-    return sorted(cases.glob("*.toml")) + sorted((cases / "linkages").glob("*.toml"))
+    return sorted(cases.glob("*.toml")) + sorted((cases / "linkages").glob("*.toml")) \
+        + sorted((cases / "users").glob("*.toml"))
 
 
 def catalogue_case_files() -> list[Path]:

@@ -174,8 +174,9 @@ def sweep_command(
         "0:360:1",
     driver: Annotated[str | None, typer.Option(
         help="For linkages: the first driver's values START:STOP:STEP from the drawn pose, "
-             "in degrees (revolute) or mm (prismatic), STOP excluded; the other drivers keep "
-             "their values. Default: the --theta12 grid.")] = None,
+             "in degrees (revolute) or the case file's length_unit (prismatic), STOP "
+             "excluded; the other drivers keep their values. Default: the --theta12 grid.")] =
+        None,
     backend: Annotated[list[str] | None, typer.Option(
         "--backend", "-b", help="Backend to sweep besides analytic (repeatable). "
         "Default: every available one.")] = None,
@@ -209,7 +210,8 @@ def sweep_command(
         grid = parse_range(theta12)
         driver_grid = None if driver is None else parse_range(driver, "--driver")
         names = list(backend) if backend else registry.available()
-        tasks = plan([c for c, _ in specs], names, grid, driver_grid)
+        tasks = plan([c for c, _ in specs], names, grid, driver_grid,
+                     {c.name: spec.length_unit for c, spec in specs})
     except (CaseError, ValueError, registry.BackendUnavailable) as error:
         raise fail_input(str(error)) from None
     try:

@@ -106,8 +106,9 @@ class SweepPlot:
     near_singular: np.ndarray
 
 
-def _names(case: Case) -> tuple[str, str, list[tuple[str, str]], str]:
-    """(drive quantity, its unit, reactions as (label, quantity stem), x-axis label)."""
+def _names(case: Case, axis: str | None = None) -> tuple[str, str, list[tuple[str, str]], str]:
+    """(drive quantity, its unit, reactions as (label, quantity stem), x-axis label);
+    ``axis``: the sweep's axis by name and unit (:func:`mechcheck.sweep.driver_axis`)."""
     if case.is_preset:
         return (f"T1{preset_of(case).drive_link}", "N·m",
                 [(f"|F{j}|", f"F{j}") for j in ("12", "23", "34", "14")], "θ12 [deg]")
@@ -116,14 +117,15 @@ def _names(case: Case) -> tuple[str, str, list[tuple[str, str]], str]:
     turns = linkage.joint(first).kind.rotates
     return (f"Q_{first}", "N·m" if turns else "N",
             [(f"|F_{j.name}|", f"F_{j.name}") for j in linkage.joints],
-            f"driver {first} from the drawn pose [{'deg' if turns else 'mm'}]")
+            f"{axis or f'driver {first}, ' + ('deg' if turns else 'mm')} from the drawn pose")
 
 
 def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
-               comparison: pd.DataFrame) -> SweepPlot:
+               comparison: pd.DataFrame, axis: str | None = None) -> SweepPlot:
     """The curves of one case's sweep figure from its long results, statuses and
-    comparisons (each thinned to at most :data:`MAX_POINTS` points)."""
-    drive, drive_unit, reactions, x_label = _names(case)
+    comparisons (each thinned to at most :data:`MAX_POINTS` points); ``axis``: the sweep's
+    axis by name and unit (:func:`mechcheck.sweep.driver_axis`)."""
+    drive, drive_unit, reactions, x_label = _names(case, axis)
     backends = [str(b) for b in pd.unique(results["backend"])]
     drive_curves = [Curve.of(b, _series(results, b, drive)) for b in backends]
     reference = results[results["backend"] == REFERENCE]
@@ -143,7 +145,8 @@ def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
     near = ref[(ref["condition_number"] > NEAR_SINGULAR_CONDITION) & (ref["status"] == "ok")]
     near_theta = np.sort(near["theta12"].to_numpy(dtype=float))
     return SweepPlot(
-        title=f"{case.name}: sweep over {x_label.split(' [')[0]} (dashed red: singular pose)",
+        title=f"{case.name}: sweep over {x_label.split(' [')[0].split(', ')[0]} (dashed red: "
+              "singular pose)",
         x_label=x_label, drive_label=f"{drive} [{drive_unit}]", drive=drive_curves,
         reactions=reaction_curves, errors=errors, lower=_lower_curve(case, ref),
         lower_is_condition=not case.is_preset,

@@ -407,8 +407,10 @@ def render(result: RunResult, specs: Mapping[str, AnySpec],
             _ENV.get_template("report.html.j2").render(**model, escape=html.escape))
 
 
-def _pose_list(values: pd.Series, limit: int = 20) -> str:
-    items = [fmt(float(v), 5) + "°" for v in values.to_numpy()[:limit]]
+def _pose_list(values: pd.Series, limit: int = 20, unit: str = "deg") -> str:
+    """The poses as the sweep's axis gives them: degrees with °, a length with its unit."""
+    mark = "°" if unit == "deg" else f" {unit}"
+    items = [fmt(float(v), 5) + mark for v in values.to_numpy()[:limit]]
     more = len(values) - limit
     return ", ".join(items) + (f" … ({more} more)" if more > 0 else "")
 
@@ -417,9 +419,10 @@ def _pose_list(values: pd.Series, limit: int = 20) -> str:
 GATED_NOTE = r"; not run \(the pose verdict of [^)]*\)$"
 
 
-def verdict_groups(statuses: pd.DataFrame) -> list[dict[str, str]]:
+def verdict_groups(statuses: pd.DataFrame, unit: str = "deg") -> list[dict[str, str]]:
     """One case's poses without numbers, grouped by verdict and by the backends that gave it:
-    which poses, and why (the first pose's reason; the status table has each pose's)."""
+    which poses (in the sweep axis' ``unit``), and why (the first pose's reason; the status
+    table has each pose's)."""
     rest = statuses[statuses["status"] != "ok"]
     backends = sorted({str(b) for b in statuses["backend"].unique()})
     # Each (pose, verdict) with the set of backends that gave it there.
@@ -438,17 +441,55 @@ def verdict_groups(statuses: pd.DataFrame) -> list[dict[str, str]]:
         if reasons.nunique() > 1:
             reason += " (first pose; other poses' reasons in the status table)"
         out.append({"status": status, "backends": "every backend" if list(who) == backends
-                    else ", ".join(who), "poses": _pose_list(pd.Series(poses)), "reason": reason})
+                    else ", ".join(who), "poses": _pose_list(pd.Series(poses), unit=unit),
+                    "reason": reason})
     return out
+
+
+def restart_groups(statuses: pd.DataFrame, unit: str = "deg") -> list[dict[str, str]]:
+    """One case's poses that a simulator ran again from the analytic pose after its sweep's
+    continuation left the analytic branch, per backend: which poses, and the first reason."""
+    if "restart" not in statuses.columns:   # parts of a sweep without the column
+        return []
+    out = []
+    restarted = statuses[statuses["restart"].astype(str) != ""]
+    for backend, rows in restarted.groupby("backend", observed=True, sort=True):
+        out.append({"backend": str(backend), "count": str(len(rows)),
+                    "poses": _pose_list(rows["theta12"], unit=unit),
+                    "reason": str(rows["restart"].iloc[0])})
+    return out
+
+
+def cost_per_pose(statuses: pd.DataFrame) -> dict[str, float]:
+    """Each backend's median wall time per pose it ran (s): the poses it gave a number or
+    a verdict of its own, not those the pose gate or its method withheld."""
+    if "wall_time_s" not in statuses.columns:
+        return {}
+    ran = statuses[statuses["wall_time_s"] > 0.0]
+    return {str(b): float(t) for b, t in
+            ran.groupby("backend", observed=True)["wall_time_s"].median().items()}
+
+
+def failed_pose_counts(failed: pd.DataFrame) -> dict[str, int]:
+    """Per backend, the poses with at least one comparison outside tolerance (a pose counts
+    once, however many of its quantities failed)."""
+    if not len(failed):
+        return {}
+    poses = failed[["case", "backend", "theta12"]].drop_duplicates()
+    return {str(b): int(n) for b, n in poses["backend"].value_counts().items()}
 
 
 def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: pd.DataFrame,
                      comparison: pd.DataFrame, figures: dict[str, bytes], *, title: str,
                      n_poses: int, wall_time_s: float, executed: int, reused: int,
-                     fail_on: tuple[str, ...]) -> dict[str, Any]:
-    """The sweep report's view model (verdict first, then one section per case)."""
+                     fail_on: tuple[str, ...],
+                     axes: Mapping[str, tuple[str, str]] | None = None) -> dict[str, Any]:
+    """The sweep report's view model (verdict first, then one section per case); ``axes``:
+    each case's sweep axis as (label, unit) (:func:`mechcheck.sweep.driver_axis`; default
+    θ12 in degrees)."""
     failed = comparison[~comparison["passed"].astype(bool)] if len(comparison) else comparison
     failing = statuses[statuses["status"].isin(fail_on)] if len(statuses) else statuses
+    poses_failed = failed_pose_counts(failed)
     summaries = []
     for backend in (str(b) for b in pd.unique(statuses["backend"])):
         if backend == REFERENCE:
@@ -458,11 +499,12 @@ def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: 
             if len(rows) else {}
         counts = statuses[(statuses["backend"] == backend) & (statuses["status"] != "ok")]
         summaries.append(BackendSummary(
-            backend, len(rows), int((~rows["passed"].astype(bool)).sum()) if len(rows) else 0,
+            backend, len(rows), poses_failed.get(backend, 0),
             {q: float(worst[q]) for q in ordered(worst)},
             {str(k): int(v) for k, v in counts["status"].value_counts().items() if v}))
     case_views = []
     for case in cases:
+        label, unit = (axes or {}).get(case.name, ("θ12, deg", "deg"))
         st = statuses[statuses["case"] == case.name]
         ref = st[st["backend"] == REFERENCE]
         spec = specs.get(case.name)
@@ -474,15 +516,18 @@ def sweep_view_model(cases: list[Case], specs: Mapping[str, AnySpec], statuses: 
             "figure": figure_file(case.name) if case.name in figures else None,
             "figure_b64": base64.b64encode(figures[case.name]).decode()
             if case.name in figures else None,
-            "verdicts": verdict_groups(st),
+            "axis": label,
+            "verdicts": verdict_groups(st, unit),
+            "restarts": restart_groups(st, unit),
             "near_singular": _pose_list(ref.loc[(ref["condition_number"] > 1e4)
-                                                & (ref["status"] == "ok"), "theta12"]),
+                                                & (ref["status"] == "ok"), "theta12"], unit=unit),
             "failures": mine.head(30).to_dict("records"),
         })
     return {
         "title": title, "passed": not len(failed) and not len(failing),
         "n_cases": len(cases), "n_poses": n_poses, "n_comparisons": len(comparison),
-        "n_failed": len(failed), "n_failing_verdicts": len(failing),
+        "n_failed": sum(poses_failed.values()), "n_failing_verdicts": len(failing),
+        "costs": cost_per_pose(statuses),
         "fail_on": ", ".join(fail_on), "wall_time_s": wall_time_s,
         "executed": executed, "reused": reused, "summaries": summaries, "cases": case_views,
         "policy": policy_table(),

@@ -19,7 +19,8 @@ import functools
 import hashlib
 import io
 import math
-from collections.abc import Callable, Sequence
+import time
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +39,7 @@ from mechcheck.analytic.linkage_backends import (
 )
 from mechcheck.analytic.solution import QUANTITY_UNITS, Solution, kind_of_unit, table_values
 from mechcheck.analytic.values import (
+    LENGTH_UNITS,
     MAX_ANGLE_DEG,
     MAX_DRIVER_ROTATION_DEG,
     MAX_DRIVER_TRAVEL,
@@ -52,7 +54,7 @@ from mechcheck.run import POSE_VERDICTS, crash_message, finite_only, gated_messa
 MAX_SWEEP_POSES = 10_000_000
 
 #: Bump when the part format or a backend's meaning changes: old parts are then ignored.
-PART_FORMAT = 2
+PART_FORMAT = 3
 #: Poses per task. Vector backends: large chunks keep numpy efficient while
 #: parts stay small enough to resume from (≈ 0.2 s of work each). Simulators:
 #: a chunk is one continuation run; 60 poses of 1° let two workers share a turn.
@@ -60,14 +62,20 @@ VECTOR_CHUNK = 200_000
 SIMULATOR_CHUNK = 60
 
 RESULT_COLUMNS = ["case", "backend", "theta12", "quantity", "value", "unit"]
-STATUS_COLUMNS = ["case", "backend", "theta12", "status", "condition_number", "message"]
+#: ``theta12``: the sweep's axis, in the task's unit (:func:`driver_axis`); ``restart``: why a
+#: simulator ran the pose again from the analytic pose ("" if it did not); ``wall_time_s``:
+#: what the pose cost the backend (its share of a vectorised chunk).
+STATUS_COLUMNS = ["case", "backend", "theta12", "status", "condition_number", "message",
+                  "restart", "wall_time_s"]
 
 
 @dataclass(frozen=True, eq=False)
 class SweepTask:
-    """One unit of work: a backend over a chunk of input angles (degrees) of one case.
+    """One unit of work: a backend over a chunk of the sweep's axis of one case (θ12 of a
+    preset, a linkage's first driver), in ``unit``: ``deg``, or a prismatic driver's ``mm``
+    or ``m`` (:func:`driver_axis`).
 
-    ``digest`` identifies the work (format, case, backend, angles): a part
+    ``digest`` identifies the work (format, case, backend, values, unit): a part
     written under another digest is never mistaken for this task's.
     """
 
@@ -76,6 +84,7 @@ class SweepTask:
     theta12_deg: np.ndarray
     chunk: int
     digest: str
+    unit: str = "deg"
 
     @property
     def part_name(self) -> str:
@@ -99,8 +108,8 @@ def software_versions() -> tuple[str, ...]:
     return tuple(out)
 
 
-def task_digest(case: Case, backend: str, theta12_deg: np.ndarray) -> str:
-    h = hashlib.sha256(repr((PART_FORMAT, software_versions(), case, backend)).encode())
+def task_digest(case: Case, backend: str, theta12_deg: np.ndarray, unit: str = "deg") -> str:
+    h = hashlib.sha256(repr((PART_FORMAT, software_versions(), case, backend, unit)).encode())
     h.update(np.ascontiguousarray(theta12_deg, dtype=np.float64).tobytes())
     return h.hexdigest()[:16]
 
@@ -132,12 +141,14 @@ def parse_range(text: str, option: str = "--theta12") -> np.ndarray:
 
 
 def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray,
-         driver_grid: np.ndarray | None = None) -> list[SweepTask]:
+         driver_grid: np.ndarray | None = None,
+         length_units: Mapping[str, str] | None = None) -> list[SweepTask]:
     """The tasks of a sweep; the reference backend is always included.
 
     A four-bar or slider-crank sweeps θ12 over ``theta12_deg``; a linkage sweeps its first
-    driver over ``driver_grid`` (degrees of a revolute joint, mm of a prismatic one, from
-    the drawn pose; default: the θ12 grid), its other drivers at their own values.
+    driver over ``driver_grid`` (degrees of a revolute joint; a prismatic one's length in
+    its case file's ``length_unit``, ``length_units[case name]``, mm if not given; from the
+    drawn pose; default: the θ12 grid), its other drivers at their own values.
     """
     names = list(dict.fromkeys([REFERENCE, *backends]))
     for name in names:
@@ -147,17 +158,42 @@ def plan(cases: Sequence[Case], backends: Sequence[str], theta12_deg: np.ndarray
     tasks = []
     for case in cases:
         grid = theta12_deg if case.is_preset or driver_grid is None else driver_grid
+        unit = axis_unit(case, (length_units or {}).get(case.name, "mm"))
         if not case.is_preset:
-            check_driver_grid(case, grid, "--theta12" if driver_grid is None else "--driver")
+            check_driver_grid(case, grid, "--theta12" if driver_grid is None else "--driver",
+                              unit)
         for name in names:
             size = VECTOR_CHUNK if registry.get(name).vectorised else SIMULATOR_CHUNK
             for chunk, start in enumerate(range(0, len(grid), size)):
                 part = np.array(grid[start:start + size], dtype=float)
-                tasks.append(SweepTask(case, name, part, chunk, task_digest(case, name, part)))
+                tasks.append(SweepTask(case, name, part, chunk,
+                                       task_digest(case, name, part, unit), unit))
     return tasks
 
 
-def check_driver_grid(case: Case, grid: np.ndarray, option: str) -> None:
+def slides(case: Case) -> bool:
+    """Whether the sweep's axis is a length: a linkage's first driver is prismatic."""
+    if case.is_preset:
+        return False
+    return not case.linkage.joint(case.linkage.drivers[0].joint).kind.rotates
+
+
+def axis_unit(case: Case, length_unit: str = "mm") -> str:
+    """The unit of a case's sweep axis: ``deg``, or ``length_unit`` for a sliding driver."""
+    return length_unit if slides(case) else "deg"
+
+
+def driver_axis(case: Case, unit: str) -> str:
+    """The sweep axis by name and unit, as tables and figures label it: ``θ12, deg`` for a
+    four-bar or slider-crank, ``rotation of O2, deg`` or ``displacement of cyl, mm`` for a
+    linkage's first driver (from its drawn pose)."""
+    if case.is_preset:
+        return f"θ12, {unit}"
+    joint = case.linkage.drivers[0].joint
+    return f"{'displacement' if slides(case) else 'rotation'} of {joint}, {unit}"
+
+
+def check_driver_grid(case: Case, grid: np.ndarray, option: str, unit: str = "mm") -> None:
     """Refuse a linkage's sweep grid beyond the bounds of its first driver's values (a case
     file's own bounds: :data:`~mechcheck.analytic.values.MAX_DRIVER_ROTATION_DEG` and
     :data:`~mechcheck.analytic.values.MAX_DRIVER_TRAVEL` times the linkage's size)."""
@@ -171,12 +207,12 @@ def check_driver_grid(case: Case, grid: np.ndarray, option: str) -> None:
                              f"{driver.joint}; a linkage's driver turns at most "
                              f"±{MAX_DRIVER_ROTATION_DEG:g}° (ten turns) from its drawn pose")
         return
-    bound = MAX_DRIVER_TRAVEL * case.linkage.scale * 1000.0
+    bound = MAX_DRIVER_TRAVEL * case.linkage.scale / LENGTH_UNITS[unit]
     if reach > bound * (1.0 + 1e-12):
-        # The option is in mm whatever the file's unit (docs/cli.md), so it is quoted in mm.
         raise ValueError(f"{option}: case '{case.name}': a displacement of "
-                         f"{length_text(reach * 1e-3, 'mm')} of {driver.joint}; a linkage's "
-                         f"driver moves at most ±{length_text(bound * 1e-3, 'mm')} "
+                         f"{length_text(reach * LENGTH_UNITS[unit], unit)} of {driver.joint} "
+                         f"(in the case file's length_unit); a linkage's driver moves at most "
+                         f"±{length_text(bound * LENGTH_UNITS[unit], unit)} "
                          f"({MAX_DRIVER_TRAVEL:g} × its size) from its drawn pose")
 
 
@@ -233,13 +269,10 @@ def _categorical(codes: np.ndarray, categories: list[str]) -> pd.Categorical[Any
     return pd.Categorical.from_codes(codes, dtype=pd.CategoricalDtype(categories))
 
 
-def grid_si(case: Case, grid: np.ndarray) -> np.ndarray:
+def grid_si(case: Case, grid: np.ndarray, unit: str = "mm") -> np.ndarray:
     """A sweep's grid in the engine's units: a preset's θ12 (deg) in rad; a linkage's (deg of
-    a revolute first driver, mm of a prismatic one) in rad or m."""
-    if case.is_preset:
-        return np.radians(grid)
-    kind = case.linkage.joint(case.linkage.drivers[0].joint).kind
-    return np.radians(grid) if kind.rotates else grid / 1000.0
+    a revolute first driver, ``unit`` of a prismatic one) in rad or m."""
+    return grid * LENGTH_UNITS[unit] if slides(case) else np.radians(grid)
 
 
 def vector_poses(case: Case, backend: str, grid: np.ndarray) -> DecidedPoses | None:
@@ -274,13 +307,15 @@ def vector_poses(case: Case, backend: str, grid: np.ndarray) -> DecidedPoses | N
 
 def _run_vector(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     theta_deg = np.asarray(task.theta12_deg)
-    poses = vector_poses(task.case, task.backend, grid_si(task.case, theta_deg))
+    start = time.perf_counter()
+    poses = vector_poses(task.case, task.backend, grid_si(task.case, theta_deg, task.unit))
     if poses is None:
         return _not_applicable(task)
     status = pd.DataFrame({"case": task.case.name, "backend": task.backend, "theta12": theta_deg,
                            "status": poses.statuses.astype(str),
                            "condition_number": poses.condition,
-                           "message": poses.messages.astype(str)})
+                           "message": poses.messages.astype(str), "restart": "",
+                           "wall_time_s": (time.perf_counter() - start) / max(len(theta_deg), 1)})
     return _long_frame(task.case, task.backend, theta_deg, poses.values), status
 
 
@@ -311,7 +346,8 @@ def _not_applicable(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     status = pd.DataFrame({"case": task.case.name, "backend": task.backend,
                            "theta12": np.asarray(task.theta12_deg), "status": "not_applicable",
                            "condition_number": np.nan,
-                           "message": "the method does not apply to this case"})
+                           "message": "the method does not apply to this case", "restart": "",
+                           "wall_time_s": 0.0})
     return pd.DataFrame(columns=RESULT_COLUMNS), status
 
 
@@ -347,13 +383,15 @@ def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
     sweep_fn = registry.get(task.backend).sweeper()
     if sweep_fn is None:
         return _not_applicable(task)
-    grid = grid_si(task.case, theta_deg)
+    grid = grid_si(task.case, theta_deg, task.unit)
     verdicts, reasons, condition = reference_verdicts(task.case, grid)
     passing = np.flatnonzero([v not in POSE_VERDICTS for v in verdicts])
     statuses = [v if v in POSE_VERDICTS else "ok" for v in verdicts]
     messages = [gated_message(m, REFERENCE) if v in POSE_VERDICTS else ""
                 for v, m in zip(verdicts, reasons, strict=True)]
     conditions = condition.copy()
+    restarts = [""] * len(theta_deg)
+    costs = np.zeros(len(theta_deg))
     values = {q: np.full(len(theta_deg), np.nan) for q in units_of(task.case)}
     try:
         solutions: list[Solution] = sweep_fn(task.case, grid[passing], task.backend) \
@@ -366,12 +404,15 @@ def _run_simulator(task: SweepTask) -> tuple[pd.DataFrame, pd.DataFrame]:
         s = finite_only(s)
         statuses[i], messages[i] = s.status, s.message
         conditions[i] = float(s.diagnostics.get("condition_number", condition[i]))
+        restarts[i] = str(s.diagnostics.get("restart", ""))
+        costs[i] = float(s.diagnostics.get("wall_time_s", 0.0))
         for q, v in s.values.items():
             values[q][i] = v
     present = {q: v for q, v in values.items() if np.isfinite(v).any()}
     status = pd.DataFrame({
         "case": task.case.name, "backend": task.backend, "theta12": theta_deg,
         "status": statuses, "condition_number": conditions, "message": messages,
+        "restart": restarts, "wall_time_s": costs,
     })
     return _long_frame(task.case, task.backend, theta_deg, present), status
 
@@ -464,8 +505,10 @@ def is_done(parts_dir: Path, task: SweepTask) -> bool:
 
 
 def run_sweep(tasks: Sequence[SweepTask], parts_dir: Path, executor: Executor, *,
-              progress: Callable[[int, int], None] | None = None) -> SweepOutcome:
-    """Run the tasks not yet done, writing each part the moment it arrives.
+              progress: Callable[[int, int], None] | None = None,
+              finished: Callable[[SweepTask, bytes], None] | None = None) -> SweepOutcome:
+    """Run the tasks not yet done, writing each part the moment it arrives; ``finished``
+    is told each task as it is written, with its status part (Parquet bytes).
 
     An interrupted sweep keeps every part already written; running the same
     sweep again executes only the missing tasks.
@@ -484,6 +527,8 @@ def run_sweep(tasks: Sequence[SweepTask], parts_dir: Path, executor: Executor, *
         results_path, status_path = part_paths(parts_dir, task)
         write_all(results_path.parent, {results_path.name: results})
         write_all(status_path.parent, {status_path.name: status})
+        if finished:
+            finished(task, status)
         done_poses += len(task.theta12_deg)
         if progress:
             progress(done_poses, total_poses)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import os
 import shutil
 import sys
 import time
@@ -21,7 +22,7 @@ from mechcheck.figures import cycle_panels, draw_sweep, figure_file, poses_file,
 from mechcheck.junit import junit_sweep_xml
 from mechcheck.output import OutputError, locked_folder, write_all
 from mechcheck.report import render_sweep, sweep_view_model
-from mechcheck.sweep import LocalExecutor, SweepTask, run_sweep
+from mechcheck.sweep import LocalExecutor, SweepTask, driver_axis, is_done, run_sweep
 from mechcheck.tables import sweep_comparison
 from mechcheck.verdicts import without_numbers
 
@@ -29,30 +30,57 @@ from mechcheck.verdicts import without_numbers
 def compare_sweep(cases: list[Case], results: pd.DataFrame,
                   statuses: pd.DataFrame) -> pd.DataFrame:
     """Every non-reference backend's poses against the reference, all cases (``results``
-    and ``statuses``: the sweep's tables, :meth:`~mechcheck.sweep.SweepOutcome.read`)."""
+    and ``statuses``: the sweep's tables, :meth:`~mechcheck.sweep.SweepOutcome.read`).
+
+    Only a backend's poses with forces (status ``ok``) are compared: a pose with a verdict
+    keeps its pose quantities (where the simulator came to rest), and comparing those
+    position by position would count one unsettled pose as a dozen failures."""
     frames = []
     for case in cases:
         mine = results[results["case"] == case.name]
         ref = mine[mine["backend"] == REFERENCE]
-        ref_status = statuses[(statuses["case"] == case.name)
-                              & (statuses["backend"] == REFERENCE)]
+        own = statuses[statuses["case"] == case.name]
+        ref_status = own[own["backend"] == REFERENCE]
         backends = sorted({str(b) for b in mine["backend"].unique()} - {REFERENCE})
         if backends:  # all at once, each backend's rows together, in name order
-            others = pd.concat([mine[mine["backend"] == b] for b in backends])
+            others = pd.concat([ok_rows(mine[mine["backend"] == b], own[own["backend"] == b])
+                                for b in backends])
             frames.append(sweep_comparison(case, ref, ref_status, others))
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
         columns=["case", "theta12", "quantity", "backend", "value", "reference", "abs_err",
                  "rel_err", "tolerance", "passed", "case_kind"])
 
 
+def ok_rows(rows: pd.DataFrame, status: pd.DataFrame) -> pd.DataFrame:
+    """One backend's result rows at the poses where its status is ``ok``."""
+    return rows[rows["theta12"].isin(status.loc[status["status"] == "ok", "theta12"])]
+
+
+def failed_poses(comparison: pd.DataFrame) -> int:
+    """The poses (case, backend, pose) with at least one comparison outside tolerance: a
+    pose counts once, however many of its quantities failed."""
+    if not len(comparison):
+        return 0
+    failed = comparison[~comparison["passed"].astype(bool)]
+    return len(failed[["case", "backend", "theta12"]].drop_duplicates())
+
+
 def draw_figures(executor: Executor, cases: list[Case], results: pd.DataFrame,
-                 statuses: pd.DataFrame, comparison: pd.DataFrame) -> dict[str, Future[bytes]]:
+                 statuses: pd.DataFrame, comparison: pd.DataFrame,
+                 axes: dict[str, tuple[str, str]] | None = None) -> dict[str, Future[bytes]]:
     """Each case's figure (PNG bytes, to come), drawn in the sweep's worker pool: this
     process only reduces the tables to the thinned curves
-    (:func:`mechcheck.figures.sweep_plot`)."""
+    (:func:`mechcheck.figures.sweep_plot`); ``axes``: each case's axis (:func:`sweep_axes`)."""
+    labels = {name: label for name, (label, _) in (axes or {}).items()}
     return {c.name: executor.submit(draw_sweep, sweep_plot(
         c, results[results["case"] == c.name], statuses[statuses["case"] == c.name],
-        comparison[comparison["case"] == c.name])) for c in cases}
+        comparison[comparison["case"] == c.name], labels.get(c.name))) for c in cases}
+
+
+def sweep_axes(tasks: list[SweepTask]) -> dict[str, tuple[str, str]]:
+    """Each case's sweep axis as (label, unit): ``displacement of cyl, mm``, never θ12 for a
+    linkage (:func:`~mechcheck.sweep.driver_axis`)."""
+    return {t.case.name: (driver_axis(t.case, t.unit), t.unit) for t in tasks}
 
 
 def draw_poses(executor: Executor, cases: list[Case], results: pd.DataFrame,
@@ -95,6 +123,39 @@ def warm_figures(executor: Executor, figures: int) -> None:
             executor.submit(warm_up)
 
 
+class Remaining:
+    """What is left of a sweep, in seconds: each unfinished task's poses at its backend's
+    measured cost per pose (the ``wall_time_s`` its finished tasks reported; a backend not
+    yet measured at the dearest measured so far), shared among ``workers``. A driven pymunk
+    pose can cost a thousand settled MuJoCo poses: counting poses alike misleads."""
+
+    def __init__(self, tasks: list[SweepTask], workers: int) -> None:
+        self.left = {id(t): t for t in tasks}
+        self.workers = max(1, workers)
+        self.cost: dict[str, float] = {}
+
+    def finished(self, task: SweepTask, status: bytes) -> None:
+        import io
+
+        self.left.pop(id(task), None)
+        spent = pd.read_parquet(io.BytesIO(status), columns=["wall_time_s"])["wall_time_s"]
+        if len(spent) and float(spent.sum()) > 0.0:
+            self.cost[task.backend] = float(spent.sum()) / len(spent)
+
+    def backend(self) -> str:
+        """The backend of the earliest unfinished task: the one the workers are on."""
+        return next(iter(self.left.values())).backend if self.left else ""
+
+    def seconds(self) -> float | None:
+        """The estimate, or None before any cost is measured."""
+        if not self.cost:
+            return None
+        dearest = max(self.cost.values())
+        work = sum(len(t.theta12_deg) * self.cost.get(t.backend, dearest)
+                   for t in self.left.values())
+        return work / self.workers
+
+
 def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask], n_poses: int,
                       out: Path, *, workers: int | None, dask: str | None,
                       fail_on: tuple[str, ...], junit: Path | None, quiet: bool,
@@ -112,30 +173,40 @@ def run_sweep_command(specs: list[tuple[Case, AnySpec]], tasks: list[SweepTask],
         if fresh:
             for folder in ("results", "status"):
                 shutil.rmtree(out / folder, ignore_errors=True)
+        parallel = 1 if workers == 0 else workers or os.cpu_count() or 1
         return _sweep_and_report(executor, specs, tasks, n_poses, out, fail_on=fail_on,
-                                 junit=junit, quiet=quiet, figures=figures)
+                                 junit=junit, quiet=quiet, figures=figures,
+                                 parallel=min(parallel, max(len(tasks), 1)))
 
 
 def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
                       tasks: list[SweepTask], n_poses: int, out: Path, *,
                       fail_on: tuple[str, ...], junit: Path | None, quiet: bool,
-                      figures: bool) -> int:
+                      figures: bool, parallel: int = 1) -> int:
     cases = [c for c, _ in specs]
     start = time.perf_counter()
     bar = None
+    remaining = Remaining([t for t in tasks if not is_done(out, t)], parallel)
     if not quiet:
         from tqdm import tqdm  # only for the progress bar
 
-        bar = tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True)
+        # tqdm's own estimate assumes every pose costs the same: ours weighs them.
+        bar = tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True,
+                   bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} poses [{elapsed}{postfix}]")
 
     def progress(done: int, total: int) -> None:
         if bar is not None:
             bar.total = total
             bar.n = done
+            left = remaining.seconds()
+            bar.set_postfix_str(
+                f"on {remaining.backend() or '-'}, "
+                + (f"≈{tqdm.format_interval(left)} left" if left is not None
+                   else "measuring the cost per pose"), refresh=False)
             bar.refresh()
 
     try:
-        outcome = run_sweep(tasks, out, executor, progress=progress)
+        outcome = run_sweep(tasks, out, executor, progress=progress, finished=remaining.finished)
     except OutputError as error:
         raise OutputError(f"{error} (the parts already finished are kept: the same command "
                           "resumes from them)") from None
@@ -149,14 +220,17 @@ def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
     # third of a resumed sweep's comparing).
     results, statuses = outcome.read(), outcome.read(kind="status")
     comparison = compare_sweep(cases, results, statuses)
-    drawing = draw_figures(executor, cases, results, statuses, comparison) if figures else {}
+    axes = sweep_axes(tasks)
+    drawing = draw_figures(executor, cases, results, statuses, comparison, axes) \
+        if figures else {}
     posing = draw_poses(executor, cases, results, statuses) if figures else {}
     comparison_buffer = comparison.to_parquet(index=False)  # while the figures are drawn
     pngs = {name: future.result() for name, future in drawing.items()}
     poses = {name: png for name, future in posing.items() if (png := future.result())}
     model = sweep_view_model(cases, {c.name: s for c, s in specs}, statuses, comparison, pngs,
                              title="mechcheck sweep report", n_poses=n_poses, wall_time_s=wall,
-                             executed=outcome.executed, reused=outcome.reused, fail_on=fail_on)
+                             executed=outcome.executed, reused=outcome.reused, fail_on=fail_on,
+                             axes=axes)
     attach_poses(model, poses)
     markdown, page = render_sweep(model)
     files: dict[str, str | bytes] = {"report.md": markdown, "report.html": page}
@@ -170,13 +244,13 @@ def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
     write_all(out, files)
     if junit is not None:
         write_all(junit.parent, {junit.name: junit_sweep_xml(comparison, statuses, fail_on, wall)})
-    failed = int((~comparison["passed"].astype(bool)).sum()) if len(comparison) else 0
+    failed = failed_poses(comparison)
     failing = int(statuses["status"].isin(fail_on).sum()) if len(statuses) else 0
     status = 1 if failed or failing else 0
     absent = without_numbers(zip(statuses["status"].astype(str), statuses["case"].astype(str),
                                  strict=True)) if len(statuses) else ""
     print(f"{len(cases)} case{'s' * (len(cases) != 1)} x {n_poses} poses, {len(comparison)} "
-          f"comparisons, {failed} outside tolerance, {failing} poses with a failing verdict"
+          f"comparisons, {failed} poses outside tolerance, {failing} poses with a failing verdict"
           f"{f' (poses without numbers: {absent})' if absent else ''}; "
           f"{outcome.executed} tasks run, "
           f"{outcome.reused} reused, {wall:.1f} s -> {out}/report.md "

@@ -115,20 +115,34 @@ class Convergence:
                 and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL
                 and self.solver_disagreement <= SOLVER_AGREEMENT_RTOL)
 
+    @property
+    def solver_only_failed(self) -> bool:
+        """Whether the iteration rule is the only one that did not hold."""
+        return (self.lead_disagreement <= LEAD_AGREEMENT_RTOL
+                and self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL
+                and not self.solver_disagreement <= SOLVER_AGREEMENT_RTOL)
+
     def verdict(self) -> str:
         """Why the run is not converged (empty when it is)."""
         if not self.lead_disagreement <= LEAD_AGREEMENT_RTOL:
             limit = f"; {self.lead_limit}" if self.lead_limit else ""
-            return (f"start-up transient still {self.lead_disagreement:.1e} of the forces after "
-                    f"{self.lead_steps} lead steps of {self.dt:.3g} s{limit}")
+            return (f"start-up transient still {self.lead_disagreement:.1e} of the forces (rule: ≤ "
+                    f"{LEAD_AGREEMENT_RTOL:.0e}, LEAD_AGREEMENT_RTOL) after {self.lead_steps} "
+                    f"lead steps of {self.dt:.3g} s{limit}; governed by the lead-in budget "
+                    f"MAX_LEAD_STEPS = {MAX_LEAD_STEPS} (mechcheck.sim_models.convergence)")
         if not self.timestep_disagreement <= TIMESTEP_AGREEMENT_RTOL:
             return (f"time step not converged: runs with dt = {2.0 * self.dt:.3g} s and "
-                    f"{self.dt:.3g} s still differ by {self.timestep_disagreement:.1e} "
-                    "of the forces")
+                    f"{self.dt:.3g} s still differ by {self.timestep_disagreement:.1e} of the "
+                    f"forces (rule: ≤ {TIMESTEP_AGREEMENT_RTOL:.0e}, TIMESTEP_AGREEMENT_RTOL); "
+                    f"governed by MAX_TIMESTEP_HALVINGS = {MAX_TIMESTEP_HALVINGS} "
+                    "(mechcheck.sim_models.convergence)")
         if not self.solver_disagreement <= SOLVER_AGREEMENT_RTOL:
             return (f"constraint solve not converged: the last step solved again with more "
-                    f"iterations moves the reading by {self.solver_disagreement:.1e} of the "
-                    "forces")
+                    "iterations "
+                    f"moves the reading by {self.solver_disagreement:.1e} of the forces (rule: "
+                    f"≤ {SOLVER_AGREEMENT_RTOL:.0e}, SOLVER_AGREEMENT_RTOL, 10× inside the "
+                    "1e-3 dynamic tolerance); governed by the simulator's solver iterations "
+                    "per step (the 'iterations' diagnostic: the last rung of its ladder)")
         return ""
 
 

@@ -125,7 +125,7 @@ def test_a_new_simulator_package_is_listed_run_and_compared(fake_simulator: Path
     swept = cli("sweep", "arm.toml", "-b", "fakesim", "--theta12", "0:60:20", "--workers", "0",
                 "-o", "sweep", "-q")
     assert swept.exit_code == 0, swept.output
-    assert ", 0 outside tolerance" in swept.output
+    assert ", 0 poses outside tolerance" in swept.output
     swept_table = pd.read_parquet(fake_simulator / "sweep" / "comparison.parquet")
     assert len(swept_table[swept_table["backend"] == "fakesim"]) > 0
 

@@ -123,7 +123,9 @@ def test_dask_local_cluster_gives_results_identical_to_local_processes(tmp_path:
         remote = run_sweep(tasks, tmp_path / "dask", executor)
     assert remote.executed == len(tasks)
     pd.testing.assert_frame_equal(sorted_results(local.read()), sorted_results(remote.read()))
-    a, b = (o.read(kind="status").sort_values(["case", "backend", "theta12"])
+    # Everything but what each pose cost: a wall time is measured, never reproduced.
+    a, b = (o.read(kind="status").drop(columns="wall_time_s")
+            .sort_values(["case", "backend", "theta12"])
             .reset_index(drop=True).astype({"case": str, "backend": str, "status": str})
             for o in (local, remote))
     pd.testing.assert_frame_equal(a, b)

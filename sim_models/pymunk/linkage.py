@@ -195,7 +195,8 @@ def python_settle_run(model: LinkageModel, contraction: float = 0.0) -> Run:
     return run
 
 
-def primed_settle_run(model: LinkageModel, seed: Array) -> tuple[LinkageModel, Run]:
+def primed_settle_run(model: LinkageModel, seed: Array,
+                      soft: bool = False) -> tuple[LinkageModel, Run]:
     """Settle, after pymunk's own constraint solve at the seed has warmed its impulses;
     next to a change point with the settings that needs (:func:`~.settings.near_change_point`),
     in a model built anew with them. (The model that ran, and how the run ended.)
@@ -212,10 +213,11 @@ def primed_settle_run(model: LinkageModel, seed: Array) -> tuple[LinkageModel, R
     (:class:`~.slow_mode.SlowMode`); one slower than :data:`~.settings.SOFT_CONTRACTION`
     marks a pose next to a change point. The priming extrapolates the slow mode, and its
     measured contraction adds a window to the stop rules of the priming and of the
-    settling (:func:`~.settle.slow_window`).
+    settling (:func:`~.settle.slow_window`). ``soft``: with those settings whatever the
+    probe finds (the second rung of :func:`settle`'s ladder).
     """
     slow, probed = probe(model, seed)
-    if slow.contraction > SOFT_CONTRACTION:
+    if soft or slow.contraction > SOFT_CONTRACTION:
         model, slow, priming = soft_priming(model, seed)
     else:
         priming = solve_run(model, seed, slow)
@@ -316,12 +318,27 @@ class Outcome:
 
 
 def not_settled(case: str, backend: str, pose: dict[str, float], diag: dict[str, float | str],
-                units: dict[str, str] | None = None) -> Solution:
-    """``not_settled`` for any model: the pose it reached, its diagnostics, no forces."""
+                units: dict[str, str] | None = None,
+                rule: tuple[float, float] | None = None) -> Solution:
+    """``not_settled`` for any model: the pose it reached, its diagnostics, no forces; the
+    message says which stop rule did not hold against its bound (``rule``: the residual
+    velocity's, m/s, and the force change's) and the setting that governs it."""
+    speed, change = float(diag["residual_velocity"]), float(diag["force_change"])
+    if rule is None:
+        held = f"residual velocity {speed:.3g} m/s, force change {change:.3g}"
+    else:
+        failing = [f"residual velocity {speed:.3g} m/s (rule: ≤ {rule[0]:.3g}, settle_speed "
+                   "× size)"] if not speed <= rule[0] else []
+        failing += [f"force change {change:.3g} of the forces a step (rule: ≤ {rule[1]:.0e}, "
+                    "settle_force_change)"] if not change <= rule[1] else []
+        held = "; ".join(failing) or (f"residual velocity {speed:.3g} m/s and force change "
+                                      f"{change:.3g} within the rules, but not for "
+                                      "settle_patience steps in a row")
     return Solution(case, backend, pose, status="not_settled",
-                    message=f"did not settle within {diag['steps']} steps "
-                            f"(residual velocity {diag['residual_velocity']:.3g} m/s, "
-                            f"force change {diag['force_change']:.3g})",
+                    message=f"did not settle within {diag['steps']} steps ({held}); governed "
+                            "by the step budget max_steps of mechcheck.sim_models.pymunk."
+                            f"settings (dt {diag.get('dt', '?')} s, {diag.get('iterations', '?')} "
+                            "iterations a step)",
                     diagnostics=diag, units=units or {})
 
 
@@ -365,13 +382,18 @@ def solutions(model: LinkageModel, backend: str, method: str, outcomes: list[Out
             diag["driver"] = float(drivers[o.index])
         pose = {k: v[m] for k, v in pose_lists.items()}
         if not o.run.settled:
-            out.append(not_settled(model.case.name, backend, pose, diag, units))
+            s = model.settings
+            out.append(not_settled(model.case.name, backend, pose, diag, units,
+                                   (s.settle_speed * model.scale, s.settle_force_change)))
         elif held and drifts[m] > ASSEMBLY_DRIFT * model.scale:
             out.append(Solution(
                 model.case.name, backend, pose, status="not_settled", diagnostics=diag, units=units,
-                message=f"came to rest {drifts[m]:.3g} m away from the held assembly (next to a "
-                        "lock another assembly is that close, and the load made the joints' "
-                        "soft correction give way to it); forces withheld"))
+                message=f"came to rest {drifts[m]:.3g} m away from the held assembly (rule: "
+                        f"≤ {ASSEMBLY_DRIFT * model.scale:.3g} m, ASSEMBLY_DRIFT × size; another "
+                        "assembly is that close, and the load made the joints' soft correction "
+                        f"give way to it, with {model.settings.iterations} iterations a step "
+                        "and the fictitious mass fictitious_mass of mechcheck.sim_models."
+                        "pymunk.settings); forces withheld"))
         elif held and (effect := drift_effect(float(results.condition[o.index]), float(drifts[m]),
                                               model.scale)) > DRIFT_EFFECT:
             out.append(Solution(
@@ -462,7 +484,16 @@ def settle(case: Case, settings: SolverSettings = LINKAGE_SETTLE,
         # No priming: re-posed on the unstretched seed, the members would carry nothing.
         run = settle_run(model)
     else:
-        model, run = primed_settle_run(model, seed)
+        built = model
+        model, run = primed_settle_run(built, seed)
+        solution = solutions(model, backend, "settle", [outcome(model, run, start)], results)[0]
+        if solution.status == "not_settled" and model is built:
+            # The ladder's second rung: the settings next to a change point (16× the
+            # Gauss–Seidel iterations, 10× the fictitious mass). With the first, the scissor
+            # lift's 200 kg platform, 0.265 m up its stroke (condition number 150), swung
+            # onto its other assembly; with these it rests on its own in 24 steps.
+            model, run = primed_settle_run(build_linkage_model(case, settings, seed), seed,
+                                           soft=True)
     solution = solutions(model, backend, "settle", [outcome(model, run, start)], results)[0]
     return strain_verdict(case.linkage.elastic_links if stretches else (), solution, "pymunk")
 

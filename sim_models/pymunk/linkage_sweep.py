@@ -26,14 +26,23 @@ from mechcheck.analytic.linkage_forces import LinkageResults
 from mechcheck.analytic.linkage_kinematics import Array
 from mechcheck.analytic.solution import Solution
 from mechcheck.analytic.values import CaseError
-from mechcheck.sim_models.linkage_motion import driven_sweep, has_free_coordinates, is_driven
+from mechcheck.sim_models.convergence import DRIVEN_DRIFT
+from mechcheck.sim_models.linkage_motion import (
+    at_first_driver,
+    driven_sweep,
+    has_free_coordinates,
+    is_driven,
+)
 from mechcheck.sim_models.pymunk.linkage import (
+    ASSEMBLY_DRIFT,
     Outcome,
     free_start,
     hold_without_correction,
     outcome,
+    pose_drifts,
     refusal,
-    settle_run,
+    settle,
+    settle_run as held_settle_run,
     solutions,
     solve_run,
     unstable,
@@ -41,11 +50,11 @@ from mechcheck.sim_models.pymunk.linkage import (
 from mechcheck.sim_models.pymunk.linkage_model import (
     LinkageModel,
     build_linkage_model,
-    coordinates,
     move_lock,
     place,
 )
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE
+from mechcheck.sim_models.pymunk.settle import Run
 
 BACKENDS = ("pymunk", "pymunk_solve")
 
@@ -74,35 +83,95 @@ def held_sweep(case: Case, values: Array, backend: str, results: LinkageResults)
     """The sweep of a held linkage in one model (built at the first pose simulated): every
     coordinate held, or the constraint solve, from the analytic pose; free coordinates from
     where the last settled run came to rest (the first from the drawn pose). An unstable
-    equilibrium of free coordinates gets its verdict and is not simulated."""
+    equilibrium of free coordinates gets its verdict and is not simulated.
+
+    Continuation carries the last pose's impulses (and free coordinates) into the next run,
+    and they can push it onto another branch of the linkage. A settled run that came to rest
+    off the analytic branch (:func:`off_branch`) is not kept: that pose is run again alone
+    from the analytic pose, as ``mechcheck run`` runs it (:func:`restarted`), its
+    diagnostics say so (``restart``), and the sweep goes on in a model built anew there."""
     drivers, free, solve = driver_values(case, values), has_free_coordinates(case), backend == BACKENDS[1]
     assert drivers is not None
     first = case.linkage.joint(case.linkage.drivers[0].joint)
     model: LinkageModel | None = None
     previous: Array | None = None
-    verdicts: dict[int, Solution] = {}
-    outcomes: list[Outcome] = []
+    given: dict[int, Solution] = {}
+    segments: list[tuple[LinkageModel, list[Outcome]]] = []
     for k, value in enumerate(values):
         start = time.perf_counter()
         found = None if solve or not free else unstable(case, backend, results, k)
         if found is not None:
-            verdicts[k] = found
+            given[k] = found
             continue
         q = results.pose.q[k]
         seed = q if solve or not free else previous if previous is not None else free_start(case, drivers[k])
-        model = model or sweep_model(case, solve, seed)
+        fresh = model is None
+        if model is None:
+            model = sweep_model(case, solve, seed)
+            segments.append((model, []))
         move_lock(model, first, float(value))
         place(model, seed)
-        run = solve_run(model, q) if solve else settle_run(model)
-        outcomes.append(outcome(model, run, start, k))
+        run = solve_run(model, q) if solve else sweep_settle_run(
+            model, q if fresh and not (free or model.members) else None)
+        done = outcome(model, run, start, k)
+        left = "" if solve or not run.settled else off_branch(model, done.q, q, free)
+        if left:
+            given[k] = restarted(case, backend, float(value), left)
+            model, previous = None, None
+            continue
+        segments[-1][1].append(done)
         if free and run.settled:
-            previous = coordinates(model)
+            previous = done.q
     method = "constraint_solve" if solve else "settle"
-    simulated = dict(zip((o.index for o in outcomes),
-                         solutions(model, backend, method, outcomes, results, values) if model else [],
-                         strict=True))
-    return [simulated[k] if k in simulated else with_driver(verdicts[k], float(value))
-            for k, value in enumerate(values)]
+    for built, outcomes in segments:
+        given.update(zip((o.index for o in outcomes),
+                         solutions(built, backend, method, outcomes, results, values), strict=True))
+    return [given[k] if "driver" in given[k].diagnostics else with_driver(given[k], float(v))
+            for k, v in enumerate(values)]
+
+
+def sweep_settle_run(model: LinkageModel, prime_at: Array | None) -> Run:
+    """A settling run of the sweep; the first of a model built anew with every coordinate
+    held after pymunk's own constraint solve at the pose ``prime_at`` has warmed its
+    impulses: from none, the first steps' unresolved load can jolt a held linkage onto its
+    other branch (as :func:`~.linkage.primed_settle_run` does for one pose). Elastic
+    members are not primed: re-posed unstretched, they would carry nothing."""
+    if prime_at is not None:
+        solve_run(model, prime_at)
+    return held_settle_run(model)
+
+
+#: A settled run of free coordinates (or of elastic members, which deflect by their strain)
+#: that came to rest farther than this × the linkage's size from the analytic pose found
+#: another equilibrium: the bound driven runs use for leaving an assembly
+#: (:data:`~mechcheck.sim_models.convergence.DRIVEN_DRIFT`). A held rigid linkage is held
+#: to :data:`~.linkage.ASSEMBLY_DRIFT`.
+FREE_BRANCH_DRIFT = DRIVEN_DRIFT
+
+
+def off_branch(model: LinkageModel, rest: Array, q: Array, free: bool) -> str:
+    """Why a settled run that came to rest at ``rest`` left the analytic branch at pose ``q``
+    (both (3n,)), or ``""``: it is farther from ``q`` than :data:`~.linkage.ASSEMBLY_DRIFT` ×
+    size (held) or :data:`FREE_BRANCH_DRIFT` × size (free coordinates, or elastic members)."""
+    bound = (FREE_BRANCH_DRIFT if free or model.members else ASSEMBLY_DRIFT) * model.scale
+    # A body's drift is at most its largest coordinate change × (√2 + its radius): checked
+    # first, as one subtraction, since every pose of a sweep is checked and few are off.
+    if float(np.abs(rest - q).max()) * (1.5 + float(model.radii.max())) <= bound:
+        return ""
+    drift = float(pose_drifts(model.radii, rest[None], q[None])[0])
+    if drift <= bound:
+        return ""
+    return (f"continuing from the previous pose, the run came to rest {drift:.3g} m from the "
+            f"analytic pose (more than {bound:.3g} m): another branch; restarted from the "
+            "analytic pose")
+
+
+def restarted(case: Case, backend: str, value: float, why: str) -> Solution:
+    """The pose at ``value`` of the first driver run alone, as ``mechcheck run`` runs it
+    (:func:`~.linkage.settle`), with ``why`` it was restarted as its ``restart`` diagnostic."""
+    sol = settle(at_first_driver(case, value))
+    return Solution(sol.case, backend, sol.values, sol.status, sol.message,
+                    {**sol.diagnostics, "driver": value, "restart": why}, units=sol.units)
 
 
 def sweep_model(case: Case, solve: bool, seed: Array) -> LinkageModel:
