@@ -255,7 +255,8 @@ def continuous_reason(case: Case, first: Array) -> str:
     """Why a driven sweep over ``first`` is not one continuous motion ("" if it is): the
     case must turn its first driver at a constant speed with every other driver held, and
     the values must lie on an evenly spaced grid of one whole turn (a periodic motion, each
-    pose passed once)."""
+    pose passed once; the sweep's poses the gate withheld are not among them, so part of a
+    turn on such a grid counts too)."""
     drivers = case.linkage.drivers
     lead, others = drivers[0], drivers[1:]
     if not case.linkage.is_moving:
@@ -268,7 +269,7 @@ def continuous_reason(case: Case, first: Array) -> str:
     if not case.linkage.joint(lead.joint).kind.rotates:
         return "the first driver slides: its motion is not periodic"
     if grid_step(first) is None:
-        return "the values are not an evenly spaced grid of one whole turn"
+        return "the values are not on an evenly spaced grid of a whole turn"
     return ""
 
 
@@ -324,6 +325,12 @@ def lead_samples(case: Case, first: Array) -> Array:
     return np.where(np.asarray(found.pose.assembled, dtype=bool), found.condition, np.inf)
 
 
+#: Why a stretch's poses ran one by one when the simulator did not run it as one motion.
+STRETCH_REFUSED = ("per pose: the simulator does not run this stretch as one motion (a gear "
+                   "mesh, a Coulomb joint at rest or reversing at a pose, or no lead-in to it "
+                   "converged)")
+
+
 def driven_sweep(case: Case, first: Array, drive: Callable[[Case], Solution],
                  run: StretchRun | None = None) -> list[Solution]:
     """A driven linkage over values of its first driver. Where the sweep is one continuous
@@ -346,8 +353,7 @@ def driven_sweep(case: Case, first: Array, drive: Callable[[Case], Solution],
                       if found is not None
                       else noted(drive(at_first_driver(case, first[i])),
                                  "per pose: no calm continuous motion from a neighbour"
-                                 if stretch.size == 1 else "per pose: its stretch's lead-in did "
-                                 "not converge"))
+                                 if stretch.size == 1 else STRETCH_REFUSED))
     return [s for s in out if s is not None]
 
 
