@@ -215,15 +215,52 @@ def read_drive(rigs: LinkageRigs, motion: Motion, steps: int, dt: float,
     return read_instant(rigs, friction)
 
 
-def run_steps(rigs: LinkageRigs, steps: int, friction: bool) -> None:
-    """Step the models in lockstep, each step's friction from the massless-limit reactions."""
+def run_steps(rigs: LinkageRigs, steps: int, friction: bool,
+              loads: list[PointLoads] | None = None) -> None:
+    """Step the models in lockstep, each step's friction from the massless-limit reactions;
+    ``loads``: each model's loads applied by :class:`PointLoads` (else by the rig)."""
     for _ in range(steps):
-        for rig in rigs.members:
-            forward(rig)
+        for k, rig in enumerate(rigs.members):
+            if loads is None:
+                forward(rig)
+            else:
+                mujoco.mj_kinematics(rig.model, rig.data)
+                loads[k].apply(rig)
+                mujoco.mj_forward(rig.model, rig.data)
         if friction:
             with_friction(rigs, massless_reactions)
         for rig in rigs.members:
             mujoco.mj_Euler(rig.model, rig.data)
+
+
+class PointLoads:
+    """A rig's xfrc_applied at its current pose when it is the loads and the friction alone
+    (:meth:`.linkage_loads.RigLoads.wrenches` without a gear mesh, a carried force or a
+    closure's damper, :func:`plain`), summed per body by ``bincount``: a long run applies it
+    at every step, where the general path's small-array calls cost three times MuJoCo's
+    forward pass. The same sums, in another order (rounding apart)."""
+
+    def __init__(self, rig: LinkageRig) -> None:
+        table = rig.loads
+        self.sites, self.bodies = table.sites, table.bodies
+        self.fx, self.fy = table.forces[:, 0].copy(), table.forces[:, 1].copy()
+        self.torques = np.asarray(table.torques, dtype=float)
+        self.base = np.zeros((rig.model.nbody, 6))
+        self.base[:, 0:3] = rig.body_forces
+
+    def apply(self, rig: LinkageRig) -> None:
+        d = rig.data
+        wrench = self.base + rig.extra
+        if self.sites.size:
+            arm = d.site_xpos[self.sites] - d.xipos[self.bodies]
+            moment = arm[:, 0] * self.fy - arm[:, 1] * self.fx + self.torques
+            wrench[:, 5] += np.bincount(self.bodies, moment, minlength=len(wrench))
+        d.xfrc_applied[:] = wrench
+
+
+def plain(rig: LinkageRig) -> bool:
+    """The rig's loads are the point loads and the friction alone (:class:`PointLoads`)."""
+    return not (rig.meshes or rig.carried.any() or (rig.closure_damping and rig.viscous))
 
 
 def read_instant(rigs: LinkageRigs, friction: bool) -> dict[str, float]:
@@ -248,9 +285,10 @@ def read_stretch(rigs: LinkageRigs, motion: Motion, lead: int, dt: float, interv
         start_run(rig, motion, lead, dt)
     per_pose = round(interval / dt)
     base = rigs.base
+    loads = [PointLoads(rig) for rig in rigs.members] if all(map(plain, rigs.members)) else None
     out = []
     for k in range(poses):
-        run_steps(rigs, lead if k == 0 else per_pose, friction)
+        run_steps(rigs, lead if k == 0 else per_pose, friction, loads)
         values = read_instant(rigs, friction)
         assert base.clock is not None
         out.append((values, {
