@@ -105,13 +105,18 @@ def mujoco_floor(case: Case, counts: Counter[tuple[float, int]]) -> float:
 def pymunk_floor(case: Case, counts: Counter[tuple[float, int]]) -> float:
     """Seconds of ``cpSpaceStep`` alone on the driven Space, as many times at each time step
     and iteration count as the sweep stepped there."""
-    from mechcheck.sim_models.linkage_motion import prescribed_motion
+    from dataclasses import replace
+
     from mechcheck.sim_models.pymunk._fast.bulk import lib
-    from mechcheck.sim_models.pymunk.linkage_dynamics import build_twins
+    from mechcheck.sim_models.pymunk.linkage_dynamics import DRIVEN
+    from mechcheck.sim_models.pymunk.linkage_model import build_linkage_model
 
     took = 0.0
     for (dt, iterations), n in counts.items():
-        model = build_twins(case, prescribed_motion(case), dt, iterations).base
+        # The driven Space without the run's Python: no loads or friction callbacks.
+        settings = replace(DRIVEN, dt=dt, iterations=iterations)
+        model = build_linkage_model(case, settings, np.zeros(3 * len(case.linkage.moving_links)),
+                                    driven=True)
         model.space.gravity = (0.0, -9.81)  # loaded (see bench_pymunk.c_floor: no subnormals)
         step, space = lib.cpSpaceStep, model.space._space
         start = time.perf_counter()
