@@ -241,8 +241,10 @@ def at_first_driver(case: Case, value: float) -> Case:
 #: Sweep values within this fraction of the grid's step of an evenly spaced whole turn lie on
 #: it (the CLI's degrees converted to radians round at 1e-16 of a turn).
 GRID_RTOL = 1e-9
-#: Points between two poses of a continuous run at which the condition rule is checked.
-STRETCH_SAMPLES = 4
+#: A continuous run's motion between two poses is checked for the condition rule at
+#: STRETCH_SAMPLES − 1 points evenly between them (the midpoint: each is analysed with its
+#: condition number, a third of a 360-pose sweep's analysis with three points).
+STRETCH_SAMPLES = 2
 
 #: A driven run over the poses of a stretch (the case at its first pose, the poses' values
 #: in the order the motion passes them, their analytic analysis): one Solution per pose
@@ -332,17 +334,19 @@ STRETCH_REFUSED = ("per pose: the simulator does not run this stretch as one mot
 
 
 def driven_sweep(case: Case, first: Array, drive: Callable[[Case], Solution],
-                 run: StretchRun | None = None) -> list[Solution]:
+                 run: StretchRun | None = None,
+                 results: LinkageResults | None = None) -> list[Solution]:
     """A driven linkage over values of its first driver. Where the sweep is one continuous
     motion (:func:`continuous_reason`) and the simulator can ``run`` stretches, each stretch
     of poses (:func:`stretches`) is one run read as it passes them; every other pose is one
     driven run of its own (``drive``), reaching its pose with the case's rates after its own
-    lead-in. The diagnostic ``sweep_run`` says which, and why a sweep fell back."""
+    lead-in. The diagnostic ``sweep_run`` says which, and why a sweep fell back.
+    ``results``: the analytic analysis of ``first``, if already made."""
     first = np.atleast_1d(np.asarray(first, dtype=float))
     why = "no continuous run in this simulator" if run is None else continuous_reason(case, first)
     if why or run is None:
         return [noted(drive(at_first_driver(case, v)), f"per pose: {why}") for v in first]
-    results = analytic_results(case, first)
+    results = results if results is not None else analytic_results(case, first)
     out: list[Solution | None] = [None] * first.size
     for stretch in stretches(case, first, results):
         solved = run(at_first_driver(case, first[stretch[0]]), first[stretch],

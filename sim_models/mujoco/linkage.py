@@ -398,7 +398,7 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     first = np.asarray(first, dtype=float)
     why = unbuildable(case) or (unsettled_members(case) if backend == "mujoco" else rigid_only(case))
     if backend == "mujoco" and why is None and is_driven(case):
-        return driven_sweep(case, first, settle_linkage, drive_stretch)
+        return driven_sweep(case, first, settle_linkage, drive_stretch, results)
     if backend == "mujoco":
         why = why or (FREE_SWEEP_REFUSAL if has_free_coordinates(case) else None)
     if why is not None:

@@ -63,7 +63,7 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
         from mechcheck.sim_models.pymunk.linkage_dynamics import drive_linkage, drive_stretch
 
         return driven_sweep(case, values, lambda at: drive_linkage(at, analytic_results(at)),
-                            drive_stretch)
+                            drive_stretch, results)
     refused = refusal(case, backend)
     if refused is not None:
         return [refused] * len(values)
