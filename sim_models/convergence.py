@@ -11,8 +11,9 @@ reading removes by running twice, at k and 2k (:func:`massless_limit`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -108,6 +109,9 @@ class Convergence:
     lead_limit: str = ""
     #: How far the reading moves when its last step is solved with more iterations.
     solver_disagreement: float = 0.0
+    #: What the simulator measured of the run that gave ``values`` (a continuous sweep's
+    #: pose drift, rate error…), by name.
+    run: dict[str, float] = field(default_factory=dict)
 
     @property
     def converged(self) -> bool:
@@ -209,6 +213,55 @@ def halve_timestep(read: Reading, out: Convergence, scale: float, runs: int,
         if not residual > TIMESTEP_AGREEMENT_RTOL:  # converged, or NaN: stop either way
             break
     return out
+
+
+#: The readings of one continuous run through a stretch of poses, with what the simulator
+#: measured of each: (lead steps before its first pose, time step, how many of its poses).
+StretchReading = Callable[[int, float, int], list[tuple[dict[str, float], dict[str, float]]]]
+
+
+def stretch_timestep(dt: float, interval: float) -> float:
+    """The largest time step up to ``dt`` that puts every pose ``interval`` seconds apart
+    on a step: the run is read exactly at each pose."""
+    return interval / math.ceil(interval / dt * (1.0 - 1e-12))
+
+
+def converge_stretch(read: StretchReading, limit: LeadLimit, dt: float, scale: float,
+                     runs: int, poses: int, units: dict[str, str] | None = None
+                     ) -> list[Convergence] | None:
+    """The rules of :func:`converge` on one continuous run through ``poses`` poses: the
+    lead-in lengthened at the first pose (:func:`lengthen_lead`: later poses follow a longer
+    run, whose start-up transient has died further), then the whole run repeated at half
+    the time step (the same lead steps) until each pose's two readings agree within
+    :data:`TIMESTEP_AGREEMENT_RTOL`, a repeat running only as far as the last pose not yet
+    agreed. None where the lead-in does not converge (its poses are then run one by one).
+    Each pose's ``total_steps`` is its share of the stretch's."""
+    first = lengthen_lead(lambda steps, step: read(steps, step, 1)[0][0], limit, dt, scale,
+                          runs, units)
+    if not first.lead_disagreement <= LEAD_AGREEMENT_RTOL:
+        return None
+    outs = [Convergence(values, first.lead_steps, dt, lead_disagreement=first.lead_disagreement,
+                        run=run) for values, run in read(first.lead_steps, dt, poses)]
+    total = first.total_steps + runs * round(sum(o.run.get("steps", 0.0) for o in outs[-1:]))
+    pending = list(range(poses))
+    for _ in range(MAX_TIMESTEP_HALVINGS):
+        if not pending:
+            break
+        dt *= 0.5
+        finer = read(first.lead_steps, dt, pending[-1] + 1)
+        total += runs * round(finer[-1][1].get("steps", 0.0))
+        still = []
+        for k in pending:
+            residual = disagreement(finer[k][0], outs[k].values, scale, units)
+            out = outs[k]
+            out.values, out.run, out.dt = finer[k][0], finer[k][1], dt
+            out.timestep_disagreement = residual if np.isfinite(residual) else np.inf
+            if residual > TIMESTEP_AGREEMENT_RTOL:  # NaN stops a pose, as in :func:`halve_timestep`
+                still.append(k)
+        pending = still
+    for out in outs:
+        out.total_steps = total // poses
+    return outs
 
 
 #: A driven run whose pose at the instant is farther than this × the linkage's size from

@@ -4,10 +4,11 @@ value, velocity and acceleration over time, and how far back a lead-in may start
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Joint, Link, Linkage
@@ -240,11 +241,132 @@ def at_first_driver(case: Case, value: float) -> Case:
     return replace(case, geometry=replace(linkage, drivers=(first, *linkage.drivers[1:])))
 
 
-def driven_sweep(case: Case, first: Array, drive: Callable[[Case], Solution]) -> list[Solution]:
-    """A driven linkage over values of its first driver: one driven run per pose (``drive``),
-    each reaching its pose with the case's rates. A run needs its own lead-in along its own
-    motion, so nothing carries over from the last pose."""
-    return [drive(at_first_driver(case, v)) for v in first]
+#: Sweep values within this fraction of the grid's step of an evenly spaced whole turn lie on
+#: it (the CLI's degrees converted to radians round at 1e-16 of a turn).
+GRID_RTOL = 1e-9
+#: A continuous run's motion between two poses is checked for the condition rule at
+#: STRETCH_SAMPLES − 1 points evenly between them (the midpoint: each is analysed with its
+#: condition number, a third of a 360-pose sweep's analysis with three points).
+STRETCH_SAMPLES = 2
+
+#: A driven run over the poses of a stretch (the case at its first pose, the poses' values
+#: in the order the motion passes them, their analytic analysis): one Solution per pose
+#: (None: that pose is run alone), or None where the stretch cannot be run as one motion
+#: (its poses are then run one by one).
+StretchRun = Callable[[Case, Array, LinkageResults], "Sequence[Solution | None] | None"]
+
+
+def continuous_reason(case: Case, first: Array) -> str:
+    """Why a driven sweep over ``first`` is not one continuous motion ("" if it is): the
+    case must turn its first driver at a constant speed with every other driver held, and
+    the values must lie on an evenly spaced grid of one whole turn (a periodic motion, each
+    pose passed once; the sweep's poses the gate withheld are not among them, so part of a
+    turn on such a grid counts too)."""
+    drivers = case.linkage.drivers
+    lead, others = drivers[0], drivers[1:]
+    if not case.linkage.is_moving:
+        return "a quasi-static friction run: each pose is driven on its own at creeping speed"
+    if lead.acceleration or any(d.acceleration for d in others) or not lead.velocity:
+        return ("the drivers accelerate: the prescribed motion is not one constant-speed "
+                "motion through the poses")
+    if any(d.velocity for d in others):
+        return "a driver other than the first moves: the sweep's poses are not on one motion"
+    if not case.linkage.joint(lead.joint).kind.rotates:
+        return "the first driver slides: its motion is not periodic"
+    if grid_step(first) is None:
+        return "the values are not on an evenly spaced grid of a whole turn"
+    return ""
+
+
+def grid_step(first: Array) -> float | None:
+    """The step of the evenly spaced whole turn (2π/n) the values lie on, or None."""
+    values = np.sort(np.asarray(first, dtype=float))
+    if values.size < 2 or values[-1] - values[0] >= 2.0 * math.pi:
+        return None
+    step = float(np.diff(values).min())
+    if step <= 0.0:
+        return None
+    n = round(2.0 * math.pi / step)
+    step = 2.0 * math.pi / n
+    offsets = (values - values[0]) / step
+    return step if np.abs(offsets - np.round(offsets)).max() <= GRID_RTOL else None
+
+
+def stretches(case: Case, first: Array, results: LinkageResults) -> list[NDArray[np.intp]]:
+    """The poses of a continuous sweep (indices into ``first``) in the runs that pass them,
+    each in the order its motion does: a run starts after a pose missing from the whole turn
+    (one the gate withheld), and again wherever its motion since the last pose passes a pose
+    whose condition number is more than ``LEAD_CONDITION_GROWTH`` times the one it reaches
+    (the rule of a per-pose lead-in, :func:`lead_limit`)."""
+    step = grid_step(first)
+    assert step is not None
+    sense = 1.0 if case.linkage.drivers[0].velocity > 0.0 else -1.0
+    order: NDArray[np.intp] = np.argsort(sense * np.asarray(first, dtype=float), kind="stable")
+    ticks = np.round(sense * (first[order] - first[order[0]]) / step).astype(int)
+    gaps = np.diff(np.append(ticks, ticks[0] + round(2.0 * math.pi / step))) != 1
+    start = (int(np.flatnonzero(gaps)[-1]) + 1) % order.size if gaps.any() else 0
+    order = np.roll(order, -start)
+    gaps = np.roll(gaps, -start)
+    calm = calm_passages(case, first[order], sense * step, results.take(order))
+    breaks = gaps[:-1] | np.logical_not(calm)
+    return np.split(order, np.flatnonzero(breaks) + 1)
+
+
+def calm_passages(case: Case, values: Array, step: float, results: LinkageResults) -> Array:
+    """For each pose after the first, whether the motion from the one before passes no pose
+    whose condition number exceeds ``LEAD_CONDITION_GROWTH`` times its own (and assembles)."""
+    fractions = np.arange(1, STRETCH_SAMPLES) / STRETCH_SAMPLES
+    between = (values[:-1, None] + step * fractions[None, :]).ravel()
+    cond = np.concatenate([lead_samples(case, between[k:k + LEAD_CHUNK])
+                           for k in range(0, between.size, LEAD_CHUNK)] or [np.empty(0)])
+    worst = cond.reshape(values.size - 1, -1).max(axis=1, initial=0.0)
+    return np.asarray(worst <= LEAD_CONDITION_GROWTH * np.asarray(results.condition)[1:], dtype=bool)
+
+
+def lead_samples(case: Case, first: Array) -> Array:
+    """The condition number at these values of the first driver (∞ where it does not
+    assemble)."""
+    found = analytic_results(case, first)
+    return np.where(np.asarray(found.pose.assembled, dtype=bool), found.condition, np.inf)
+
+
+#: Why a stretch's poses ran one by one when the simulator did not run it as one motion.
+STRETCH_REFUSED = ("per pose: the simulator does not run this stretch as one motion (a gear "
+                   "mesh, a Coulomb joint at rest or reversing at a pose, or no lead-in to it "
+                   "converged)")
+
+
+def driven_sweep(case: Case, first: Array, drive: Callable[[Case], Solution],
+                 run: StretchRun | None = None,
+                 results: LinkageResults | None = None) -> list[Solution]:
+    """A driven linkage over values of its first driver. Where the sweep is one continuous
+    motion (:func:`continuous_reason`) and the simulator can ``run`` stretches, each stretch
+    of poses (:func:`stretches`) is one run read as it passes them; every other pose is one
+    driven run of its own (``drive``), reaching its pose with the case's rates after its own
+    lead-in. The diagnostic ``sweep_run`` says which, and why a sweep fell back.
+    ``results``: the analytic analysis of ``first``, if already made."""
+    first = np.atleast_1d(np.asarray(first, dtype=float))
+    why = "no continuous run in this simulator" if run is None else continuous_reason(case, first)
+    if why or run is None:
+        return [noted(drive(at_first_driver(case, v)), f"per pose: {why}") for v in first]
+    results = results if results is not None else analytic_results(case, first)
+    out: list[Solution | None] = [None] * first.size
+    for stretch in stretches(case, first, results):
+        solved = run(at_first_driver(case, first[stretch[0]]), first[stretch],
+                     results.take(stretch)) if stretch.size > 1 else None
+        for k, i in enumerate(stretch.tolist()):
+            found = solved[k] if solved is not None else None
+            out[i] = (noted(found, f"continuous: one run through {stretch.size} poses")
+                      if found is not None
+                      else noted(drive(at_first_driver(case, first[i])),
+                                 "per pose: no calm continuous motion from a neighbour"
+                                 if stretch.size == 1 else STRETCH_REFUSED))
+    return [s for s in out if s is not None]
+
+
+def noted(solution: Solution, how: str) -> Solution:
+    """``solution`` with how the sweep ran it (``sweep_run``) among its diagnostics."""
+    return replace(solution, diagnostics={**solution.diagnostics, "sweep_run": how})
 
 
 def gated_sweep(case: Case, first: Array, backend: str,

@@ -45,7 +45,7 @@ from mechcheck.sim_models.mujoco.batch_settle import (
     kept_models,
 )
 from mechcheck.sim_models.mujoco.joint_kinds import BUILDS
-from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage
+from mechcheck.sim_models.mujoco.linkage_dynamics import drive_linkage, drive_stretch
 from mechcheck.sim_models.mujoco.linkage_free import settle_free
 from mechcheck.sim_models.mujoco.linkage_friction import (
     apply_friction,
@@ -398,7 +398,7 @@ def sweep_linkage(case: Case, first: np.ndarray, backend: str = "mujoco",
     first = np.asarray(first, dtype=float)
     why = unbuildable(case) or (unsettled_members(case) if backend == "mujoco" else rigid_only(case))
     if backend == "mujoco" and why is None and is_driven(case):
-        return driven_sweep(case, first, settle_linkage)
+        return driven_sweep(case, first, settle_linkage, drive_stretch, results)
     if backend == "mujoco":
         why = why or (FREE_SWEEP_REFUSAL if has_free_coordinates(case) else None)
     if why is not None:

@@ -53,17 +53,21 @@ from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.convergence import (
     Convergence,
     converge,
+    converge_stretch,
     driven_verdict,
     inertia_correction,
     massless_limit,
+    stretch_timestep,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.inertia import link_extent, real_inertial
 from mechcheck.sim_models.linkage_motion import (
     Motion,
+    at_first_driver,
     at_rest_reason,
     driven_motion,
     lead_limit,
+    prescribed_motion,
     self_locking_note,
 )
 from mechcheck.sim_models.mujoco.joint_kinds import builder_of
@@ -207,19 +211,153 @@ def read_drive(rigs: LinkageRigs, motion: Motion, steps: int, dt: float,
     differ by their inertia alone."""
     for rig in rigs.members:
         start_run(rig, motion, steps, dt)
+    run_steps(rigs, steps, friction)
+    return read_instant(rigs, friction)
+
+
+def run_steps(rigs: LinkageRigs, steps: int, friction: bool,
+              loads: list[PointLoads] | None = None) -> None:
+    """Step the models in lockstep, each step's friction from the massless-limit reactions;
+    ``loads``: each model's loads applied by :class:`PointLoads` (else by the rig)."""
     for _ in range(steps):
-        for rig in rigs.members:
-            forward(rig)
+        for k, rig in enumerate(rigs.members):
+            if loads is None:
+                forward(rig)
+            else:
+                mujoco.mj_kinematics(rig.model, rig.data)
+                loads[k].apply(rig)
+                mujoco.mj_forward(rig.model, rig.data)
         if friction:
             with_friction(rigs, massless_reactions)
         for rig in rigs.members:
             mujoco.mj_Euler(rig.model, rig.data)
+
+
+class PointLoads:
+    """A rig's xfrc_applied at its current pose when it is the loads and the friction alone
+    (:meth:`.linkage_loads.RigLoads.wrenches` without a gear mesh, a carried force or a
+    closure's damper, :func:`plain`), summed per body by ``bincount``: a long run applies it
+    at every step, where the general path's small-array calls cost three times MuJoCo's
+    forward pass. The same sums, in another order (rounding apart)."""
+
+    def __init__(self, rig: LinkageRig) -> None:
+        table = rig.loads
+        self.sites, self.bodies = table.sites, table.bodies
+        self.fx, self.fy = table.forces[:, 0].copy(), table.forces[:, 1].copy()
+        self.torques = np.asarray(table.torques, dtype=float)
+        self.base = np.zeros((rig.model.nbody, 6))
+        self.base[:, 0:3] = rig.body_forces
+
+    def apply(self, rig: LinkageRig) -> None:
+        d = rig.data
+        wrench = self.base + rig.extra
+        if self.sites.size:
+            arm = d.site_xpos[self.sites] - d.xipos[self.bodies]
+            moment = arm[:, 0] * self.fy - arm[:, 1] * self.fx + self.torques
+            wrench[:, 5] += np.bincount(self.bodies, moment, minlength=len(wrench))
+        d.xfrc_applied[:] = wrench
+
+
+def plain(rig: LinkageRig) -> bool:
+    """The rig's loads are the point loads and the friction alone (:class:`PointLoads`)."""
+    return not (rig.meshes or rig.carried.any() or (rig.closure_damping and rig.viscous))
+
+
+def read_instant(rigs: LinkageRigs, friction: bool) -> dict[str, float]:
+    """The values at the models' current state, free of fictitious inertia; with friction,
+    after :data:`FINAL_FRICTION_PASSES` passes that match it to the reactions."""
     values: dict[str, float] = {}
     for _ in range(FINAL_FRICTION_PASSES if friction else 1):
         for rig in rigs.members:
             forward(rig)
         values = with_friction(rigs) if friction else massless_reading(rigs)
     return values
+
+
+def read_stretch(rigs: LinkageRigs, motion: Motion, lead: int, dt: float, interval: float,
+                 poses: int, friction: bool, reference: np.ndarray
+                 ) -> list[tuple[dict[str, float], dict[str, float]]]:
+    """One run through ``poses`` poses ``interval`` seconds apart, the first after ``lead``
+    steps of ``dt``: each pose's values (as :func:`read_drive`) read at the step that
+    reaches it, and what the run measured there (steps so far, the clock's speed error,
+    the loop's gap, the pose's distance from the analytic ``reference`` qpos)."""
+    for rig in rigs.members:
+        start_run(rig, motion, lead, dt)
+    per_pose = round(interval / dt)
+    base = rigs.base
+    loads = [PointLoads(rig) for rig in rigs.members] if all(map(plain, rigs.members)) else None
+    out = []
+    for k in range(poses):
+        run_steps(rigs, lead if k == 0 else per_pose, friction, loads)
+        values = read_instant(rigs, friction)
+        assert base.clock is not None
+        out.append((values, {
+            "steps": float(lead + k * per_pose),
+            "residual_velocity": abs(float(base.data.qvel[base.clock]) - 1.0),
+            "loop_violation": base.loop_violation(),
+            "pose_drift": turned_drift(base, reference[k]),
+            "fictitious_inertia_correction": (inertia_correction(base.read(), values, base.scale,
+                                                                 base.units)
+                                              if rigs.doubled is not None else 0.0)}))
+    return out
+
+
+def turned_drift(rig: LinkageRig, qpos: np.ndarray) -> float:
+    """:meth:`.linkage_build.LinkageRig.pose_drift` with every hinge's difference taken
+    modulo a turn: a continuous run's hinges count the turns it has made."""
+    gap = rig.data.qpos - qpos
+    turning = rig.hinge[rig.model.dof_jntid]
+    gap = np.where(turning, np.remainder(gap + np.pi, 2.0 * np.pi) - np.pi, gap)
+    return float(np.abs(gap * rig.weight).max(initial=0.0))
+
+
+def drive_stretch(case: Case, values: np.ndarray, results: LinkageResults
+                  ) -> list[Solution] | None:
+    """The ``mujoco`` backend at the poses ``values`` of a continuous sweep (the case at the
+    first, turning at constant speed; ``results`` their analytic analysis): one run read at
+    each pose as it passes (:func:`read_stretch`), judged by
+    :func:`~mechcheck.sim_models.convergence.converge_stretch`. None where the poses are to
+    be run one by one: a gear mesh (its side is chosen per run), a Coulomb joint at rest or
+    reversing at a pose, or a lead-in that does not converge."""
+    start = time.perf_counter()
+    if any(at_rest_reason(at_first_driver(case, v), DYNAMIC.timestep) for v in values):
+        return None
+    motion = prescribed_motion(case)
+    rigs = driven_rigs(case, motion)
+    if rigs.base.meshes:
+        return None
+    friction = case.has_coulomb_friction
+    interval = abs(float(values[1] - values[0]) / float(motion.velocity[0]))
+    reference = rigs.base.joint_states(results.pose)[0]
+
+    def read(lead: int, dt: float, poses: int) -> list[tuple[dict[str, float], dict[str, float]]]:
+        return read_stretch(rigs, motion, lead, dt, interval, poses, friction, reference)
+
+    outs = converge_stretch(read, lead_limit(case, motion, float(results.condition[0])),
+                            stretch_timestep(DYNAMIC.timestep, interval), rigs.base.scale,
+                            rigs.runs, len(values), rigs.base.units)
+    if outs is None:
+        return None
+    share = (time.perf_counter() - start) / len(values)
+    return [stretch_solution(case, rigs, out, results.take(np.array([k])), share)
+            for k, out in enumerate(outs)]
+
+
+def stretch_solution(case: Case, rigs: LinkageRigs, out: Convergence, results: LinkageResults,
+                     share: float) -> Solution:
+    """A pose of a continuous run with its diagnostics (those of :func:`driven_solution`,
+    measured at the step that reached it)."""
+    run = out.run
+    units = rigs.base.units or {}
+    diagnostics = RunDiagnostics(
+        "driven", out.total_steps, share, run["residual_velocity"], run["loop_violation"],
+        run["pose_drift"],
+    ).as_dict(lead_disagreement=out.lead_disagreement, lead_steps=out.lead_steps,
+              timestep=out.dt, timestep_disagreement=out.timestep_disagreement,
+              fictitious_runs=rigs.runs,
+              fictitious_inertia_correction=run["fictitious_inertia_correction"])
+    return driven_verdict(case.name, "mujoco", out, diagnostics, units, case.linkage.scale,
+                          lambda: out.verdict() + self_locking_note(results))
 
 
 def drive_linkage(case: Case, results: LinkageResults) -> Solution:

@@ -45,19 +45,23 @@ from mechcheck.analytic.solution import Solution, quantity_kind
 from mechcheck.sim_models.convergence import (
     Convergence,
     converge,
+    converge_stretch,
     disagreement,
     driven_verdict,
     inertia_correction,
     left_assembly,
     massless_limit,
+    stretch_timestep,
 )
 from mechcheck.sim_models.diagnostics import RunDiagnostics
 from mechcheck.sim_models.linkage_motion import (
     Motion,
+    at_first_driver,
     at_rest_reason,
     driven_motion,
     has_free_coordinates,
     lead_limit,
+    prescribed_motion,
     self_locking_note,
 )
 from mechcheck.sim_models.pymunk.linkage import loop_violations, pose_drifts, pose_table
@@ -283,35 +287,98 @@ def run_drive(twins: Twins, motion: Motion, steps: int, dt: float) -> DriveEnd:
     its reading moves when that step is solved again with more iterations
     (:func:`resolve_last_step`)."""
     linkage = twins.base.linkage
-    times = dt * np.arange(-steps, 2, dtype=float)  # t0 … t* + dt
+    values = start_drive(twins, motion, steps, dt, 0)
+    history: list[Values] = []
+    before_last = advance(twins, values, 0, steps, history, dt)
+    instant = solve_pose(linkage, *motion.at(np.zeros(1)))
+    return drive_end(twins, motion, 0.0, instant.q, before_last, dt)
+
+
+def start_drive(twins: Twins, motion: Motion, steps: int, dt: float, after: int) -> Array:
+    """Place the twins ``steps·dt`` before the instant on the prescribed motion (the analytic
+    pose, its velocities half a step later); the drivers' values at every step from there
+    to ``after`` steps past the instant, and two more."""
+    linkage = twins.base.linkage
+    times = dt * np.arange(-steps, after + 2, dtype=float)  # t0 … t* + (after + 1)·dt
     values, _, _ = motion.at(times)
     start = solve_pose(linkage, *motion.at(times[:1]))
     half = solve_pose(linkage, *motion.at(times[:1] + 0.5 * dt))
     for model in twins.models:
         place(model, start.q[0])
         set_velocities(model, half.qdot[0])
-    history: list[Values] = []
-    before_last: tuple[list[list[BodyState]], list[Values]] = ([], [])
-    for n in range(steps):
+    return values
+
+
+Saved = tuple[list[list[BodyState]], list[Values]]
+
+
+def advance(twins: Twins, values: Array, first: int, last: int, history: list[Values],
+            dt: float) -> Saved:
+    """Steps ``first`` … ``last − 1`` of a run whose drivers' values per step are
+    ``values``; the state before the last of them (to solve it again)."""
+    before_last: Saved = ([], [])
+    for n in range(first, last):
         for model in twins.models:
             drive_to(model, values[n + 2])  # the position the next update must reach
-        if n == steps - 1:
+        if n == last - 1:
             before_last = [snapshot(m.bodies.values()) for m in twins.models], list(history)
         step_once(twins, history, dt)
+    return before_last
+
+
+def drive_end(twins: Twins, motion: Motion, t: float, instant: Array, before_last: Saved,
+              dt: float) -> DriveEnd:
+    """The reading of the step that reached the time ``t`` of the motion, whose analytic
+    pose is ``instant`` (1, 3n); the models are left as the check of its solve
+    (:func:`resolve_last_step`) leaves them."""
+    linkage = twins.base.linkage
     base = twins.base
     # The velocities now are those of half a step past the instant.
-    _, prescribed, _ = motion.at(np.array([0.5 * dt]))
+    _, prescribed, _ = motion.at(np.array([t + 0.5 * dt]))
     q = coordinates(base)
     pose = {k: float(v[0]) for k, v in pose_table(linkage, q[None, :]).items()}
     reactions_now, correction = twins.reading()
     rate_error = float(np.abs(driver_rates(base) - prescribed[0]).max(initial=0.0))
     # Every twin's: one that left the assembly spoils the extrapolation of both.
     radius = np.array([gyration_radius(linkage, link) for link in linkage.moving_links])
-    instant = solve_pose(linkage, *motion.at(times[steps:steps + 1]))
-    drift = float(pose_drifts(radius, np.array([coordinates(m) for m in twins.models]),
-                              np.repeat(instant.q, len(twins.models), axis=0)).max())
+    simulated = np.array([coordinates(m) for m in twins.models])
+    drift = float(pose_drifts(radius, simulated,
+                              turned_like(simulated, np.repeat(instant, len(twins.models),
+                                                               axis=0))).max())
     unsolved = resolve_last_step(twins, *before_last, reactions_now, dt)
     return DriveEnd(pose | reactions_now, q, rate_error, correction, unsolved, drift)
+
+
+def turned_like(q: Array, reference: Array) -> Array:
+    """``reference`` (M, 3n) with each body's angle moved by whole turns to the nearest of
+    ``q``'s: a long run's bodies count the turns they have made."""
+    out = np.array(reference, dtype=float)
+    gap = q[:, 2::3] - out[:, 2::3]
+    out[:, 2::3] += 2.0 * np.pi * np.round(gap / (2.0 * np.pi))
+    return out
+
+
+def run_stretch(twins: Twins, motion: Motion, lead: int, dt: float, per_pose: int,
+                instants: Array) -> list[DriveEnd]:
+    """One run through the poses ``instants`` (M, 3n, analytic, each ``per_pose`` steps
+    after the last), the first after ``lead`` steps of ``dt``: at the step that reaches each
+    pose, its reading as :func:`run_drive` takes it. The run then goes on from that step as
+    it was taken (the check of its solve undone, bodies and friction history; the
+    constraints keep its better warm start)."""
+    poses = len(instants)
+    values = start_drive(twins, motion, lead, dt, (poses - 1) * per_pose)
+    history: list[Values] = []
+    ends = []
+    for k in range(poses):
+        first = 0 if k == 0 else lead + (k - 1) * per_pose
+        before_last = advance(twins, values, first, lead + k * per_pose, history, dt)
+        taken = [snapshot(m.bodies.values()) for m in twins.models], list(history)
+        ends.append(drive_end(twins, motion, k * per_pose * dt, instants[k:k + 1],
+                              before_last, dt))
+        for bodies in taken[0]:
+            restore(bodies)
+        history[:] = taken[1]
+    return ends
 
 
 def step_once(twins: Twins, history: list[Values], dt: float) -> None:
@@ -411,11 +478,99 @@ def read_drive(case: Case, motion: Motion, steps: int, dt: float, iterations: in
         end = run_drive(twins, motion, steps, dt)
     except Diverged:
         return DriveEnd(dict.fromkeys(units, math.nan), coordinates(twins.base), math.nan)
-    if left_assembly(end.drift, case.linkage.scale):
-        kinds = {q: quantity_kind(q, units.get(q)) for q in end.values}
-        return replace(end, values={q: v if kinds[q] == "pose" else math.nan
-                                    for q, v in end.values.items()})
-    return end
+    return withheld(end, units, case.linkage.scale)
+
+
+def withheld(end: DriveEnd, units: dict[str, str], scale: float) -> DriveEnd:
+    """``end`` with NaN forces where its run left the assembly it was started on
+    (:func:`left_assembly`): no convergence rule accepts them."""
+    if not left_assembly(end.drift, scale):
+        return end
+    kinds = {q: quantity_kind(q, units.get(q)) for q in end.values}
+    return replace(end, values={q: v if kinds[q] == "pose" else math.nan
+                                for q, v in end.values.items()})
+
+
+def read_stretch(case: Case, motion: Motion, lead: int, dt: float, interval: float,
+                 instants: Array, iterations: int) -> list[DriveEnd]:
+    """:func:`run_stretch` on fresh twins, as :func:`read_drive` reads one pose: a run that
+    diverges reads NaN from there on, a pose where it had left the assembly NaN forces."""
+    twins = build_twins(case, motion, dt, iterations)
+    units = quantity_units(case.linkage)
+    ends: list[DriveEnd] = []
+    try:
+        ends = run_stretch(twins, motion, lead, dt, round(interval / dt), instants)
+    except Diverged:
+        lost = DriveEnd(dict.fromkeys(units, math.nan), coordinates(twins.base), math.nan)
+        ends = [lost] * len(instants)
+    return [withheld(end, units, case.linkage.scale) for end in ends]
+
+
+def drive_stretch(case: Case, values: Array, results: LinkageResults
+                  ) -> list[Solution | None] | None:
+    """The ``pymunk`` backend at the poses ``values`` of a continuous sweep (the case at the
+    first, turning at constant speed; ``results`` their analytic analysis): one run read at
+    each pose as it passes (:func:`run_stretch`), judged by
+    :func:`~mechcheck.sim_models.convergence.converge_stretch`, at each rung of
+    :data:`ITERATIONS` in turn (:func:`climb`). None where the poses are to be run one by
+    one: a refused case, or a Coulomb joint at rest or reversing at a pose; None for a pose
+    that no rung's lead-in reached."""
+    start = time.perf_counter()
+    if refusal(case) is not None or any(at_rest_reason(at_first_driver(case, v), DRIVEN.dt,
+                                                       SENSED_RATE) for v in values):
+        return None
+    runs = 2 if has_fictitious_inertia(case.linkage, False) else 1
+    interval = abs(float(values[1] - values[0]) / float(case.linkage.drivers[0].velocity))
+    found: list[Rung | None] = [None] * len(values)
+    steps = 0
+    for iterations in ITERATIONS:
+        pending = [k for k, f in enumerate(found) if f is None or not f[0].converged]
+        for group in np.split(np.array(pending, dtype=int),
+                              np.flatnonzero(np.diff(pending) != 1) + 1) if pending else []:
+            steps += climb(case, values, results, group, iterations, interval, runs, found)
+    share = (time.perf_counter() - start) / len(values)
+    out: list[Solution | None] = []
+    for k, f in enumerate(found):
+        if f is not None:
+            f[0].total_steps = steps // len(values)
+        out.append(None if f is None else driven_solution(
+            case, results.take(np.array([k])), f[0], f[1], runs, f[2], share))
+    return out
+
+
+#: A pose's reading at a rung of :data:`ITERATIONS`: its convergence, its run's end, the rung.
+Rung = tuple[Convergence, DriveEnd, int]
+
+
+def climb(case: Case, values: Array, results: LinkageResults, group: Array, iterations: int,
+          interval: float, runs: int, found: list[Rung | None]) -> int:
+    """One rung for the consecutive poses ``group`` (indices into ``values``) not yet
+    converged: a run from a lead-in to the first of them through the rest
+    (:func:`~mechcheck.sim_models.convergence.converge_stretch`), each pose's reading put in
+    ``found``; a rung whose lead-in does not converge leaves them as they were. Returns the
+    steps it took."""
+    at = at_first_driver(case, float(values[group[0]]))
+    motion = prescribed_motion(at)
+    instants = np.asarray(results.pose.q)[group]
+    units = quantity_units(case.linkage)
+    ends: dict[tuple[float, int], DriveEnd] = {}  # by time step and pose
+
+    def read(lead: int, dt: float, poses: int) -> list[tuple[dict[str, float], dict[str, float]]]:
+        got = read_stretch(at, motion, lead, dt, interval, instants[:poses], iterations)
+        ends.update(((dt, k), e) for k, e in enumerate(got))
+        return [(e.values, {"steps": float(lead + k * round(interval / dt))})
+                for k, e in enumerate(got)]
+
+    outs = converge_stretch(read, lead_limit(at, motion, float(results.condition[group[0]])),
+                            stretch_timestep(DRIVEN.dt, interval), case.linkage.scale, runs,
+                            len(group), units)
+    if outs is None:
+        return 0
+    for j, k in enumerate(group.tolist()):
+        end = ends[(outs[j].dt, j)]
+        outs[j].solver_disagreement = end.solver_disagreement
+        found[k] = (outs[j], end, iterations)
+    return outs[0].total_steps * len(outs)
 
 
 def drive_at_timestep(case: Case, dt: float, lead_time: float) -> Solution:

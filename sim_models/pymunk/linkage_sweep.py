@@ -69,9 +69,10 @@ def sweep(case: Case, first: ArrayLike, backend: str = "pymunk",
         raise CaseError(NOTHING_TO_SWEEP, key="drivers", case=case.name)
     values = np.atleast_1d(np.asarray(first, dtype=float))
     if backend == "pymunk" and is_driven(case):
-        from mechcheck.sim_models.pymunk.linkage_dynamics import drive_linkage
+        from mechcheck.sim_models.pymunk.linkage_dynamics import drive_linkage, drive_stretch
 
-        return driven_sweep(case, values, lambda at: drive_linkage(at, analytic_results(at)))
+        return driven_sweep(case, values, lambda at: drive_linkage(at, analytic_results(at)),
+                            drive_stretch, results)
     refused = refusal(case, backend)
     if refused is not None:
         return [refused] * len(values)

@@ -1,0 +1,169 @@
+"""Driven sweeps run as one continuous motion: the user's Whitworth quick-return turning at
+10 rad/s, a whole turn in 1° steps (360 poses, ``mechcheck sweep --driver 0:360:1``),
+through each simulator's ``sweep``, against that simulator's own stepping cost for the same
+steps (its C floor, measured in the same run).
+
+The floor: the steps the sweep took, counted in an untimed run of the same (deterministic)
+sweep, made again with nothing else in the loop. MuJoCo: one single-threaded
+``mujoco.rollout`` of the driven model (its clock and drive) for as many steps, each a
+forward pass and an Euler step, as the sweep's are. pymunk: Chipmunk's ``cpSpaceStep`` on
+the driven Space, as many times at each time step and iteration count as the sweep stepped
+there. The sweep's own work on top (loads, friction, readings, checks, the analytic
+seeds) is the ratio. Medians over ``--repeats`` with min and max.
+
+    python benchmarks/bench_sweep_driven.py --repeats 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+import pymunk
+
+from mechcheck import load_cases
+from mechcheck.analytic.case import Case
+from mechcheck.analytic.solution import Solution
+from mechcheck.backends import get
+
+CASES = [Path("compare/cases/users/whitworth.toml"), Path("/work/shared/cases/users/whitworth.toml")]
+
+
+def whitworth() -> Case:
+    path = next(p for p in CASES if p.exists())
+    return next(c for c in load_cases(path) if c.name == "whitworth-running")
+
+
+def sweep(case: Case, grid: np.ndarray, backend: str) -> list[Solution]:
+    run = get(backend).sweeper()
+    assert run is not None
+    solutions: list[Solution] = run(case, grid, backend)
+    return solutions
+
+
+@contextmanager
+def counting(backend: str) -> Iterator[Counter[tuple[float, int]]]:
+    """The sweep's steps while inside, by (time step, iterations): MuJoCo's Euler steps,
+    pymunk's Space steps."""
+    counts: Counter[tuple[float, int]] = Counter()
+    if backend == "mujoco":
+        euler = mujoco.mj_Euler
+
+        def counted_euler(m: Any, d: Any) -> None:
+            counts[(float(m.opt.timestep), 0)] += 1
+            euler(m, d)
+
+        mujoco.mj_Euler = counted_euler
+        try:
+            yield counts
+        finally:
+            mujoco.mj_Euler = euler
+        return
+    step = pymunk.Space.step
+
+    def counted_step(space: pymunk.Space, dt: float) -> None:
+        counts[(dt, space.iterations)] += 1
+        step(space, dt)
+
+    pymunk.Space.step = counted_step  # type: ignore[method-assign]
+    try:
+        yield counts
+    finally:
+        pymunk.Space.step = step  # type: ignore[method-assign]
+
+
+def mujoco_floor(case: Case, counts: Counter[tuple[float, int]]) -> float:
+    """Seconds for one single-threaded rollout of the driven model per time step, as many
+    steps as the sweep took at it."""
+    from mujoco import rollout
+
+    from mechcheck.sim_models.linkage_motion import prescribed_motion
+    from mechcheck.sim_models.mujoco.linkage_dynamics import driven_rigs
+
+    rig = driven_rigs(case, prescribed_motion(case)).base
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    took = 0.0
+    for (dt, _), n in counts.items():
+        rig.model.opt.timestep = dt
+        mujoco.mj_resetData(rig.model, rig.data)
+        state = np.zeros(mujoco.mj_stateSize(rig.model, spec))
+        mujoco.mj_getState(rig.model, rig.data, state, spec)
+        start = time.perf_counter()
+        rollout.rollout(rig.model, rig.data, state[None, :], nstep=n)
+        took += time.perf_counter() - start
+    return took
+
+
+def pymunk_floor(case: Case, counts: Counter[tuple[float, int]]) -> float:
+    """Seconds of ``cpSpaceStep`` alone on the driven Space, as many times at each time step
+    and iteration count as the sweep stepped there."""
+    from dataclasses import replace
+
+    from mechcheck.sim_models.pymunk._fast.bulk import lib
+    from mechcheck.sim_models.pymunk.linkage_dynamics import DRIVEN
+    from mechcheck.sim_models.pymunk.linkage_model import build_linkage_model
+
+    took = 0.0
+    for (dt, iterations), n in counts.items():
+        # The driven Space without the run's Python: no loads or friction callbacks.
+        settings = replace(DRIVEN, dt=dt, iterations=iterations)
+        model = build_linkage_model(case, settings, np.zeros(3 * len(case.linkage.moving_links)),
+                                    driven=True)
+        model.space.gravity = (0.0, -9.81)  # loaded (see bench_pymunk.c_floor: no subnormals)
+        step, space = lib.cpSpaceStep, model.space._space
+        start = time.perf_counter()
+        for _ in range(n):
+            step(space, dt)
+        took += time.perf_counter() - start
+    return took
+
+
+def spread(values: list[float], digits: int = 2) -> str:
+    return (f"{statistics.median(values):.{digits}f} ({min(values):.{digits}f}, "
+            f"{max(values):.{digits}f})")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--step", type=float, default=1.0, help="grid step, degrees")
+    args = parser.parse_args()
+    case = whitworth()
+    grid = np.radians(np.arange(0.0, 360.0, args.step))
+    floors: dict[str, Callable[[Case, Counter[tuple[float, int]]], float]] = {
+        "mujoco": mujoco_floor, "pymunk": pymunk_floor}
+    print(f"Whitworth turning at 10 rad/s, {grid.size} poses; median (min, max) of "
+          f"{args.repeats} repeats")
+    print("| backend | ok | continuous | sweep s | steps | ms/pose | C floor ms/pose | "
+          "ratio to floor |")
+    print("|---|---|---|---|---|---|---|---|")
+    for backend, floor_of in floors.items():
+        with counting(backend) as counts:
+            solutions = sweep(case, grid, backend)
+        ok = sum(s.status == "ok" for s in solutions)
+        continuous = sum(str(s.diagnostics.get("sweep_run", "")).startswith("continuous")
+                         for s in solutions)
+        took, floor = [], []
+        for _ in range(args.repeats):
+            start = time.perf_counter()
+            sweep(case, grid, backend)
+            took.append(time.perf_counter() - start)
+            floor.append(floor_of(case, counts))
+        per_pose = [1e3 * t / grid.size for t in took]
+        floor_ms = [1e3 * f / grid.size for f in floor]
+        ratio = [t / f for t, f in zip(took, floor, strict=True)]
+        print(f"| {backend} | {ok} | {continuous} | {spread(took, 1)} | "
+              f"{sum(counts.values())} | {spread(per_pose)} | {spread(floor_ms)} | "
+              f"{spread(ratio)} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
