@@ -25,6 +25,8 @@ number 1.03e4) a second one, over a window, left 3e-10.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mechcheck.sim_models.pymunk.readout import Readout
@@ -98,6 +100,8 @@ class SlowMode:
         """Read the impulses of the step just taken; carry them to the slow mode's limit if
         its ratio is steady, or once a window has passed since the last time."""
         x = np.array(self.readout.accumulated())
+        if self.contraction == math.inf:   # gave up extrapolating (see _over_window)
+            return
         if self.contraction:
             self._over_window(x)
             return
@@ -122,7 +126,15 @@ class SlowMode:
         net = x - self._anchor
         if np.abs(net).max() > self.noise * np.abs(x).max():
             shrink = self.contraction ** window
-            self._carry(x + net * (shrink / (1.0 - shrink)))
+            # Next to a change point the mode may stop shrinking by ρ and each carry makes
+            # it larger: once the limit is no longer a number, stop carrying (plain steps
+            # from here, which the settle rules judge) rather than overflow.
+            with np.errstate(over="ignore", invalid="ignore"):
+                limit = x + net * (shrink / (1.0 - shrink))
+            if np.isfinite(limit).all():
+                self._carry(limit)
+            else:
+                self.contraction = math.inf
         else:
             self._since, self._anchor = 0, None
 
