@@ -16,7 +16,8 @@ _ENGINE = "mechcheck.analytic.linkage_backends"
 BACKENDS = (
     Backend(REFERENCE, f"{_ENGINE}:solve", "reference",
             "the member-equilibrium matrix method (the reference)",
-            sweep=f"{_ENGINE}:analytic_results", vectorised=True),
+            sweep=f"{_ENGINE}:analytic_results", vectorised=True,
+            simulate="mechcheck.analytic.trajectory:simulate"),
     Backend("superposition", f"{_ENGINE}:superposition", "analytic",
             "each load alone, the solutions added (no Coulomb friction)",
             sweep=f"{_ENGINE}:superposition_results", vectorised=True),

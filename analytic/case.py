@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+import itertools
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
@@ -32,6 +33,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.values import (
+    MAX_TIME,
     CaseError,
     FrozenMap,
     Vec2,
@@ -342,6 +344,53 @@ class Preset:
         return next((m for m in self.masses if m.link == link), None)
 
 
+#: The most output times a trajectory may ask for.
+MAX_OUTPUTS = 100_000
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """A linkage released to move freely (``[case.simulate]``): from time 0, where its
+    drivers stand at their values with their velocities, to ``end`` (s), read at each of
+    ``outputs`` (s, increasing, within 0 … end). ``rates`` gives the joint rates at time 0
+    (rad/s or m/s) of joints that no driver holds; every other free coordinate starts at
+    rest."""
+
+    end: float
+    outputs: tuple[float, ...]
+    rates: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not 0.0 < finite(self.end, "simulate.end") <= MAX_TIME:
+            raise CaseError(f"must be within 0 … {MAX_TIME:g} s (and above 0), got {self.end:g}",
+                            key="simulate.end")
+        outputs = tuple(finite(t, "simulate.outputs") for t in self.outputs)
+        if not 0 < len(outputs) <= MAX_OUTPUTS:
+            raise CaseError(f"must name 1 … {MAX_OUTPUTS} times, got {len(outputs)}",
+                            key="simulate.outputs")
+        if outputs[0] < 0.0 or outputs[-1] > self.end * (1.0 + 1e-12):
+            raise CaseError(f"must lie within 0 … end ({self.end:g} s)", key="simulate.outputs")
+        if any(b <= a for a, b in itertools.pairwise(outputs)):
+            raise CaseError("must increase", key="simulate.outputs")
+        object.__setattr__(self, "outputs", outputs)
+        object.__setattr__(self, "rates", FrozenMap(
+            {j: finite(v, f"simulate.rates.{j}") for j, v in self.rates.items()}))
+
+    def check_against(self, linkage: Linkage) -> None:
+        """The rates name joints of ``linkage`` that no driver holds."""
+        driven = {d.joint for d in linkage.drivers}
+        names = {j.name for j in linkage.joints}
+        for joint in self.rates:
+            if joint not in names:
+                raise CaseError(f"unknown joint {joint!r}", key=f"simulate.rates.{joint}")
+            if joint in driven:
+                raise CaseError("a driven joint starts at its driver's velocity: give it there",
+                                key=f"simulate.rates.{joint}")
+        if not linkage.free_motion:
+            raise CaseError("a linkage to simulate is built with free_motion=True",
+                            key="simulate")
+
+
 @dataclass(frozen=True)
 class Case:
     """One force-analysis problem at one pose, in SI units and radians: a mechanism drawn
@@ -361,6 +410,8 @@ class Case:
         (:class:`~mechcheck.analytic.presets.Renaming`); None for a linkage.
     length_unit : the unit its file writes lengths in (a key of ``LENGTH_UNITS``), for
         messages only: they quote lengths as the file wrote them.
+    simulation : given, the case is a trajectory (``mechcheck simulate``): its linkage
+        moves freely from its drawn state; None for a case at one pose.
     """
 
     name: str
@@ -370,6 +421,7 @@ class Case:
     source: str = ""
     names: Renaming | None = field(default=None, compare=False, repr=False)
     length_unit: str = field(default="m", compare=False)
+    simulation: Simulation | None = None
 
     def __post_init__(self) -> None:
         try:
@@ -388,6 +440,13 @@ class Case:
         if self.geometry is not None and not isinstance(self.geometry, Linkage):
             raise CaseError("must be a Linkage (a four-bar or slider-crank is drawn as one "
                             "by mechcheck.analytic.presets.preset_case)", key="geometry")
+        if self.simulation is not None:
+            if self.preset is not None:
+                raise CaseError("a trajectory is written in the linkage format", key="simulate")
+            self.simulation.check_against(self.linkage)
+        elif self.geometry is not None and self.geometry.free_motion:
+            raise CaseError("a linkage that moves freely needs a [case.simulate] table",
+                            key="simulate")
 
     # -- derived facts ----------------------------------------------------------------
     @property
@@ -436,8 +495,15 @@ class Case:
         return self.has_coulomb_friction or self.has_viscous_friction
 
     @property
+    def is_trajectory(self) -> bool:
+        """Moves freely over time (``mechcheck simulate``) rather than standing at one pose."""
+        return self.simulation is not None
+
+    @property
     def kind(self) -> str:
-        """``static``, ``dynamic`` or ``friction``: keys the tolerance policy."""
+        """``static``, ``dynamic``, ``friction`` or ``trajectory``: keys the tolerance policy."""
+        if self.simulation is not None:
+            return "trajectory"
         if self.has_friction:
             return "friction"
         return "dynamic" if (self.preset or self.linkage).is_moving else "static"

@@ -10,6 +10,8 @@ listing the backends (``mechcheck backends``, ``--help``) imports no simulator a
 What the functions take and return:
 
 - ``solve``: ``(Case) -> Solution``, one linkage case at its own pose;
+- ``simulate``: ``(Case) -> tuple[Trajectory, ...]``, a trajectory case's runs, one per
+  setting of the backend's ladder (the reference: one);
 - ``sweep``: over a linkage's first driver's values (rad or m from the drawn pose),
   vectorised: ``(Case, values) -> LinkageResults``; a simulator's:
   ``(Case, values, backend name) -> list[Solution]``, one per pose.
@@ -38,6 +40,7 @@ if TYPE_CHECKING:
 
     from mechcheck.analytic.case import Case
     from mechcheck.analytic.solution import Solution
+    from mechcheck.analytic.trajectory import Trajectory
 
 #: How a backend's numbers are judged (the tolerance policy's rows,
 #: :mod:`mechcheck.tolerance`): ``reference`` (the analytic backend, which the others are
@@ -78,6 +81,10 @@ class Backend:
     vectorised: bool = False
     #: The importable package it needs (None: nothing beyond mechcheck's own).
     requires: str | None = None
+    #: ``"module:function"`` of its run of a trajectory case (None: it has none):
+    #: ``(Case) -> tuple[Trajectory, ...]``, one per setting of its ladder
+    #: (:mod:`mechcheck.analytic.trajectory`).
+    simulate: str | None = None
 
     def missing_requirement(self) -> str | None:
         """The package this backend needs and this installation lacks, if any (looked up
@@ -100,6 +107,13 @@ class Backend:
         solve = self._load(self.solve, "")
         return functools.partial(vector_sweep_any if self.vectorised else sweep_any, sweep, solve,
                                  self.name)
+
+    def simulator(self) -> Callable[[Case], tuple[Trajectory, ...]] | None:
+        """Its run of a trajectory case (None if it has none), imported now."""
+        if self.simulate is None:
+            return None
+        found: Callable[[Case], tuple[Trajectory, ...]] = self._load(self.simulate, " simulate")
+        return found
 
     def _load(self, target: str, what: str) -> Callable[..., Any]:
         missing = self.missing_requirement()

@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+import itertools
 import re
 from collections import Counter
 from collections.abc import Mapping
@@ -45,6 +46,7 @@ from mechcheck.analytic.linkage_kinematics import (
 )
 from mechcheck.analytic.values import (
     GROUND,
+    MAX_TIME,
     MIN_LINK_LENGTH,
     CaseError,
     FrozenMap,
@@ -119,16 +121,35 @@ class Joint:
 
 
 @dataclass(frozen=True)
+class Effort:
+    """A driver's effort over time, N·m on a joint that turns or N on one that slides,
+    positive driving its coordinate up: linear between its (time, value) rows, held at
+    the first and last value outside them. One row is a constant effort."""
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+
+    def at(self, t: float | np.ndarray) -> np.ndarray:
+        return np.asarray(np.interp(t, self.times, self.values))
+
+
+@dataclass(frozen=True)
 class Driver:
     """A prescribed joint coordinate, measured from the drawn pose: rad (revolute) or m
     (prismatic), with its rates; ``sense`` (+1 increasing, −1 decreasing, 0 from the
-    velocity) is the quasi-static motion Coulomb friction opposes at rest."""
+    velocity) is the quasi-static motion Coulomb friction opposes at rest.
+
+    In a linkage that moves freely (``Linkage.free_motion``) a driver with an ``effort``
+    prescribes that effort instead of a motion: ``value`` and ``velocity`` are then its
+    coordinate and rate at time 0, and a driver without one moves as
+    value + velocity·t + acceleration·t²/2."""
 
     joint: str
     value: float
     velocity: float = 0.0
     acceleration: float = 0.0
     sense: int = 0
+    effort: Effort | None = None
 
 
 @dataclass(frozen=True)
@@ -206,6 +227,10 @@ class Linkage:
     #: position inside is held relative to it (:meth:`_centre_points`), and positions reported
     #: back add it (:meth:`drawn`).
     offset: Vec2 = (0.0, 0.0)
+    #: Moves freely over time (``mechcheck simulate``): drivers may prescribe efforts, free
+    #: coordinates may move and carry Coulomb friction (their motion comes from the
+    #: equations of motion, not from an equilibrium search).
+    free_motion: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", FrozenMap(
@@ -347,16 +372,40 @@ class Linkage:
         if d.sense and d.velocity and (d.velocity > 0) != (d.sense > 0):
             raise CaseError(f"says {'increasing' if d.sense > 0 else 'decreasing'} but the "
                             f"velocity {d.velocity:g} moves the other way", key=f"{key}.sense")
-        if self.has_coulomb_friction and d.velocity == 0.0 and d.sense == 0:
+        if d.effort is not None:
+            self._check_effort(d, f"{key}.{'torque' if kind.rotates else 'force'}")
+        if self.has_coulomb_friction and d.velocity == 0.0 and d.sense == 0 \
+                and not self.free_motion:
             raise CaseError("with Coulomb friction, a driver at rest needs sense = "
                             "'increasing' or 'decreasing': friction opposes a motion",
                             key=f"{key}.sense")
+
+    def _check_effort(self, d: Driver, key: str) -> None:
+        """An effort's rows (``key``: the driver's ``torque`` or ``force``)."""
+        effort = d.effort
+        assert effort is not None
+        if not self.free_motion:
+            raise CaseError("an effort moves a linkage over time: give the case a "
+                            "[case.simulate] table", key=key)
+        if d.acceleration:
+            raise CaseError("a driver with an effort has no prescribed acceleration: it "
+                            "follows from the effort", key=key.rsplit(".", 1)[0] + ".acceleration")
+        if not effort.times or len(effort.times) != len(effort.values):
+            raise CaseError("must be a number or rows of [time, value]", key=key)
+        for t, value in zip(effort.times, effort.values, strict=True):
+            finite(value, key)
+            if not 0.0 <= finite(t, key) <= MAX_TIME:
+                raise CaseError(f"times must be within 0 … {MAX_TIME:g} s, got {t:g}", key=key)
+        if any(b <= a for a, b in itertools.pairwise(effort.times)):
+            raise CaseError("times must increase row by row", key=key)
 
     def _check_driver_count(self) -> None:
         if len(self.drivers) > self.dof:
             raise CaseError(f"{len(self.drivers)} drivers for {self.dof} degree(s) of freedom",
                             key="drivers")
         free = self.dof - len(self.drivers)
+        if self.free_motion:
+            return      # free coordinates move by the equations of motion
         if free and self.is_moving:
             raise CaseError(f"{free} free coordinate(s) with motion: a free coordinate's "
                             "equilibrium pose is found only in a static case", key="drivers")
@@ -595,6 +644,11 @@ class Linkage:
     @property
     def is_moving(self) -> bool:
         return any(d.velocity or d.acceleration for d in self.drivers)
+
+    @property
+    def efforts(self) -> tuple[Driver, ...]:
+        """The drivers that prescribe an effort rather than a motion."""
+        return tuple(d for d in self.drivers if d.effort is not None)
 
     @property
     def has_coulomb_friction(self) -> bool:

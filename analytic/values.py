@@ -109,6 +109,10 @@ def length_text(metres: float, unit: str | None = None) -> str:
     return f"{metres / LENGTH_UNITS[unit]:.{QUOTED_DIGITS}g} {unit}"
 
 
+#: The longest time a trajectory may span, s: a simulator steps it at its finest time step.
+MAX_TIME = 1.0e4
+
+
 def finite(value: float, key: str, limit: float = MAX_MAGNITUDE) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise CaseError(f"must be a number, got {value!r}", key=key)

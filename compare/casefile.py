@@ -36,7 +36,7 @@ from mechcheck.analytic.case import (
 )
 from mechcheck.analytic.linkage_backends import NOTHING_TO_SWEEP, quantity_units
 from mechcheck.analytic.values import LENGTH_UNITS, lengths_quoted_in
-from mechcheck.linkage_file import LinkageCaseSpec, linkage_from_spec
+from mechcheck.linkage_file import LinkageCaseSpec, linkage_from_spec, simulation_from_spec
 from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, needs_an_effect, validated
 
 
@@ -169,10 +169,11 @@ def linkage_case(spec: LinkageCaseSpec, source: str = "") -> Case:
     linkage = linkage_from_spec(spec)
     if spec.seed is not None:
         check_printed_keys(spec.seed.printed, quantity_units(linkage))
+    simulation = None if spec.simulate is None else simulation_from_spec(spec.simulate)
     return Case(name=spec.name, geometry=linkage,
                 tolerance=tuple((f"{t.backend}:{t.quantity}", t.rtol, t.atol)
                                 for t in spec.tolerance),
-                source=source, length_unit=spec.length_unit)
+                source=source, length_unit=spec.length_unit, simulation=simulation)
 
 
 def check_printed_keys(printed: Iterable[str], quantities: Iterable[str]) -> None:

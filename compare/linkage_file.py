@@ -17,10 +17,11 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
-from mechcheck.analytic.case import CaseError, Vec2
-from mechcheck.analytic.joint_kinds import GEAR, GearMesh, kind_named
+from mechcheck.analytic.case import MAX_OUTPUTS, CaseError, Simulation, Vec2
+from mechcheck.analytic.joint_kinds import GEAR, GearMesh, JointKind, kind_named
 from mechcheck.analytic.linkage import (
     Driver,
+    Effort,
     Joint,
     JointFriction,
     LinearSpring,
@@ -31,7 +32,7 @@ from mechcheck.analytic.linkage import (
     TorsionSpring,
 )
 from mechcheck.analytic.sketch import Dimension, assembled, refuse_too_large, refuse_unsketchable
-from mechcheck.analytic.values import LENGTH_UNITS, finite, lengths_quoted_in
+from mechcheck.analytic.values import LENGTH_UNITS, MAX_TIME, finite, lengths_quoted_in
 from mechcheck.specs import Pair, SeedSpec, Strict, ToleranceSpec, force_vector, needs_an_effect, validated
 
 #: A point name or [x, y], checked by :func:`linkage_from_spec` (pydantic would name the
@@ -64,6 +65,10 @@ class JointSpec(Strict):
 GEAR_KEYS = ("centres", "pitch_radii", "pressure_angle", "internal")
 
 
+#: A driver's effort: a constant, or rows of [time (s), value].
+EffortSpec = float | list[Annotated[list[float], Field(min_length=2, max_length=2)]]
+
+
 class DriverSpec(Strict):
     joint: str
     rotation: float | None = None
@@ -71,6 +76,18 @@ class DriverSpec(Strict):
     velocity: float = 0.0
     acceleration: float = 0.0
     sense: Literal["increasing", "decreasing"] | None = None
+    #: N·m on a joint that turns, N on one that slides (``[case.simulate]`` only).
+    torque: EffortSpec | None = None
+    force: EffortSpec | None = None
+
+
+class SimulateSpec(Strict):
+    """``[case.simulate]``: the end time (s), the output times (a count of evenly spaced
+    times from 0 to end, or the times, s) and joint rates at time 0 (rad/s, m/s)."""
+
+    end: float
+    outputs: Annotated[int, Field(ge=1)] | list[float] = 101
+    rates: dict[str, float] = {}
 
 
 class DimensionSpec(Strict):
@@ -139,6 +156,20 @@ class LinkageCaseSpec(Strict):
     description: str = ""
     seed: SeedSpec | None = None
     tolerance: list[ToleranceSpec] = []
+    simulate: SimulateSpec | None = None
+
+
+def simulation_from_spec(spec: SimulateSpec) -> Simulation:
+    """``[case.simulate]`` as a Simulation: a count of outputs spread evenly over 0 … end."""
+    outputs = spec.outputs
+    if isinstance(outputs, int):
+        if outputs > MAX_OUTPUTS:
+            raise CaseError(f"must name 1 … {MAX_OUTPUTS} times, got {outputs}",
+                            key="simulate.outputs")
+        end = finite(spec.end, "simulate.end", MAX_TIME)
+        outputs = [end * k / max(outputs - 1, 1) for k in range(outputs)] if outputs > 1 \
+            else [end]
+    return Simulation(spec.end, tuple(outputs), dict(spec.rates))
 
 
 def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
@@ -196,6 +227,7 @@ def linkage_from_spec(spec: LinkageCaseSpec) -> Linkage:
             friction=None if f is None else JointFriction(
                 f.mu, {k: v * scale for k, v in f.pin_radius.items()}, dict(f.joint_mu),
                 dict(f.viscous)),
+            free_motion=spec.simulate is not None,
         )
 
 
@@ -273,4 +305,21 @@ def _driver(d: DriverSpec, i: int, kinds: Mapping[str, str], scale: float) -> Dr
     value = getattr(d, wanted) or 0.0
     value = math.radians(value) if kind.rotates else value * scale
     sense = {"increasing": 1, "decreasing": -1, None: 0}[d.sense]
-    return Driver(d.joint, value, d.velocity, d.acceleration, sense)
+    return Driver(d.joint, value, d.velocity, d.acceleration, sense, _effort(d, kind, key))
+
+
+def _effort(d: DriverSpec, kind: JointKind, key: str) -> Effort | None:
+    """A driver's ``torque`` (a joint that turns) or ``force`` (one that slides) as an
+    Effort; the rows' bounds are the Linkage's to check."""
+    wanted, other = ("torque", "force") if kind.rotates else ("force", "torque")
+    if getattr(d, other) is not None:
+        raise CaseError(f"a {kind} joint is driven by a '{wanted}', not a '{other}'",
+                        key=f"{key}.{other}")
+    given = getattr(d, wanted)
+    if given is None:
+        return None
+    if isinstance(given, list):
+        if not given:
+            raise CaseError("must be a number or rows of [time, value]", key=f"{key}.{wanted}")
+        return Effort(tuple(row[0] for row in given), tuple(row[1] for row in given))
+    return Effort((0.0,), (given,))

@@ -64,11 +64,13 @@ class Simulator:
 
 def held_and_exact(name: str, module: str, held: str, exact: str, stiffness: str) -> Simulator:
     """The usual simulator package: the backend ``name`` (held until settled, or driven:
-    tolerance family ``settled``) and ``name_solve`` (forces at the analytic pose:
-    ``exact_solve``), their functions ``settle``, ``solve_at_pose`` and ``sweep`` in
+    tolerance family ``settled``; it also runs trajectory cases) and ``name_solve`` (forces
+    at the analytic pose: ``exact_solve``), their functions ``settle``, ``solve_at_pose``,
+    ``sweep`` and ``simulate`` in
     ``module``, described by ``held`` and ``exact``; both need the package ``name``."""
     return Simulator(name, (
-        Backend(name, f"{module}:settle", "settled", held, sweep=f"{module}:sweep", requires=name),
+        Backend(name, f"{module}:settle", "settled", held, sweep=f"{module}:sweep", requires=name,
+                simulate=f"{module}:simulate"),
         Backend(f"{name}_solve", f"{module}:solve_at_pose", "exact_solve", exact,
                 sweep=f"{module}:sweep", requires=name),
     ), stiffness, requires=name)
