@@ -74,6 +74,8 @@ class Trajectory:
     steps : time steps (or right-hand-side evaluations) it took.
     energy : the reference's energy balance at ``times``.
     events : (time, what) where the motion switched (friction sticking or slipping).
+    diagnostics : what explains its error, by name (a simulator's largest loop-closure
+        gap met, m; its constraint-solver iterations; the reference's energy residual).
     """
 
     backend: str
@@ -87,6 +89,7 @@ class Trajectory:
     steps: int = 0
     energy: EnergyBalance | None = None
     events: tuple[tuple[float, str], ...] = ()
+    diagnostics: Mapping[str, float] = field(default_factory=dict)
 
     def quantities(self, linkage: Linkage) -> dict[str, Array]:
         return trajectory_quantities(linkage, self.times, self.coordinates)
