@@ -22,7 +22,7 @@ from mechcheck.figures import cycle_panels, draw_sweep, figure_file, poses_file,
 from mechcheck.junit import junit_sweep_xml
 from mechcheck.output import OutputError, locked_folder, write_all
 from mechcheck.report import render_sweep, sweep_view_model
-from mechcheck.sweep import LocalExecutor, SweepTask, driver_axis, is_done, run_sweep
+from mechcheck.sweep import LocalExecutor, SweepOutcome, SweepTask, driver_axis, is_done, run_sweep
 from mechcheck.tables import sweep_comparison
 from mechcheck.verdicts import without_numbers
 
@@ -185,34 +185,7 @@ def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
                       figures: bool, parallel: int = 1) -> int:
     cases = [c for c, _ in specs]
     start = time.perf_counter()
-    bar = None
-    remaining = Remaining([t for t in tasks if not is_done(out, t)], parallel)
-    if not quiet:
-        from tqdm import tqdm  # only for the progress bar
-
-        # tqdm's own estimate assumes every pose costs the same: ours weighs them.
-        bar = tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True,
-                   bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} poses [{elapsed}{postfix}]")
-
-    def progress(done: int, total: int) -> None:
-        if bar is not None:
-            bar.total = total
-            bar.n = done
-            left = remaining.seconds()
-            bar.set_postfix_str(
-                f"on {remaining.backend() or '-'}, "
-                + (f"≈{tqdm.format_interval(left)} left" if left is not None
-                   else "measuring the cost per pose"), refresh=False)
-            bar.refresh()
-
-    try:
-        outcome = run_sweep(tasks, out, executor, progress=progress, finished=remaining.finished)
-    except OutputError as error:
-        raise OutputError(f"{error} (the parts already finished are kept: the same command "
-                          "resumes from them)") from None
-    finally:
-        if bar is not None:
-            bar.close()
+    outcome = _run_with_progress(tasks, out, executor, quiet, parallel)
     wall = time.perf_counter() - start
     if figures:
         warm_figures(executor, len(cases))
@@ -247,12 +220,51 @@ def _sweep_and_report(executor: Executor, specs: list[tuple[Case, AnySpec]],
     failed = failed_poses(comparison)
     failing = int(statuses["status"].isin(fail_on).sum()) if len(statuses) else 0
     status = 1 if failed or failing else 0
+    print(_summary_line(len(cases), n_poses, len(comparison), failed, failing, statuses,
+                        f"{outcome.executed} tasks run, {outcome.reused} reused, {wall:.1f} s "
+                        f"-> {out}/report.md ({'PASS' if status == 0 else 'FAIL'})"))
+    return status
+
+
+def _run_with_progress(tasks: list[SweepTask], out: Path, executor: Executor, quiet: bool,
+                       parallel: int) -> SweepOutcome:
+    """The sweep's tasks run (:func:`run_sweep`), with a progress bar unless ``quiet``
+    whose estimate weighs each backend's measured cost per pose."""
+    remaining = Remaining([t for t in tasks if not is_done(out, t)], parallel)
+    bar = None
+    if not quiet:
+        from tqdm import tqdm  # only for the progress bar
+
+        # tqdm's own estimate assumes every pose costs the same: ours weighs them.
+        bar = tqdm(total=1, unit="pose", file=sys.stderr, dynamic_ncols=True,
+                   bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} poses [{elapsed}{postfix}]")
+
+    def progress(done: int, total: int) -> None:
+        if bar is not None:
+            bar.total = total
+            bar.n = done
+            left = remaining.seconds()
+            bar.set_postfix_str(
+                f"on {remaining.backend() or '-'}, "
+                + (f"≈{tqdm.format_interval(left)} left" if left is not None
+                   else "measuring the cost per pose"), refresh=False)
+            bar.refresh()
+
+    try:
+        return run_sweep(tasks, out, executor, progress=progress, finished=remaining.finished)
+    except OutputError as error:
+        raise OutputError(f"{error} (the parts already finished are kept: the same command "
+                          "resumes from them)") from None
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _summary_line(n_cases: int, n_poses: int, compared: int, failed: int, failing: int,
+                  statuses: pd.DataFrame, tail: str) -> str:
+    """The sweep's one-line summary: counts, the verdicts that gave no number, ``tail``."""
     absent = without_numbers(zip(statuses["status"].astype(str), statuses["case"].astype(str),
                                  strict=True)) if len(statuses) else ""
-    print(f"{len(cases)} case{'s' * (len(cases) != 1)} x {n_poses} poses, {len(comparison)} "
-          f"comparisons, {failed} poses outside tolerance, {failing} poses with a failing verdict"
-          f"{f' (poses without numbers: {absent})' if absent else ''}; "
-          f"{outcome.executed} tasks run, "
-          f"{outcome.reused} reused, {wall:.1f} s -> {out}/report.md "
-          f"({'PASS' if status == 0 else 'FAIL'})")
-    return status
+    return (f"{n_cases} case{'s' * (n_cases != 1)} x {n_poses} poses, {compared} "
+            f"comparisons, {failed} poses outside tolerance, {failing} poses with a failing "
+            f"verdict{f' (poses without numbers: {absent})' if absent else ''}; {tail}")
