@@ -16,6 +16,7 @@ then not simulated.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -91,44 +92,67 @@ def held_sweep(case: Case, values: Array, backend: str, results: LinkageResults)
     off the analytic branch (:func:`off_branch`) is not kept: that pose is run again alone
     from the analytic pose, as ``mechcheck run`` runs it (:func:`restarted`), its
     diagnostics say so (``restart``), and the sweep goes on in a model built anew there."""
-    drivers, free, solve = driver_values(case, values), has_free_coordinates(case), backend == BACKENDS[1]
+    drivers = driver_values(case, values)
     assert drivers is not None
-    first = case.linkage.joint(case.linkage.drivers[0].joint)
+    walk = _HeldWalk(case, backend, results, drivers, backend == BACKENDS[1],
+                     has_free_coordinates(case))
+    for k, value in enumerate(values):
+        walk.step(k, float(value))
+    method = "constraint_solve" if walk.solve else "settle"
+    given = walk.given
+    for built, outcomes in walk.segments:
+        given.update(zip((o.index for o in outcomes),
+                         solutions(built, backend, method, outcomes, results, values), strict=True))
+    return [given[k] if "driver" in given[k].diagnostics else with_driver(given[k], float(v))
+            for k, v in enumerate(values)]
+
+
+@dataclass
+class _HeldWalk:
+    """A held sweep on its way: the model it continues in (None: build one at the next
+    pose), where free coordinates last came to rest, the poses given a Solution directly
+    and the runs of each model built."""
+
+    case: Case
+    backend: str
+    results: LinkageResults
+    drivers: Array
+    solve: bool
+    free: bool
     model: LinkageModel | None = None
     previous: Array | None = None
-    given: dict[int, Solution] = {}
-    segments: list[tuple[LinkageModel, list[Outcome]]] = []
-    for k, value in enumerate(values):
+    given: dict[int, Solution] = field(default_factory=dict)
+    segments: list[tuple[LinkageModel, list[Outcome]]] = field(default_factory=list)
+
+    def step(self, k: int, value: float) -> None:
+        """Pose k, at the first driver's ``value``: run, or given its verdict."""
         start = time.perf_counter()
-        found = None if solve or not free else unstable(case, backend, results, k)
+        case, solve, free = self.case, self.solve, self.free
+        found = None if solve or not free else unstable(case, self.backend, self.results, k)
         if found is not None:
-            given[k] = found
-            continue
-        q = results.pose.q[k]
-        seed = q if solve or not free else previous if previous is not None else free_start(case, drivers[k])
-        fresh = model is None
-        if model is None:
-            model = sweep_model(case, solve, seed)
-            segments.append((model, []))
-        move_lock(model, first, float(value))
+            self.given[k] = found
+            return
+        q = self.results.pose.q[k]
+        seed = q if solve or not free else self.previous if self.previous is not None \
+            else free_start(case, self.drivers[k])
+        fresh = self.model is None
+        if self.model is None:
+            self.model = sweep_model(case, solve, seed)
+            self.segments.append((self.model, []))
+        model = self.model
+        move_lock(model, case.linkage.joint(case.linkage.drivers[0].joint), value)
         place(model, seed)
         run = solve_run(model, q) if solve else sweep_settle_run(
             model, q if fresh and not (free or model.members) else None)
         done = outcome(model, run, start, k)
         left = "" if solve or not run.settled else off_branch(model, done.q, q, free)
         if left:
-            given[k] = restarted(case, backend, float(value), left)
-            model, previous = None, None
-            continue
-        segments[-1][1].append(done)
+            self.given[k] = restarted(case, self.backend, value, left)
+            self.model, self.previous = None, None
+            return
+        self.segments[-1][1].append(done)
         if free and run.settled:
-            previous = done.q
-    method = "constraint_solve" if solve else "settle"
-    for built, outcomes in segments:
-        given.update(zip((o.index for o in outcomes),
-                         solutions(built, backend, method, outcomes, results, values), strict=True))
-    return [given[k] if "driver" in given[k].diagnostics else with_driver(given[k], float(v))
-            for k, v in enumerate(values)]
+            self.previous = done.q
 
 
 def sweep_settle_run(model: LinkageModel, prime_at: Array | None) -> Run:
