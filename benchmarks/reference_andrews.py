@@ -22,6 +22,8 @@ g = 0 to the integrator's tolerance over the test set's 0.03 s.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -66,8 +68,8 @@ QDD_END = np.array([-0.2463176316945196e5, 0.5185037701610329e5, 0.3241025686413
 
 def mass_matrix(q: Array) -> Array:
     """M(q), 7 × 7 (andrews.f's ``m``)."""
-    siph, siom = np.sin(q[3]), np.sin(q[5])
-    coth = np.cos(q[1])
+    _, th, _, ph, _, om, _ = q.tolist()     # Python floats: scalar math is cheaper than numpy's
+    siph, siom, coth = math.sin(ph), math.sin(om), math.cos(th)
     m = np.zeros((7, 7))
     m[0, 0] = m1 * ra**2 + m2 * (rr**2 - 2 * da * rr * coth + da**2) + i1 + i2
     m[1, 0] = m[0, 1] = m2 * (da**2 - da * rr * coth) + i2
@@ -84,17 +86,18 @@ def mass_matrix(q: Array) -> Array:
 
 def spring_point(gamma: float) -> tuple[float, float]:
     """D, the spring's end on K3 (andrews.f's xd, yd); its other end is C."""
-    return (sd * np.cos(gamma) + sc * np.sin(gamma) + xb,
-            sd * np.sin(gamma) - sc * np.cos(gamma) + yb)
+    return (sd * math.cos(gamma) + sc * math.sin(gamma) + xb,
+            sd * math.sin(gamma) - sc * math.cos(gamma) + yb)
 
 
 def forces(q: Array, qd: Array) -> Array:
     """f(q, q̇): the drive torque, the spring and the velocity terms (andrews.f's ``ff``)."""
-    be, th, _, ph, de, om, ep = qd
-    sith, coga, siga = np.sin(q[1]), np.cos(q[2]), np.sin(q[2])
-    coph, coom = np.cos(q[3]), np.cos(q[5])
-    xd, yd = spring_point(q[2])
-    length = np.hypot(xd - xc, yd - yc)
+    be, th, _, ph, de, om, ep = qd.tolist()
+    _, theta, gamma, phi, _, omega, _ = q.tolist()
+    sith, coga, siga = math.sin(theta), math.cos(gamma), math.sin(gamma)
+    coph, coom = math.cos(phi), math.cos(omega)
+    xd, yd = spring_point(gamma)
+    length = math.hypot(xd - xc, yd - yc)
     tension = -c0 * (length - l0) / length
     fx, fy = tension * (xd - xc), tension * (yd - yc)
     return np.array([
@@ -111,51 +114,51 @@ def forces(q: Array, qd: Array) -> Array:
 def closure(q: Array) -> Array:
     """g(q), the six loop-closure equations (E reached through K1–K2 against through K3, K4–K5
     and K6–K7)."""
-    be, th, ga, ph, de, om, ep = q
-    ex, ey = rr * np.cos(be) - d * np.cos(be + th), rr * np.sin(be) - d * np.sin(be + th)
+    be, th, ga, ph, de, om, ep = q.tolist()
+    ex, ey = rr * math.cos(be) - d * math.cos(be + th), rr * math.sin(be) - d * math.sin(be + th)
     return np.array([
-        ex - ss * np.sin(ga) - xb,
-        ey + ss * np.cos(ga) - yb,
-        ex - e * np.sin(ph + de) - zt * np.cos(de) - xa,
-        ey + e * np.cos(ph + de) - zt * np.sin(de) - ya,
-        ex - zf * np.cos(om + ep) - u * np.sin(ep) - xa,
-        ey - zf * np.sin(om + ep) + u * np.cos(ep) - ya,
+        ex - ss * math.sin(ga) - xb,
+        ey + ss * math.cos(ga) - yb,
+        ex - e * math.sin(ph + de) - zt * math.cos(de) - xa,
+        ey + e * math.cos(ph + de) - zt * math.sin(de) - ya,
+        ex - zf * math.cos(om + ep) - u * math.sin(ep) - xa,
+        ey - zf * math.sin(om + ep) + u * math.cos(ep) - ya,
     ])
 
 
 def closure_jacobian(q: Array) -> Array:
     """G(q) = ∂g/∂q, 6 × 7 (andrews.f's ``gp``)."""
-    be, th, ga, ph, de, om, ep = q
-    sibe, cobe = np.sin(be), np.cos(be)
-    sibeth, cobeth = np.sin(be + th), np.cos(be + th)
-    siphde, cophde = np.sin(ph + de), np.cos(ph + de)
-    siomep, coomep = np.sin(om + ep), np.cos(om + ep)
+    be, th, ga, ph, de, om, ep = q.tolist()
+    sibe, cobe = math.sin(be), math.cos(be)
+    sibeth, cobeth = math.sin(be + th), math.cos(be + th)
+    siphde, cophde = math.sin(ph + de), math.cos(ph + de)
+    siomep, coomep = math.sin(om + ep), math.cos(om + ep)
     g = np.zeros((6, 7))
     g[0::2, 0], g[0::2, 1] = -rr * sibe + d * sibeth, d * sibeth
     g[1::2, 0], g[1::2, 1] = rr * cobe - d * cobeth, -d * cobeth
-    g[0, 2], g[1, 2] = -ss * np.cos(ga), -ss * np.sin(ga)
-    g[2, 3], g[2, 4] = -e * cophde, -e * cophde + zt * np.sin(de)
-    g[3, 3], g[3, 4] = -e * siphde, -e * siphde - zt * np.cos(de)
-    g[4, 5], g[4, 6] = zf * siomep, zf * siomep - u * np.cos(ep)
-    g[5, 5], g[5, 6] = -zf * coomep, -zf * coomep - u * np.sin(ep)
+    g[0, 2], g[1, 2] = -ss * math.cos(ga), -ss * math.sin(ga)
+    g[2, 3], g[2, 4] = -e * cophde, -e * cophde + zt * math.sin(de)
+    g[3, 3], g[3, 4] = -e * siphde, -e * siphde - zt * math.cos(de)
+    g[4, 5], g[4, 6] = zf * siomep, zf * siomep - u * math.cos(ep)
+    g[5, 5], g[5, 6] = -zf * coomep, -zf * coomep - u * math.sin(ep)
     return g
 
 
 def closure_curvature(q: Array, qd: Array) -> Array:
     """h(q, q̇): d²g/dt² at q̈ = 0, each term of g differentiated twice by hand
     (d²/dt² cos φ = −cos φ·φ̇² − sin φ·φ̈, d²/dt² sin φ = −sin φ·φ̇² + cos φ·φ̈)."""
-    be, th, ga, ph, de, om, ep = q
-    bed, thd, gad, phd, ded, omd, epd = qd
+    be, th, ga, ph, de, om, ep = q.tolist()
+    bed, thd, gad, phd, ded, omd, epd = qd.tolist()
     bt, pd, oe = bed + thd, phd + ded, omd + epd
-    hx = -rr * np.cos(be) * bed**2 + d * np.cos(be + th) * bt**2    # of E's x through K1–K2
-    hy = -rr * np.sin(be) * bed**2 + d * np.sin(be + th) * bt**2
+    hx = -rr * math.cos(be) * bed**2 + d * math.cos(be + th) * bt**2    # of E's x through K1–K2
+    hy = -rr * math.sin(be) * bed**2 + d * math.sin(be + th) * bt**2
     return np.array([
-        hx + ss * np.sin(ga) * gad**2,
-        hy - ss * np.cos(ga) * gad**2,
-        hx + e * np.sin(ph + de) * pd**2 + zt * np.cos(de) * ded**2,
-        hy - e * np.cos(ph + de) * pd**2 + zt * np.sin(de) * ded**2,
-        hx + zf * np.cos(om + ep) * oe**2 + u * np.sin(ep) * epd**2,
-        hy + zf * np.sin(om + ep) * oe**2 - u * np.cos(ep) * epd**2,
+        hx + ss * math.sin(ga) * gad**2,
+        hy - ss * math.cos(ga) * gad**2,
+        hx + e * math.sin(ph + de) * pd**2 + zt * math.cos(de) * ded**2,
+        hy - e * math.cos(ph + de) * pd**2 + zt * math.sin(de) * ded**2,
+        hx + zf * math.cos(om + ep) * oe**2 + u * math.sin(ep) * epd**2,
+        hy + zf * math.sin(om + ep) * oe**2 - u * math.cos(ep) * epd**2,
     ])
 
 
@@ -179,6 +182,6 @@ def rhs(t: float, y: Array) -> Array:
 def energy(q: Array, qd: Array) -> float:
     """T + V_spring − mom·β: constant along the motion (the drive torque's work is mom·Δβ,
     the joints are frictionless)."""
-    xd, yd = spring_point(q[2])
-    stretch = np.hypot(xd - xc, yd - yc) - l0
+    xd, yd = spring_point(float(q[2]))
+    stretch = math.hypot(xd - xc, yd - yc) - l0
     return float(0.5 * qd @ mass_matrix(q) @ qd + 0.5 * c0 * stretch**2 - mom * q[0])
