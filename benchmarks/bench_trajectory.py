@@ -12,7 +12,7 @@ Usage:  python benchmarks/bench_trajectory.py [--repeats 5] [--calls 2000]
    its error against the published angles (so both sides are seen to do the same work).
 3. ``mechcheck.analytic.trajectory.simulate`` on ``compare/cases/trajectories/andrews.toml``:
    its time over ``Trajectory.steps`` (the right-hand-side evaluations it reports), µs per
-   evaluation, and its ratio to 2 (issue 31's target: within 3×).
+   evaluation, and its ratio to 2 (the target: within 3×).
 
 Medians over the repeats, with min and max.
 """
@@ -22,13 +22,13 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import reference_andrews as andrews
+from bench_linkage import spread
 from scipy.integrate import solve_ivp
 
 import mechcheck
@@ -37,10 +37,6 @@ from mechcheck.analytic.trajectory import simulate
 from mechcheck.casefile import load_cases
 
 CASE = Path(mechcheck.__file__).parent / "cases" / "trajectories" / "andrews.toml"
-
-
-def spread(values: list[float], fmt: str = ".3g") -> str:
-    return f"{statistics.median(values):{fmt}} (min {min(values):{fmt}}, max {max(values):{fmt}})"
 
 
 def per_call(fn: Callable[[], object], calls: int, repeats: int) -> list[float]:
@@ -90,7 +86,7 @@ def main() -> None:
 
     state = np.concatenate([andrews.Q_END, andrews.QD_END])
     hand_rhs = per_call(lambda: andrews.rhs(andrews.T_END, state), args.calls, args.repeats)
-    print(f"1. hand right-hand side alone: {spread([1e6 * t for t in hand_rhs])} µs per call")
+    print(f"1. hand right-hand side alone: {spread(hand_rhs, scale=1e6)} µs per call")
 
     (case,) = load_cases(CASE)
     engine = engine_runs(case, args.repeats)
@@ -110,7 +106,7 @@ def main() -> None:
     print(f"3. mechcheck's reference ({settings}): {engine[0][1]} evaluations, "
           f"{spread(engine_per_eval)} µs per evaluation (whole run "
           f"{spread([t for t, _, _ in engine])} s); over the hand equations': "
-          f"{spread(ratios, '.2f')} (target ≤ 3)")
+          f"{spread(ratios, fmt='.2f')} (target ≤ 3)")
 
 
 if __name__ == "__main__":

@@ -18,11 +18,9 @@ it is not there.
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import math
 from functools import cache
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
@@ -38,6 +36,8 @@ from mechcheck.analytic.trajectory import Trajectory, simulate
 from mechcheck.casefile import load_cases
 from mechcheck.tolerance import rule
 
+from .benchmark_reference import benchmark_module
+
 Array = NDArray[np.float64]
 
 TRAJECTORIES = Path(mechcheck.__file__).parent / "cases" / "trajectories"
@@ -45,28 +45,19 @@ TRAJECTORIES = Path(mechcheck.__file__).parent / "cases" / "trajectories"
 #: The engine's inverse dynamics against a hand or published acceleration: the same
 #: rigid-body equations another way, only rounding between them.
 INVERSE_RTOL = rule("analytic", "torque", "dynamic").rtol
-#: The issue's targets for the analytic reference: Andrews' angles to the test set's
-#: reference (whose own accuracy is about this; our transcription reaches 3e-10) and the
-#: closed forms' positions; the energy balance as an identity of the integrator's tolerance.
+#: The analytic reference's targets: Andrews' angles to the test set's reference state
+#: (whose own accuracy is about this; the hand transcription reaches 3e-10) and the closed
+#: forms' positions; the energy balance, an identity, to the integrator's tolerance.
 REFERENCE_RTOL = 1e-7
 ENERGY_RTOL = 1e-9
 #: Exam Q2 against its closed form, over the case's scale (the harness's error measure).
 CLOSED_FORM_TOL = 1e-9
-#: N four-bar: energy drift over 10 s, through every horizontal pass (the issue's target).
+#: N four-bar: energy drift over 10 s, through every horizontal pass.
 DRIFT_RTOL = 1e-8
 
 
-def reference_module() -> ModuleType:
-    """benchmarks/ is not installed: load the hand-written Andrews equations from their file."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "reference_andrews.py"
-    spec = importlib.util.spec_from_file_location("reference_andrews", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-ANDREWS = reference_module()
+#: The IVP test set's Andrews equations, written by hand, with its published values.
+ANDREWS = benchmark_module("reference_andrews")
 
 
 @cache
