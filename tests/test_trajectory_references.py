@@ -2,7 +2,7 @@
 each held to a value from outside the engine:
 
 * Andrews' squeezing mechanism: the IVP test set's published state at t = 0.03 s
-  (``benchmarks/reference_andrews.py`` cites it and writes the test set's equations by hand);
+  (``tests/andrews.py``: the test set's equations by hand, with its source);
 * the IFToMM benchmark A02, N four-bar: an exact pendulum (elliptic functions);
 * seed 002's exam Q2 released: its closed-form piecewise solution, with and without friction;
 * the seed four-bar and slider-crank released: their first acceleration by a hand Lagrange
@@ -36,7 +36,7 @@ from mechcheck.analytic.trajectory import Trajectory, simulate
 from mechcheck.casefile import load_cases
 from mechcheck.tolerance import rule
 
-from .benchmark_reference import benchmark_module
+from .andrews import ANDREWS
 
 Array = NDArray[np.float64]
 
@@ -55,9 +55,6 @@ CLOSED_FORM_TOL = 1e-9
 #: N four-bar: energy drift over 10 s, through every horizontal pass.
 DRIFT_RTOL = 1e-8
 
-
-#: The IVP test set's Andrews equations, written by hand, with its published values.
-ANDREWS = benchmark_module("reference_andrews")
 
 
 @cache
