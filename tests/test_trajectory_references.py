@@ -56,7 +56,6 @@ CLOSED_FORM_TOL = 1e-9
 DRIFT_RTOL = 1e-8
 
 
-
 @cache
 def trajectory_cases() -> dict[str, Case]:
     return {c.name: c for c in load_cases(*sorted(TRAJECTORIES.glob("*.toml")))}
@@ -81,10 +80,12 @@ def link_angles(linkage: Linkage, run: Trajectory) -> dict[str, Array]:
     return {link: run.coordinates[:, 3 * i + 2] for i, link in enumerate(linkage.moving_links)}
 
 
-def driven_at(linkage: Linkage, joint: str, velocity: float, acceleration: float) -> LinkageResults:
-    """The inverse dynamics of ``linkage`` at its drawn pose with ``joint`` driven at the given
-    rates: the same file as a case at one instant (no efforts, no free motion)."""
-    driver = Driver(joint, 0.0, velocity, acceleration)
+def driven_at(linkage: Linkage, joint: str, value: float, velocity: float,
+              acceleration: float) -> LinkageResults:
+    """The inverse dynamics of ``linkage`` with ``joint`` driven to ``value`` (from the drawn
+    pose) at the given rates: the same file as a case at one instant (no efforts, no free
+    motion)."""
+    driver = Driver(joint, value, velocity, acceleration)
     return solve_linkage(dataclasses.replace(linkage, drivers=(driver,), free_motion=False))
 
 
@@ -184,7 +185,7 @@ def test_andrews_file_needs_the_drive_torque_for_the_published_acceleration() ->
     inertias, spring and geometry are the test set's."""
     linkage = trajectory_case("andrews-squeezer").linkage
     (torque,) = (d.effort.at(0.0) for d in linkage.drivers if d.effort is not None)
-    results = driven_at(linkage, "O", 0.0, ANDREWS.QDD0[0])
+    results = driven_at(linkage, "O", 0.0, 0.0, ANDREWS.QDD0[0])
     assert results.values["Q_O"][0] == pytest.approx(float(torque), rel=INVERSE_RTOL)
     assert float(torque) == ANDREWS.mom
     got = results.pose.qddot[0, body_columns(linkage)]
@@ -203,11 +204,8 @@ def test_andrews_file_needs_the_drive_torque_at_the_published_end_state() -> Non
     linkage = trajectory_case("andrews-squeezer").linkage
     turned = ANDREWS.Q_END[0] - ANDREWS.Q0[0]
     rate, acceleration = ANDREWS.QD_END[0], ANDREWS.QDD_END[0]
-    moved = dataclasses.replace(linkage, drivers=(Driver("O", turned, rate, acceleration),),
-                                free_motion=False)
-    results = solve_linkage(moved)
-    coasting = solve_linkage(dataclasses.replace(
-        moved, drivers=(Driver("O", turned, rate, 0.0),))).values["Q_O"][0]
+    results = driven_at(linkage, "O", turned, rate, acceleration)
+    coasting = driven_at(linkage, "O", turned, rate, 0.0).values["Q_O"][0]
     inertia_torque = results.values["Q_O"][0] - coasting
     assert abs(results.values["Q_O"][0] - ANDREWS.mom) <= REFERENCE_RTOL * abs(inertia_torque)
     columns = body_columns(linkage)
@@ -285,9 +283,7 @@ def test_n_four_bar_is_a_pendulum_of_constant_inertia(turned_deg: float, rate: f
     linkage = trajectory_case("n-four-bar").linkage
     _, inertia, weight = n_four_bar_numbers(linkage)
     turned = math.radians(turned_deg)
-    moved = dataclasses.replace(linkage, drivers=(Driver("P0", turned, rate, acceleration),),
-                                free_motion=False)
-    effort = solve_linkage(moved).values["Q_P0"][0]
+    effort = driven_at(linkage, "P0", turned, rate, acceleration).values["Q_P0"][0]
     theta = math.pi / 2 + turned
     assert effort == pytest.approx(inertia * acceleration + weight * math.cos(theta),
                                    rel=INVERSE_RTOL, abs=INVERSE_RTOL * weight)
@@ -377,9 +373,7 @@ def test_q2_file_releases_with_the_closed_form_acceleration(name: str, velocity:
     (driver,) = case.linkage.drivers
     assert driver.value == Q2_X0 and driver.effort is not None and driver.effort.values == (0.0,)
     accel = (-Q2_STIFFNESS * Q2_X0 + mu * Q2_MASS * Q2_G) / Q2_MASS
-    moved = dataclasses.replace(case.linkage, drivers=(Driver("slide", Q2_X0, velocity, accel),),
-                                free_motion=False)
-    force = solve_linkage(moved).values["Q_slide"][0]
+    force = driven_at(case.linkage, "slide", Q2_X0, velocity, accel).values["Q_slide"][0]
     assert abs(force) <= INVERSE_RTOL * Q2_STIFFNESS * Q2_X0
 
 
@@ -485,8 +479,8 @@ def test_seed_released_first_acceleration_needs_no_drive(name: str) -> None:
     acceleration = SEEDS_RELEASED[name]()
     assert acceleration == pytest.approx(STATED_FIRST_ACCELERATION[name], abs=5e-4)
     linkage = trajectory_case(name).linkage
-    driven = driven_at(linkage, "A0", 0.0, acceleration)
-    unbalanced = driven_at(linkage, "A0", 0.0, 0.0).values["Q_A0"][0]   # the torque it replaces
+    driven = driven_at(linkage, "A0", 0.0, 0.0, acceleration)
+    unbalanced = driven_at(linkage, "A0", 0.0, 0.0, 0.0).values["Q_A0"][0]   # the torque it replaces
     assert abs(driven.values["Q_A0"][0]) <= INVERSE_RTOL * abs(unbalanced)
 
 
