@@ -118,6 +118,13 @@ def test_energy_balance_of_the_reference(name: str) -> None:
 
 
 # -- Andrews' squeezing mechanism ---------------------------------------------------------
+#
+# Source of every value: F. Mazzia, C. Magherini, Test Set for Initial Value Problem Solvers,
+# release 2.4, problem "andrews" (https://archimede.uniba.it/~testset/problems/andrews.php),
+# Fortran andrews.f (revision andrews.F,v 1.2 2006/10/02), as in the R package deTestSet
+# (github.com/rforge/bvpsolve, pkg/deTestSet/src/Ex_andrews.f): the consistent initial
+# state ``andini`` (ANDREWS.Q0, QDD0, LAMBDA0) and the reference state at 0.03 s
+# ``andsoln`` (ANDREWS.Q_END, QD_END, QDD_END; PSIDE at rtol = atol = 1e-14).
 
 
 def test_andrews_hand_equations_reach_the_published_state() -> None:
