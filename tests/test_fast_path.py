@@ -6,10 +6,7 @@ dynamic and friction cases take."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
@@ -20,6 +17,7 @@ from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.presets import preset_case
 from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, rule
 
+from .benchmark_reference import benchmark_module
 from .builtin import builtin
 from .closed_form import forces
 from .closed_form.equilibrium import condition, eliminate, known_vector
@@ -30,17 +28,7 @@ from .strategies import cases
 RTOL = rule("analytic", "force", "static").rtol
 
 
-def reference_module() -> ModuleType:
-    """benchmarks/ is not installed: load the reference from its file."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "reference_presets.py"
-    spec = importlib.util.spec_from_file_location("reference_presets", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-REFERENCE = reference_module()
+REFERENCE = benchmark_module("reference_presets")
 
 #: Every whole degree, and a stretch 1e-3° wide around 0° (where a crank passes its
 #: ground line) at a finer spacing.
