@@ -38,7 +38,8 @@ SWEEP = np.radians(np.concatenate([np.arange(-180.0, 180.0, 1.0), np.linspace(-1
 def reference_of(case: Case, theta: np.ndarray) -> dict[str, np.ndarray]:
     statics = REFERENCE.fourbar_statics if case.mechanism == "four_bar" \
         else REFERENCE.slidercrank_statics
-    with np.errstate(invalid="ignore", divide="ignore"):  # unassembled poses are NaN
+    # Unassembled poses are NaN; a dead point's forces overflow (both left out as singular).
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         return statics(case, theta)
 
 

@@ -300,7 +300,8 @@ def solve_members(case: Case, joints: dict[str, Coordinates],
         rhs2 = -m4
     else:
         rhs2 = (v2x * f3y - v2y * f3x) - m2
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # A near-singular draw overflows here; its condition number rejects it in the strategy.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         det = v1x * v2y - v1y * v2x
         f34x = (v2x * -m3 - v1x * rhs2) / det
         f34y = (v2y * -m3 - v1y * rhs2) / det
