@@ -9,7 +9,9 @@ sweep, made again with nothing else in the loop. MuJoCo: one single-threaded
 forward pass and an Euler step, as the sweep's are. pymunk: Chipmunk's ``cpSpaceStep`` on
 the driven Space, as many times at each time step and iteration count as the sweep stepped
 there. The sweep's own work on top (loads, friction, readings, checks, the analytic
-seeds) is the ratio. Medians over ``--repeats`` with min and max.
+seeds) is the ratio. Each timed sweep is of the case read anew from its file, so nothing
+kept with a linkage (its analysed path) is reused. Medians over ``--repeats`` with min
+and max.
 
     python benchmarks/bench_sweep_driven.py --repeats 3
 """
@@ -55,17 +57,20 @@ def counting(backend: str) -> Iterator[Counter[tuple[float, int]]]:
     pymunk's Space steps."""
     counts: Counter[tuple[float, int]] = Counter()
     if backend == "mujoco":
-        euler = mujoco.mj_Euler
+        from mechcheck.sim_models.mujoco import _fast
+
+        euler, compiled = mujoco.mj_Euler, _fast.drive
 
         def counted_euler(m: Any, d: Any) -> None:
             counts[(float(m.opt.timestep), 0)] += 1
             euler(m, d)
 
-        mujoco.mj_Euler = counted_euler
+        # The steps are counted in Python: the compiled runs make the same ones, uncounted.
+        mujoco.mj_Euler, _fast.drive = counted_euler, lambda *_: False
         try:
             yield counts
         finally:
-            mujoco.mj_Euler = euler
+            mujoco.mj_Euler, _fast.drive = euler, compiled
         return
     step = pymunk.Space.step
 
@@ -135,11 +140,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--step", type=float, default=1.0, help="grid step, degrees")
+    parser.add_argument("--backend", choices=("mujoco", "pymunk"), action="append",
+                        help="time this simulator only (repeatable; default: both)")
     args = parser.parse_args()
     case = whitworth()
     grid = np.radians(np.arange(0.0, 360.0, args.step))
     floors: dict[str, Callable[[Case, Counter[tuple[float, int]]], float]] = {
         "mujoco": mujoco_floor, "pymunk": pymunk_floor}
+    floors = {name: f for name, f in floors.items() if name in (args.backend or floors)}
     print(f"Whitworth turning at 10 rad/s, {grid.size} poses; median (min, max) of "
           f"{args.repeats} repeats")
     print("| backend | ok | continuous | sweep s | steps | ms/pose | C floor ms/pose | "
@@ -153,8 +161,9 @@ def main() -> None:
                          for s in solutions)
         took, floor = [], []
         for _ in range(args.repeats):
+            fresh = whitworth()  # read anew: nothing the library keeps per linkage is reused
             start = time.perf_counter()
-            sweep(case, grid, backend)
+            sweep(fresh, grid, backend)
             took.append(time.perf_counter() - start)
             floor.append(floor_of(case, counts))
         per_pose = [1e3 * t / grid.size for t in took]

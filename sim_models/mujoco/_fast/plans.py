@@ -29,6 +29,9 @@ class MjCalls(NamedTuple):
     mul_m: Any
     set_state: Any
     get_state: Any
+    euler: Any
+    fwd_position: Any
+    forward_skip: Any
 
 
 class PointsPlan(NamedTuple):
@@ -143,3 +146,29 @@ class PassPlan(NamedTuple):
     ended_at: Array
     rules: Array
     ended_state: Array
+
+
+class DrivePlan(NamedTuple):
+    """:func:`.drive_kernel.drive`: a driven run's steps before each reading, its loads
+    (:class:`..linkage_dynamics.PointLoads`: fixed body wrenches, forces at sites with their
+    bodies, couples), the data's views, the arrays copied out at each reading (as
+    :class:`ReadsPlan`'s)."""
+
+    steps: Array
+    skip_position: int  # mjSTAGE_POS: the forward pass after the position stage
+    base: Array
+    sites: Array
+    bodies: Array
+    fx: Array
+    fy: Array
+    torques: Array
+    d_xfrc: Array
+    d_sites: Array
+    d_centres: Array
+    carried: Array
+    d_force: Array
+    d_pos: Array
+    out_force: Array
+    out_pos: Array
+    outs: tuple[Array, ...]
+    sources: tuple[Array, ...]
