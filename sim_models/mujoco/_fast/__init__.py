@@ -30,6 +30,7 @@ import numpy as np
 
 from mechcheck.sim_models.compiled import kernel
 from mechcheck.sim_models.mujoco._fast.plans import (
+    Capture,
     DrivePlan,
     EquationsPlan,
     PassData,
@@ -164,11 +165,19 @@ def reads(rig: LinkageRig, states: Array, targets: Array, xfrc: Array, drives: A
     plan = ReadsPlan(np.ascontiguousarray(states), int(mujoco.mjtState.mjSTATE_FULLPHYSICS),
                      m.eq_data, np.asarray(rig.driver_eqs, dtype=np.int64), targets, xfrc,
                      d.xfrc_applied, d.qfrc_applied, np.asarray(rig.drive_dofs, dtype=np.int64),
-                     np.ascontiguousarray(drives).reshape(n, -1), rig.carried, views[2],
-                     views[1], snapshot.efc_force, snapshot.efc_pos,
-                     tuple(getattr(snapshot, field).reshape(n, -1) for field, _ in rig.captured),
-                     tuple(source.reshape(-1) for _, source in rig.captured))
+                     np.ascontiguousarray(drives).reshape(n, -1),
+                     capture_plan(rig, views, snapshot, n))
     return in_place(m, d, rig.nefc, views, lambda: loop.reads(calls(m, d), plan))
+
+
+def capture_plan(rig: LinkageRig, views: tuple[Array, ...], snapshot: Snapshot,
+                 n: int) -> Capture:
+    """What a kernel copies out at each of ``n`` reads (:meth:`..linkage_readout.RigReadout.
+    capture`): the constraint ``views`` into ``snapshot``'s, each of the rig's captured
+    arrays into its own."""
+    return Capture(rig.carried, views[2], views[1], snapshot.efc_force, snapshot.efc_pos,
+                   tuple(getattr(snapshot, field).reshape(n, -1) for field, _ in rig.captured),
+                   tuple(source.reshape(-1) for _, source in rig.captured))
 
 
 def drive(rig: LinkageRig, loads: PointLoads, steps: Array, snapshot: Snapshot) -> bool:
@@ -189,10 +198,8 @@ def drive(rig: LinkageRig, loads: PointLoads, steps: Array, snapshot: Snapshot) 
     plan = DrivePlan(np.asarray(steps, dtype=np.int64), int(mujoco.mjtStage.mjSTAGE_POS),
                      loads.base + rig.extra, np.asarray(loads.sites, dtype=np.int64),
                      np.asarray(loads.bodies, dtype=np.int64), loads.fx, loads.fy,
-                     loads.torques, d.xfrc_applied, d.site_xpos, d.xipos, rig.carried,
-                     views[2], views[1], snapshot.efc_force, snapshot.efc_pos,
-                     tuple(getattr(snapshot, field).reshape(n, -1) for field, _ in rig.captured),
-                     tuple(source.reshape(-1) for _, source in rig.captured))
+                     loads.torques, d.xfrc_applied, d.site_xpos, d.xipos,
+                     capture_plan(rig, views, snapshot, n))
     return in_place(m, d, rig.nefc, views, lambda: compiled.drive(calls(m, d), plan))
 
 

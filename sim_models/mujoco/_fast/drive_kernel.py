@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from mechcheck.sim_models.mujoco._fast.exact_kernel import capture
 from mechcheck.sim_models.mujoco._fast.plans import DrivePlan, MjCalls
 
 
@@ -35,19 +36,13 @@ def loaded_forward(mj: MjCalls, p: DrivePlan, moments: np.ndarray) -> None:
 
 @njit(nogil=True, cache=True)
 def drive(mj: MjCalls, p: DrivePlan) -> None:
-    """``p.steps[k]`` steps, then reading k, for every k: the captured arrays copied into
-    row k, the equality forces with the carried ones added."""
+    """``p.steps[k]`` steps, then reading k, for every k (:func:`.exact_kernel.capture`
+    into row k)."""
     moments = np.zeros(p.base.shape[0])
-    nefc = p.carried.size
     for k in range(p.steps.size):
         for _ in range(p.steps[k]):
             loaded_forward(mj, p, moments)
             mj.euler(mj.m, mj.d)
         loaded_forward(mj, p, moments)
         mj.rne(mj.m, mj.d)
-        for i in range(len(p.outs)):
-            p.outs[i][k] = p.sources[i]
-        p.out_force[k] = p.d_force
-        p.out_pos[k] = p.d_pos
-        for j in range(nefc):
-            p.out_force[k, j] += p.carried[j]
+        capture(p.capture, k)
