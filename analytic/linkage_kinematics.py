@@ -18,7 +18,8 @@ J·q̈ = [0, a] − (J̇·q̇), with J̇·q̇ written out per constraint.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import threading
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -433,23 +434,95 @@ def _walked_positions(linkage: Linkage, value: Array) -> tuple[Array, Array]:
     return q, locked
 
 
+@dataclass
+class _Path:
+    """One side of one driver's path from the drawn pose, as far as it has been walked in
+    whole steps (:func:`_walk`): the anchors k·size, and the step where it locks (0: not
+    met) with how far the path reaches."""
+
+    anchors: list[Array]
+    locked_at: int = 0
+    reach: float = math.inf
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+
+#: The paths walked so far (:func:`_walk`), by what they depend on (:func:`_path_key`), the
+#: most recently used last; at most :data:`KEPT_PATHS`.
+_PATHS: dict[tuple[str, float, float], _Path] = {}
+KEPT_PATHS = 16
+_PATHS_LOCK = threading.Lock()
+
+
+def _kept_path(linkage: Linkage, side: float, size: float, start: Array) -> _Path:
+    """The path of the linkage's driver on one ``side`` in steps of ``size``, as far as it
+    has been walked: kept for a mechanism, not for one Linkage value, since a case at
+    another driver value (a sweep's pose, a driven run's start) is a new value of the same
+    mechanism and walks the same path."""
+    key = (_path_key(linkage), side, size)
+    with _PATHS_LOCK:
+        path = _PATHS.pop(key, None) or _Path([start])
+        _PATHS[key] = path
+        while len(_PATHS) > KEPT_PATHS:
+            del _PATHS[next(iter(_PATHS))]
+    return path
+
+
+def _path_key(linkage: Linkage) -> str:
+    """What a path from the drawn pose depends on, as text: the drawing, the links, the
+    joints and the driven joints; not the drivers' values or rates, nor the loads."""
+    return kept(linkage, "path key", lambda: repr((tuple(linkage.points.items()), linkage.links,
+                                                   linkage.joints,
+                                                   tuple(d.joint for d in linkage.drivers))))
+
+
 def _walk(linkage: Linkage, start: Array, side: float, size: float,
           travel: float) -> tuple[Array, float]:
     """The anchors k·size (k = 0, 1, …) of one driver's path on one side of the drawn pose,
-    up to ``travel`` or to where the linkage locks, and how far the path reaches."""
+    up to ``travel`` or to where the linkage locks, and how far the path reaches.
+
+    The whole steps (k·size ≤ ``travel``) are kept (:func:`_kept_path`): a path walked
+    again, farther or not (a sweep analysed in parts, a driven run started at each of its
+    poses), goes on from where the last walk stopped, through the same Newton steps from
+    the same anchors, so to the same poses. A last step short of a whole one is walked anew
+    each time."""
     count = math.ceil(travel / size) if travel > 0.0 else 0
-    anchors = [start]
-    for k in range(1, count + 1):
-        target = np.array([[side * min(k * size, travel)]])
-        trial, ok = _newton(linkage, anchors[-1][None, :], target)
-        if not ok[0]:
-            trial, ok = _in_halves(linkage, anchors[-1][None, :], side * (k - 1) * size, target)
-        if not ok[0]:
-            fraction = _lock_fraction(linkage, anchors[-1][None, :], target,
-                                      np.array([(k - 1) * size / abs(target[0, 0])]), np.ones(1))
-            return np.array(anchors), float(fraction[0]) * abs(target[0, 0])
-        anchors.append(trial[0])
+    path = _kept_path(linkage, side, size, start)
+    with path.lock:  # solves may run in several threads
+        while (not path.locked_at and len(path.anchors) <= count
+               and len(path.anchors) * size <= travel):
+            k = len(path.anchors)
+            found, reach = _anchor(linkage, path.anchors[-1], side, size, k, k * size)
+            if found is None:
+                path.locked_at, path.reach = k, reach
+            else:
+                path.anchors.append(found)
+        whole = 1
+        while whole < len(path.anchors) and whole <= count and whole * size <= travel:
+            whole += 1
+        anchors = path.anchors[:whole]
+        if path.locked_at == whole and whole <= count and whole * size <= travel:
+            return np.array(anchors), path.reach
+    for k in range(whole, count + 1):
+        found, reach = _anchor(linkage, anchors[-1], side, size, k, min(k * size, travel))
+        if found is None:
+            return np.array(anchors), reach
+        anchors.append(found)
     return np.array(anchors), math.inf
+
+
+def _anchor(linkage: Linkage, before: Array, side: float, size: float, k: int,
+            value: float) -> tuple[Array | None, float]:
+    """Step k of a path (:func:`_walk`), from the anchor ``before`` to the driver at
+    side·``value``: the pose there, or None and how far the path reaches (where it locks)."""
+    target = np.array([[side * value]])
+    trial, ok = _newton(linkage, before[None, :], target)
+    if not ok[0]:
+        trial, ok = _in_halves(linkage, before[None, :], side * (k - 1) * size, target)
+    if ok[0]:
+        return trial[0], math.inf
+    fraction = _lock_fraction(linkage, before[None, :], target,
+                              np.array([(k - 1) * size / abs(target[0, 0])]), np.ones(1))
+    return None, float(fraction[0]) * abs(target[0, 0])
 
 
 def _in_halves(linkage: Linkage, q: Array, start: float, target: Array,

@@ -76,9 +76,13 @@ def unit_factor(unit: str) -> float:
     return DEGREES_PER_RADIAN if unit == "deg" else 1.0
 
 
+#: The quantity kind of each unit that is not a pose's (:func:`kind_of_unit`).
+UNIT_KINDS = {"N": "force", "N*m": "torque"}
+
+
 def kind_of_unit(unit: str) -> str:
     """``force`` (N), ``torque`` (N*m) or ``pose`` (deg, m): the policy's quantity kind."""
-    return {"N": "force", "N*m": "torque"}.get(unit, "pose")
+    return UNIT_KINDS.get(unit, "pose")
 
 
 def order_key(quantity: str) -> tuple[int, int, str]:

@@ -9,9 +9,15 @@ sweep, made again with nothing else in the loop. MuJoCo: one single-threaded
 forward pass and an Euler step, as the sweep's are. pymunk: Chipmunk's ``cpSpaceStep`` on
 the driven Space, as many times at each time step and iteration count as the sweep stepped
 there. The sweep's own work on top (loads, friction, readings, checks, the analytic
-seeds) is the ratio. Medians over ``--repeats`` with min and max.
+seeds) is the ratio. Each timed sweep is of the case read anew from its file, with no
+continuation path kept, so nothing an earlier sweep found is reused. Medians over ``--repeats`` with min
+and max.
 
-    python benchmarks/bench_sweep_driven.py --repeats 3
+    python benchmarks/bench_sweep_driven.py --repeats 3 [--backend mujoco] [--cpu]
+
+``--cpu`` times with the process's CPU time instead of the wall clock: on a machine shared
+with other work the wall clock counts the time the process waited for a core, in the sweep
+and in its floor alike but not in the same measure.
 """
 
 from __future__ import annotations
@@ -30,10 +36,13 @@ import numpy as np
 import pymunk
 
 from mechcheck import load_cases
+from mechcheck.analytic import linkage_kinematics
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
 from mechcheck.backends import get
 
+#: The clock every time is read from (``--cpu``: the process's CPU time).
+CLOCK: list[Callable[[], float]] = [time.perf_counter]
 CASES = [Path("compare/cases/users/whitworth.toml"), Path("/work/shared/cases/users/whitworth.toml")]
 
 
@@ -55,17 +64,20 @@ def counting(backend: str) -> Iterator[Counter[tuple[float, int]]]:
     pymunk's Space steps."""
     counts: Counter[tuple[float, int]] = Counter()
     if backend == "mujoco":
-        euler = mujoco.mj_Euler
+        from mechcheck.sim_models.mujoco import _fast
+
+        euler, compiled = mujoco.mj_Euler, _fast.drive
 
         def counted_euler(m: Any, d: Any) -> None:
             counts[(float(m.opt.timestep), 0)] += 1
             euler(m, d)
 
-        mujoco.mj_Euler = counted_euler
+        # The steps are counted in Python: the compiled runs make the same ones, uncounted.
+        mujoco.mj_Euler, _fast.drive = counted_euler, lambda *_: False
         try:
             yield counts
         finally:
-            mujoco.mj_Euler = euler
+            mujoco.mj_Euler, _fast.drive = euler, compiled
         return
     step = pymunk.Space.step
 
@@ -96,9 +108,9 @@ def mujoco_floor(case: Case, counts: Counter[tuple[float, int]]) -> float:
         mujoco.mj_resetData(rig.model, rig.data)
         state = np.zeros(mujoco.mj_stateSize(rig.model, spec))
         mujoco.mj_getState(rig.model, rig.data, state, spec)
-        start = time.perf_counter()
+        start = CLOCK[0]()
         rollout.rollout(rig.model, rig.data, state[None, :], nstep=n)
-        took += time.perf_counter() - start
+        took += CLOCK[0]() - start
     return took
 
 
@@ -119,10 +131,10 @@ def pymunk_floor(case: Case, counts: Counter[tuple[float, int]]) -> float:
                                     driven=True)
         model.space.gravity = (0.0, -9.81)  # loaded (see bench_pymunk.c_floor: no subnormals)
         step, space = lib.cpSpaceStep, model.space._space
-        start = time.perf_counter()
+        start = CLOCK[0]()
         for _ in range(n):
             step(space, dt)
-        took += time.perf_counter() - start
+        took += CLOCK[0]() - start
     return took
 
 
@@ -135,13 +147,21 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--step", type=float, default=1.0, help="grid step, degrees")
+    parser.add_argument("--backend", choices=("mujoco", "pymunk"), action="append",
+                        help="time this simulator only (repeatable; default: both)")
+    parser.add_argument("--cpu", action="store_true",
+                        help="time with the process's CPU time (a shared machine's other load "
+                             "does not count), not the wall clock")
     args = parser.parse_args()
+    if args.cpu:
+        CLOCK[0] = time.process_time
     case = whitworth()
     grid = np.radians(np.arange(0.0, 360.0, args.step))
     floors: dict[str, Callable[[Case, Counter[tuple[float, int]]], float]] = {
         "mujoco": mujoco_floor, "pymunk": pymunk_floor}
+    floors = {name: f for name, f in floors.items() if name in (args.backend or floors)}
     print(f"Whitworth turning at 10 rad/s, {grid.size} poses; median (min, max) of "
-          f"{args.repeats} repeats")
+          f"{args.repeats} repeats; {'CPU time' if args.cpu else 'wall clock'}")
     print("| backend | ok | continuous | sweep s | steps | ms/pose | C floor ms/pose | "
           "ratio to floor |")
     print("|---|---|---|---|---|---|---|---|")
@@ -153,9 +173,13 @@ def main() -> None:
                          for s in solutions)
         took, floor = [], []
         for _ in range(args.repeats):
-            start = time.perf_counter()
-            sweep(case, grid, backend)
-            took.append(time.perf_counter() - start)
+            # Read anew, and no path of its continuation kept: nothing an earlier sweep
+            # found is reused (a sweep in a new process).
+            fresh = whitworth()
+            linkage_kinematics._PATHS.clear()
+            start = CLOCK[0]()
+            sweep(fresh, grid, backend)
+            took.append(CLOCK[0]() - start)
             floor.append(floor_of(case, counts))
         per_pose = [1e3 * t / grid.size for t in took]
         floor_ms = [1e3 * f / grid.size for f in floor]

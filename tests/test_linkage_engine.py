@@ -5,15 +5,17 @@ give the same numbers as their own closed forms, independent code paths."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 
+from mechcheck.analytic import linkage_kinematics
 from mechcheck.analytic.case import Case, FourBarGeometry
 from mechcheck.analytic.kinematics import pose_of
 from mechcheck.analytic.linkage_forces import solve_linkage
-from mechcheck.analytic.linkage_kinematics import solve_pose
+from mechcheck.analytic.linkage_kinematics import continuation_positions, solve_pose
 from mechcheck.analytic.presets import FOUR_BAR_NAMES, SLIDER_CRANK_NAMES, preset_case, redrawn
 
 from .closed_form import forces
@@ -95,3 +97,35 @@ def test_a_non_grashof_crank_locks_where_the_theory_says() -> None:
     assert pose.assembled.tolist() == [True, False, False]
     reached = np.degrees(pose.locked_at[1:] * np.radians([120.0, -150.0]))
     assert reached == pytest.approx([limit, -limit], abs=1e-6)
+
+
+def test_a_kept_path_gives_the_poses_and_locks_of_a_fresh_walk(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The continuation keeps each mechanism's path in whole steps, for any Linkage value of
+    it: the non-Grashof four-bar above solved in parts (near, farther, past its lock on
+    both sides, nearer again, one part as the mechanism drawn with another driver value)
+    gives every part's poses and lock points, to the last bit, as walks with nothing kept,
+    in fewer steps."""
+    linkage = preset_case("jam", FourBarGeometry(0.300, 0.100, 0.229, 0.099), 0.0).linkage
+    other = replace(linkage, drivers=(replace(linkage.drivers[0], value=0.3),))
+    parts = [(linkage, [10.0, 30.0]), (other, [90.0, 45.5, 120.0]), (linkage, [-150.0, -20.0]),
+             (other, [5.0, 96.0, 97.0, -97.0]), (linkage, [100.0, 3.0])]
+    steps: list[int] = []
+    anchor = linkage_kinematics._anchor
+
+    def counted(*args: object) -> object:
+        steps.append(1)
+        return anchor(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(linkage_kinematics, "_anchor", counted)
+    monkeypatch.setattr(linkage_kinematics, "_PATHS", {})
+    kept = [continuation_positions(lk, np.radians(np.array(values))[:, None])
+            for lk, values in parts]
+    walked = len(steps)
+    monkeypatch.setattr(linkage_kinematics, "KEPT_PATHS", 0)
+    for (lk, values), (q, locked) in zip(parts, kept, strict=True):
+        fresh_q, fresh_locked = continuation_positions(lk, np.radians(np.array(values))[:, None])
+        assert np.array_equal(q, fresh_q, equal_nan=True), values
+        assert np.array_equal(locked, fresh_locked, equal_nan=True), values
+    assert np.isfinite(kept[1][1]).tolist() == [False, False, True]  # 120° is past the lock
+    assert 2 * walked < len(steps) - walked

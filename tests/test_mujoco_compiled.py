@@ -2,7 +2,8 @@
 ``mujoco_solve``'s batch and the settled sweep's reads) against the Python loops: the same
 MuJoCo functions on the same MjData, so the same numbers to the last bit; the Python loops
 wherever the compiled ones cannot run; and models kept from one sweep to the next give the
-numbers of models built anew."""
+numbers of models built anew. A continuous driven sweep's runs
+(:mod:`~mechcheck.sim_models.mujoco._fast.drive_kernel`) likewise."""
 
 from __future__ import annotations
 
@@ -14,11 +15,12 @@ import pytest
 
 from mechcheck.analytic.presets import as_linkage
 from mechcheck.analytic.solution import Solution
-from mechcheck.sim_models.mujoco import _fast, backend as _mujoco, batch_settle
+from mechcheck.sim_models.mujoco import _fast, backend as _mujoco, batch_settle, linkage_dynamics
 from mechcheck.sweep import gated_poses
 
 from .builtin import builtin, builtin_cases
 from .harness import sweeper
+from .test_driven_sweep import whitworth
 from .test_pymunk_linkage import at_rest
 
 #: The backend's functions as the harness calls them (a preset as its linkage).
@@ -210,3 +212,38 @@ def test_compiled_passes_run_out_of_budget_as_the_rollouts_do(
         [s.diagnostics.get("passes") for s in rolled]
     assert [s.message for s in compiled] == [s.message for s in rolled]
     assert_same_settling(compiled, rolled)
+
+
+def test_a_continuous_driven_sweep_compiled_reads_the_python_loops_numbers(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The user's Whitworth quick-return (a massless block: two models and their massless
+    limit; a cutting force off the ram's centre, weights), its crank turning at 10 rad/s
+    through a whole turn in 30° steps, one continuous run: each model's run
+    compiled (:mod:`._fast.drive_kernel`), in the Python loop of the same MuJoCo calls, and
+    in the lockstep loop that applies the loads as the general path does
+    (:meth:`~mechcheck.sim_models.mujoco.linkage_loads.RigLoads.wrenches`, a kinematics pass
+    before each forward pass) give every pose the same steps and numbers, to the last bit."""
+    case, turn = whitworth(), np.radians(np.arange(0.0, 360.0, 30.0))
+    ran: list[bool] = []
+    original = _fast.drive
+
+    def recorded(*args: object) -> bool:
+        ran.append(original(*args))  # type: ignore[arg-type]
+        return ran[-1]
+
+    with monkeypatch.context() as m:
+        m.setattr(_fast, "drive", recorded)
+        compiled = sweep(case, turn, "mujoco")
+    assert ran and all(ran), "numba: every model's run compiled"
+    with monkeypatch.context() as m:
+        m.setattr(_fast, "drive", lambda *_: False)
+        stepped = sweep(case, turn, "mujoco")
+    with monkeypatch.context() as m:
+        m.setattr(linkage_dynamics, "plain", lambda rig: False)
+        general = sweep(case, turn, "mujoco")
+    continuous = [s for s in compiled if str(s.diagnostics.get("sweep_run")).startswith("continuous")]
+    assert len(continuous) == 12 and all(s.status == "ok" for s in continuous)
+    for other in (stepped, general):
+        assert [s.diagnostics.get("steps") for s in compiled] == \
+            [s.diagnostics.get("steps") for s in other]
+        assert identical(compiled, other)

@@ -65,16 +65,18 @@ from mechcheck.sim_models.linkage_motion import (
     Motion,
     at_first_driver,
     at_rest_reason,
+    coulomb_joints,
     driven_motion,
     lead_limit,
     prescribed_motion,
     self_locking_note,
 )
+from mechcheck.sim_models.mujoco import _fast
 from mechcheck.sim_models.mujoco.joint_kinds import builder_of
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
 from mechcheck.sim_models.mujoco.linkage_mesh import pushing
 from mechcheck.sim_models.mujoco.linkage_model import INERTIA_FLOOR_FRACTION, spanning_tree
-from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig
+from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
 from mechcheck.sim_models.mujoco.model import Settings
 
 #: Dynamics: first time step 2.5e-5 s (refined by halving). With dt = 1e-3 the
@@ -224,9 +226,7 @@ def run_steps(rigs: LinkageRigs, steps: int, friction: bool,
             if loads is None:
                 forward(rig)
             else:
-                mujoco.mj_kinematics(rig.model, rig.data)
-                loads[k].apply(rig)
-                mujoco.mj_forward(rig.model, rig.data)
+                loaded_forward(rig, loads[k])
         if friction:
             with_friction(rigs, massless_reactions)
         for rig in rigs.members:
@@ -274,38 +274,112 @@ def read_instant(rigs: LinkageRigs, friction: bool) -> dict[str, float]:
     return values
 
 
+#: What a continuous run measured at a pose, besides its values, by name (the diagnostics
+#: of :func:`stretch_solution`).
+Measured = dict[str, float]
+
+
 def read_stretch(rigs: LinkageRigs, motion: Motion, lead: int, dt: float, interval: float,
                  poses: int, friction: bool, reference: np.ndarray
-                 ) -> list[tuple[dict[str, float], dict[str, float]]]:
+                 ) -> list[tuple[dict[str, float], Measured]]:
     """One run through ``poses`` poses ``interval`` seconds apart, the first after ``lead``
     steps of ``dt``: each pose's values (as :func:`read_drive`) read at the step that
     reaches it, and what the run measured there (steps so far, the clock's speed error,
     the loop's gap, the pose's distance from the analytic ``reference`` qpos)."""
+    per_pose = round(interval / dt)
+    steps = np.full(poses, per_pose, dtype=np.int64)
+    steps[0] = lead
+    if not friction and all(map(plain, rigs.members)):
+        return plain_readings(rigs, motion, dt, steps, reference)
     for rig in rigs.members:
         start_run(rig, motion, lead, dt)
-    per_pose = round(interval / dt)
     base = rigs.base
     loads = [PointLoads(rig) for rig in rigs.members] if all(map(plain, rigs.members)) else None
     out = []
-    for k in range(poses):
-        run_steps(rigs, lead if k == 0 else per_pose, friction, loads)
+    for k, done in enumerate(np.cumsum(steps).tolist()):
+        run_steps(rigs, int(steps[k]), friction, loads)
         values = read_instant(rigs, friction)
-        assert base.clock is not None
-        out.append((values, {
-            "steps": float(lead + k * per_pose),
-            "residual_velocity": abs(float(base.data.qvel[base.clock]) - 1.0),
-            "loop_violation": base.loop_violation(),
-            "pose_drift": turned_drift(base, reference[k]),
-            "fictitious_inertia_correction": (inertia_correction(base.read(), values, base.scale,
-                                                                 base.units)
-                                              if rigs.doubled is not None else 0.0)}))
+        out.append((values, measured(rigs, values, done, base.data.qvel,
+                                     base.loop_violation(), base.data.qpos, reference[k],
+                                     base.read)))
     return out
 
 
-def turned_drift(rig: LinkageRig, qpos: np.ndarray) -> float:
-    """:meth:`.linkage_build.LinkageRig.pose_drift` with every hinge's difference taken
-    modulo a turn: a continuous run's hinges count the turns it has made."""
-    gap = rig.data.qpos - qpos
+def measured(rigs: LinkageRigs, values: dict[str, float], steps: int, qvel: np.ndarray,
+             gap: float, qpos: np.ndarray, reference: np.ndarray,
+             base_values: Callable[[], dict[str, float]]) -> Measured:
+    """What a continuous run measured at a pose: its steps so far, the clock's speed error,
+    the loop's gap, the pose's distance from the analytic ``reference`` qpos, the
+    fictitious inertia the massless limit ``values`` removed from the base model's
+    reading (``base_values()``)."""
+    base = rigs.base
+    assert base.clock is not None
+    return {"steps": float(steps),
+            "residual_velocity": abs(float(qvel[base.clock]) - 1.0),
+            "loop_violation": gap,
+            "pose_drift": turned_drift(base, qpos, reference),
+            "fictitious_inertia_correction": (inertia_correction(base_values(), values,
+                                                                 base.scale, base.units)
+                                              if rigs.doubled is not None else 0.0)}
+
+
+def plain_readings(rigs: LinkageRigs, motion: Motion, dt: float, steps: np.ndarray,
+                   reference: np.ndarray) -> list[tuple[dict[str, float], Measured]]:
+    """:func:`read_stretch` of models whose loads are :class:`PointLoads` and no Coulomb
+    friction: the models do not share anything, so each runs the whole stretch on its own
+    (:func:`plain_stretch`), capturing MuJoCo's arrays at each pose, and the read-out reads
+    every pose at once."""
+    base = rigs.base
+    snaps = [plain_stretch(rig, motion, dt, steps) for rig in rigs.members]
+    columns = [rig.values(snap) for rig, snap in zip(rigs.members, snaps, strict=True)]
+    gaps = base.loop_gaps(snaps[0].efc_pos)
+    out = []
+    for k, done in enumerate(np.cumsum(steps).tolist()):
+        read = [{q: float(column[q][k]) for q in column} for column in columns]
+        values = (read[0] if rigs.doubled is None
+                  else massless_limit(read[0], read[1], base.units))
+        out.append((values, measured(rigs, values, done, snaps[0].qvel[k],
+                                     float(gaps[k]), snaps[0].qpos[k], reference[k],
+                                     read[0].copy)))
+    return out
+
+
+def plain_stretch(rig: LinkageRig, motion: Motion, dt: float, steps: np.ndarray) -> Snapshot:
+    """One model's run from ``steps[0]·dt`` before the instant, read after each ``steps[k]``
+    steps: MuJoCo's arrays at each reading (:meth:`.linkage_readout.RigReadout.capture`).
+    Compiled where it can be (:func:`._fast.drive`: the same calls, the same numbers)."""
+    snapshot = rig.snapshot(len(steps))
+    loads = PointLoads(rig)
+    start_run(rig, motion, int(steps[0]), dt)
+    if _fast.drive(rig, loads, steps, snapshot):
+        return snapshot
+    start_run(rig, motion, int(steps[0]), dt)
+    m, d = rig.model, rig.data
+    for k, count in enumerate(steps.tolist()):
+        for _ in range(count):
+            loaded_forward(rig, loads)
+            mujoco.mj_Euler(m, d)
+        loaded_forward(rig, loads)
+        mujoco.mj_rnePostConstraint(m, d)
+        rig.capture(snapshot, k)
+    return snapshot
+
+
+def loaded_forward(rig: LinkageRig, loads: PointLoads) -> None:
+    """A forward pass with ``loads`` at the current positions: MuJoCo's position stage
+    (the kinematics among it), the loads from the positions it found, the rest of the pass
+    (the loads enter only after the position stage)."""
+    m, d = rig.model, rig.data
+    mujoco.mj_fwdPosition(m, d)
+    loads.apply(rig)
+    mujoco.mj_forwardSkip(m, d, mujoco.mjtStage.mjSTAGE_POS, 0)
+
+
+def turned_drift(rig: LinkageRig, qpos: np.ndarray, reference: np.ndarray) -> float:
+    """:meth:`.linkage_build.LinkageRig.pose_drift` of ``qpos`` from ``reference`` with every
+    hinge's difference taken modulo a turn: a continuous run's hinges count the turns it
+    has made."""
+    gap = qpos - reference
     turning = rig.hinge[rig.model.dof_jntid]
     gap = np.where(turning, np.remainder(gap + np.pi, 2.0 * np.pi) - np.pi, gap)
     return float(np.abs(gap * rig.weight).max(initial=0.0))
@@ -320,7 +394,10 @@ def drive_stretch(case: Case, values: np.ndarray, results: LinkageResults
     be run one by one: a gear mesh (its side is chosen per run), a Coulomb joint at rest or
     reversing at a pose, or a lead-in that does not converge."""
     start = time.perf_counter()
-    if any(at_rest_reason(at_first_driver(case, v), DYNAMIC.timestep) for v in values):
+    # The Coulomb joints do not depend on the driver's value: a case without any needs no
+    # case per pose to ask.
+    if coulomb_joints(case) and any(at_rest_reason(at_first_driver(case, v), DYNAMIC.timestep)
+                                    for v in values):
         return None
     motion = prescribed_motion(case)
     rigs = driven_rigs(case, motion)

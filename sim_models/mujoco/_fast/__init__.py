@@ -4,7 +4,8 @@ seam the physics modules call it through (this module).
 - :mod:`.pointers`: MuJoCo's C library (its functions' pointers, models' and data's
   addresses, the constraint arrays' place in MjData's arena, models copied in place);
 - :mod:`.plans`: what the kernels are handed (named arrays);
-- :mod:`.exact_kernel`, :mod:`.step_kernel`, :mod:`.stop_kernel`: the numba kernels.
+- :mod:`.exact_kernel`, :mod:`.step_kernel`, :mod:`.stop_kernel`, :mod:`.drive_kernel`: the
+  numba kernels.
 
 Every function here either does its work compiled and says so (True, or a result), or
 says it cannot (False, None), and the caller runs its own Python: the same MuJoCo calls
@@ -29,6 +30,8 @@ import numpy as np
 
 from mechcheck.sim_models.compiled import kernel
 from mechcheck.sim_models.mujoco._fast.plans import (
+    Capture,
+    DrivePlan,
     EquationsPlan,
     PassData,
     PassPlan,
@@ -47,6 +50,7 @@ from mechcheck.sim_models.mujoco._fast.pointers import (
 )
 
 if TYPE_CHECKING:
+    from mechcheck.sim_models.mujoco.linkage_dynamics import PointLoads
     from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
 
 Array = np.ndarray
@@ -55,6 +59,7 @@ _HERE = "mechcheck.sim_models.mujoco._fast"
 STOP_KERNEL = f"{_HERE}.stop_kernel"
 EXACT_KERNEL = f"{_HERE}.exact_kernel"
 STEP_KERNEL = f"{_HERE}.step_kernel"
+DRIVE_KERNEL = f"{_HERE}.drive_kernel"
 
 
 # -- the stop rules -------------------------------------------------------------------
@@ -160,11 +165,42 @@ def reads(rig: LinkageRig, states: Array, targets: Array, xfrc: Array, drives: A
     plan = ReadsPlan(np.ascontiguousarray(states), int(mujoco.mjtState.mjSTATE_FULLPHYSICS),
                      m.eq_data, np.asarray(rig.driver_eqs, dtype=np.int64), targets, xfrc,
                      d.xfrc_applied, d.qfrc_applied, np.asarray(rig.drive_dofs, dtype=np.int64),
-                     np.ascontiguousarray(drives).reshape(n, -1), rig.carried, views[2],
-                     views[1], snapshot.efc_force, snapshot.efc_pos,
-                     tuple(getattr(snapshot, field).reshape(n, -1) for field, _ in rig.captured),
-                     tuple(source.reshape(-1) for _, source in rig.captured))
+                     np.ascontiguousarray(drives).reshape(n, -1),
+                     capture_plan(rig, views, snapshot, n))
     return in_place(m, d, rig.nefc, views, lambda: loop.reads(calls(m, d), plan))
+
+
+def capture_plan(rig: LinkageRig, views: tuple[Array, ...], snapshot: Snapshot,
+                 n: int) -> Capture:
+    """What a kernel copies out at each of ``n`` reads (:meth:`..linkage_readout.RigReadout.
+    capture`): the constraint ``views`` into ``snapshot``'s, each of the rig's captured
+    arrays into its own."""
+    return Capture(rig.carried, views[2], views[1], snapshot.efc_force, snapshot.efc_pos,
+                   tuple(getattr(snapshot, field).reshape(n, -1) for field, _ in rig.captured),
+                   tuple(source.reshape(-1) for _, source in rig.captured))
+
+
+def drive(rig: LinkageRig, loads: PointLoads, steps: Array, snapshot: Snapshot) -> bool:
+    """:func:`..linkage_dynamics.plain_stretch`'s loop compiled from the rig's current
+    state: ``steps[k]`` steps, then reading k into row k of ``snapshot``; whether it ran
+    (False: the state is untouched, or the arena moved and the caller starts again)."""
+    compiled = kernel(DRIVE_KERNEL) if library() is not None else None
+    if compiled is None:
+        return False
+    m, d = rig.model, rig.data
+    # A forward pass lays the constraint arrays out; it changes nothing a step reads (the
+    # solver's warm start is the last step's, kept by mj_Euler).
+    mujoco.mj_forward(m, d)
+    if d.efc_force.size != rig.nefc:
+        return False
+    views = constraint_views(d, rig.nefc, m.nv)
+    n = len(steps)
+    plan = DrivePlan(np.asarray(steps, dtype=np.int64), int(mujoco.mjtStage.mjSTAGE_POS),
+                     loads.base + rig.extra, np.asarray(loads.sites, dtype=np.int64),
+                     np.asarray(loads.bodies, dtype=np.int64), loads.fx, loads.fy,
+                     loads.torques, d.xfrc_applied, d.site_xpos, d.xipos,
+                     capture_plan(rig, views, snapshot, n))
+    return in_place(m, d, rig.nefc, views, lambda: compiled.drive(calls(m, d), plan))
 
 
 # -- model copies ----------------------------------------------------------------------

@@ -15,6 +15,7 @@ from __future__ import annotations
 from numba import njit
 
 from mechcheck.sim_models.mujoco._fast.plans import (
+    Capture,
     EquationsPlan,
     MjCalls,
     PointsPlan,
@@ -79,7 +80,6 @@ def reads(mj: MjCalls, p: ReadsPlan) -> None:
     """The settled reads: each state set (``spec``), its drivers' targets, loads and drive
     forces, a forward pass and mj_rnePostConstraint; the captured arrays copied into row k,
     the equality forces with the carried ones added."""
-    nefc = p.carried.size
     for k in range(p.states.shape[0]):
         mj.set_state(mj.m, mj.d, p.states[k].ctypes.data, p.spec)
         for j in range(p.driver_eqs.size):
@@ -89,9 +89,16 @@ def reads(mj: MjCalls, p: ReadsPlan) -> None:
             p.d_qfrc[p.drive_dofs[j]] = p.drives[k, j]
         mj.forward(mj.m, mj.d)
         mj.rne(mj.m, mj.d)
-        for i in range(len(p.outs)):
-            p.outs[i][k] = p.sources[i]
-        p.out_force[k] = p.d_force
-        p.out_pos[k] = p.d_pos
-        for j in range(nefc):
-            p.out_force[k, j] += p.carried[j]
+        capture(p.capture, k)
+
+
+@njit(cache=True)
+def capture(c: Capture, k: int) -> None:
+    """The captured arrays copied into row k, the equality forces with the carried ones
+    added."""
+    for i in range(len(c.outs)):
+        c.outs[i][k] = c.sources[i]
+    c.out_force[k] = c.d_force
+    c.out_pos[k] = c.d_pos
+    for j in range(c.carried.size):
+        c.out_force[k, j] += c.carried[j]

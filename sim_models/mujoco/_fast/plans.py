@@ -29,6 +29,9 @@ class MjCalls(NamedTuple):
     mul_m: Any
     set_state: Any
     get_state: Any
+    euler: Any
+    fwd_position: Any
+    forward_skip: Any
 
 
 class PointsPlan(NamedTuple):
@@ -87,6 +90,20 @@ class PostPlan(NamedTuple):
     steady: bool  # qacc stays zero
 
 
+class Capture(NamedTuple):
+    """What a read copies out of MjData into row k of a Snapshot's arrays
+    (:func:`.exact_kernel.capture`): the equality forces (the data's constraint views) with
+    the carried ones added, and each captured array (``outs`` row k ← ``sources``)."""
+
+    carried: Array
+    d_force: Array
+    d_pos: Array
+    out_force: Array
+    out_pos: Array
+    outs: tuple[Array, ...]
+    sources: tuple[Array, ...]
+
+
 class ReadsPlan(NamedTuple):
     """:func:`.exact_kernel.reads`: the states (set by ``spec``) with their drivers'
     targets, loads and drive forces, the data's views, the arrays copied out."""
@@ -101,13 +118,7 @@ class ReadsPlan(NamedTuple):
     d_qfrc: Array
     drive_dofs: Array
     drives: Array
-    carried: Array
-    d_force: Array
-    d_pos: Array
-    out_force: Array
-    out_pos: Array
-    outs: tuple[Array, ...]
-    sources: tuple[Array, ...]
+    capture: Capture
 
 
 class PassData(NamedTuple):
@@ -143,3 +154,22 @@ class PassPlan(NamedTuple):
     ended_at: Array
     rules: Array
     ended_state: Array
+
+
+class DrivePlan(NamedTuple):
+    """:func:`.drive_kernel.drive`: a driven run's steps before each reading, its loads
+    (:class:`..linkage_dynamics.PointLoads`: fixed body wrenches, forces at sites with their
+    bodies, couples), the data's views, the arrays copied out at each reading."""
+
+    steps: Array
+    skip_position: int  # mjSTAGE_POS: the forward pass after the position stage
+    base: Array
+    sites: Array
+    bodies: Array
+    fx: Array
+    fy: Array
+    torques: Array
+    d_xfrc: Array
+    d_sites: Array
+    d_centres: Array
+    capture: Capture

@@ -29,6 +29,8 @@ SET_STATE = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_
 #: ``mj_mulM(const mjModel *, const mjData *, mjtNum *res, const mjtNum *vec)``.
 MUL = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t,
                        ctypes.c_ssize_t)
+#: ``mj_forwardSkip(const mjModel *, mjData *, int skipstage, int skipsensor)``.
+SKIP = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_int, ctypes.c_int)
 #: ``mjModel *mj_copyModel(mjModel *dest, const mjModel *src)``.
 COPY_MODEL = ctypes.CFUNCTYPE(ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t)
 
@@ -54,8 +56,9 @@ def functions() -> dict[str, Callable[..., None]]:
     out: dict[str, Callable[..., None]] = {
         name: PASS((name, lib))
         for name in ("mj_forward", "mj_kinematics", "mj_comPos", "mj_comVel",
-                     "mj_rnePostConstraint", "mj_step")}
+                     "mj_rnePostConstraint", "mj_step", "mj_Euler", "mj_fwdPosition")}
     return out | {"mj_mulM": MUL(("mj_mulM", lib)),
+                  "mj_forwardSkip": SKIP(("mj_forwardSkip", lib)),
                   "mj_setState": SET_STATE(("mj_setState", lib)),
                   "mj_getState": SET_STATE(("mj_getState", lib))}
 
@@ -65,7 +68,8 @@ def calls(model: mujoco.MjModel, data: mujoco.MjData) -> MjCalls:
     f = functions()
     return MjCalls(model._address, data._address, f["mj_forward"], f["mj_kinematics"],
                    f["mj_comPos"], f["mj_comVel"], f["mj_rnePostConstraint"], f["mj_step"],
-                   f["mj_mulM"], f["mj_setState"], f["mj_getState"])
+                   f["mj_mulM"], f["mj_setState"], f["mj_getState"], f["mj_Euler"],
+                   f["mj_fwdPosition"], f["mj_forwardSkip"])
 
 
 @cache
