@@ -144,3 +144,16 @@ def test_an_unstable_run_says_what_it_lacked() -> None:
     assert "about 1.59e+04 iterations" in why and "ladder ends at 102400" in why
     assert "ladder ends at 1600" in dyn.instability(1600, per_iteration, 1000)
     assert dyn.instability(1600, 0.9 ** 0.01, 10) == ""
+
+
+def test_the_scissor_lift_64_mm_down_needs_more_iterations_than_its_ladder_allows() -> None:
+    """Open limit (docs/limitations.md): 64 mm down the stroke (condition number 544) a
+    stable step needs more Gauss–Seidel iterations than the 102 400 the ladder allows a
+    linkage of 10 joints, so a driven pymunk run there ends `not_settled`, saying so."""
+    case = raising_scissor_lift(-0.064)
+    q = analytic_results(case, np.array([-0.064])).pose.q[0]
+    per_iteration = dyn.iteration_contraction(case, q)
+    last = dyn.rungs(len(case.linkage.joints))[-1]
+    assert last == 102400
+    assert per_iteration ** last > dyn.STABLE_STEP_CONTRACTION
+    assert "ladder ends at 102400" in dyn.instability(last, per_iteration, len(case.linkage.joints))
