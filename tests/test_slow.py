@@ -57,10 +57,7 @@ USERS = Path(__file__).resolve().parents[1] / "compare" / "cases" / "users"
 @pytest.mark.parametrize(("file", "driver"), [
     ("whitworth.toml", "0:360:15"),
     ("toggle_press.toml", "-30:30:5"),
-    pytest.param("scissor_lift.toml", "-0.06:0.29:0.025", marks=pytest.mark.xfail(
-        reason="pymunk's driven runs of the raising scissor lift leave their assembly "
-               "(-60, -35, 240, 265 mm) or run out of lead-in (-10 mm) below condition "
-               "number 10³; its held sweep passes")),
+    ("scissor_lift.toml", "-0.06:0.29:0.025"),
 ])
 def test_user_mechanisms_sweep_with_a_number_at_every_pose(tmp_path: Path, file: str,
                                                            driver: str) -> None:

@@ -1,0 +1,159 @@
+"""pymunk's driven runs are stable only where a step's Gauss–Seidel leaves at most half of the
+constraint solve's slowest mode, and the iteration ladder climbs to the first rung that
+leaves a quarter (``linkage_dynamics.next_rung``): measured on the users' raising scissor
+lift, whose driven runs left their assembly at 1600 iterations a step."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mechcheck import load_cases, solve
+from mechcheck.analytic.case import Case
+from mechcheck.sim_models.convergence import DRIVEN_DRIFT, Convergence
+from mechcheck.sim_models.linkage_motion import analytic_results, at_first_driver, driven_motion
+from mechcheck.sim_models.pymunk import linkage_dynamics as dyn
+from mechcheck.sim_models.pymunk.linkage_sweep import sweep as pymunk_sweep
+from mechcheck.tolerance import rule
+
+USERS = Path(__file__).resolve().parents[1] / "compare" / "cases" / "users"
+
+
+def raising_scissor_lift(extension: float) -> Case:
+    case = next(c for c in load_cases(USERS / "scissor_lift.toml")
+                if c.name == "scissor-lift-raise")
+    return at_first_driver(case, extension)
+
+
+def step_map(rho: float) -> np.ndarray:
+    """One step of one constraint mode (state: position error / dt, velocity, impulse / mass),
+    written from Chipmunk's step: the solve starts from the last step's impulse p (warm
+    start), aims at the velocity −e/dt that removes the whole error (``error_bias`` 0), and
+    Gauss–Seidel leaves the fraction ``rho`` of the way from its start to that aim:
+    p' = (1 − ρ)·(−e/dt − v) + ρ·p, v' = v + p', e'/dt = e/dt + v'."""
+    impulse = np.array([-(1.0 - rho), -(1.0 - rho), rho])
+    velocity = impulse + np.array([0.0, 1.0, 0.0])
+    return np.array([velocity + np.array([1.0, 0.0, 0.0]), velocity, impulse])
+
+
+def radius(rho: float) -> float:
+    return float(np.abs(np.linalg.eigvals(step_map(rho))).max())
+
+
+def test_a_warm_started_solve_with_complete_correction_is_stable_up_to_half() -> None:
+    """The step map's spectral radius crosses 1 at ρ = 1/2 (there its characteristic
+    polynomial is λ³ − 1.5λ² + 1.5λ − 0.5 = (λ − 1/2)(λ² − λ + 1), roots 1/2 and
+    e^(±iπ/3)), and the ladder's bound keeps it well inside."""
+    assert np.poly(step_map(0.5)) == pytest.approx([1.0, -1.5, 1.5, -0.5])
+    assert radius(0.49) < 1.0 < radius(0.51)
+    assert radius(0.0) == pytest.approx(0.0, abs=1e-12)  # a converged solve: deadbeat
+    assert radius(dyn.STABLE_STEP_CONTRACTION) < 0.85
+    # the growth measured on the scissor lift at −60 mm (1.12× a step at ρ = 0.87 and 0.70)
+    assert 1.1 < radius(0.7) < radius(0.87) < 1.16
+
+
+def test_the_contraction_per_iteration_does_not_depend_on_the_iterations_a_step() -> None:
+    """A step of N iterations is N sweeps of one linear map: the slowest mode's step ratio
+    measured at 400 iterations a step is the per-iteration contraction measured at 100, to
+    the 400th power."""
+    case = raising_scissor_lift(-0.035)
+    q = analytic_results(case, np.array([-0.035])).pose.q[0]
+    per_iteration = dyn.iteration_contraction(case, q)
+    twins = dyn.build_twins(case, driven_motion(case, dyn.QUASI_STATIC_OMEGA), dyn.DRIVEN.dt, 400)
+    drivers = np.array([d.value for d in case.linkage.drivers])
+    at_400 = max(dyn.slowest_ratio(m, q, drivers) for m in twins.models)
+    assert at_400 == pytest.approx(per_iteration ** 400, rel=1e-2)
+    assert 0.5 < per_iteration ** 1600 and per_iteration ** 6400 < dyn.STABLE_STEP_CONTRACTION
+
+
+@pytest.mark.parametrize(("iterations", "holds"), [(1600, False), (6400, True)])
+def test_a_driven_run_leaves_its_assembly_where_a_step_leaves_more_than_half(
+        iterations: int, holds: bool) -> None:
+    """35 mm down the stroke (condition number 102) a step leaves 0.63 of the slowest mode at
+    1600 iterations and 0.15 at 6400: the run of 400 steps leaves its assembly at the first
+    and holds it at the second."""
+    case = raising_scissor_lift(-0.035)
+    end = dyn.read_drive(case, driven_motion(case, dyn.QUASI_STATIC_OMEGA), 400,
+                         dyn.DRIVEN.dt, iterations)
+    assert (end.drift <= DRIVEN_DRIFT * case.linkage.scale) is holds, end.drift
+
+
+# Slow tier: three rungs of driven runs, about 10 s on an idle machine.
+@pytest.mark.slow
+def test_the_raising_scissor_lift_gets_a_driven_number_where_its_runs_were_unstable() -> None:
+    """At −35 mm pymunk's driven run left its assembly at 1600 iterations a step; the ladder
+    climbs to the first stable rung, 6400, whose reading is the analytic one within the
+    dynamic tolerance."""
+    case = raising_scissor_lift(-0.035)
+    got = pymunk_sweep(raising_scissor_lift(0.0), np.array([-0.035]), "pymunk")[0]
+    assert got.status == "ok", got.message
+    assert got.diagnostics["iterations"] == 6400
+    reference = solve(case, "analytic")
+    tol = rule("pymunk", "force", "dynamic")
+    forces = [q for q, u in reference.units.items() if u == "N"]
+    largest = max(abs(reference.values[q]) for q in forces)
+    for q in forces:
+        assert abs(got.values[q] - reference.values[q]) <= tol.rtol * largest, (q, tol.reason)
+
+
+def unconverged(solver_only: bool) -> Convergence:
+    out = Convergence({}, 100, 1e-4, lead_disagreement=0.0, timestep_disagreement=0.0)
+    out.solver_disagreement = 1.0 if solver_only else 0.0
+    if not solver_only:
+        out.lead_disagreement = 1.0
+    return out
+
+
+@pytest.mark.parametrize(("iterations", "solver_only", "rho_100", "expected"), [
+    (400, False, 0.9999, 1600),        # below PLAIN_ITERATIONS: always the next rung
+    (1600, True, 0.5, 6400),           # the iteration rule alone: the next rung
+    (1600, False, 0.9913, 25600),      # 0.9913^16 = 0.87, ^64 = 0.57, ^256 = 0.107
+    (1600, False, 0.95, 6400),         # 0.95^16 = 0.44 (unstable), ^64 = 0.037
+    (1600, False, 0.9, None),          # 0.9^16 = 0.185: stable, more iterations won't help
+    (1600, False, 0.99999, None),      # 0.99999^1024 = 0.99: no rung is stable
+    (102400, True, 0.5, None),         # the last rung
+])
+def test_the_ladder_climbs_to_the_first_stable_rung(iterations: int, solver_only: bool,
+                                                    rho_100: float, expected: int | None) -> None:
+    per_iteration = rho_100 ** (1.0 / 100.0)
+    assert dyn.next_rung(unconverged(solver_only), iterations,
+                         lambda: per_iteration, 10) == expected
+
+
+def test_a_rung_whose_lead_in_reached_no_reading_climbs_as_an_unstable_one() -> None:
+    per_iteration = 0.9913 ** (1.0 / 100.0)
+    assert dyn.next_rung(None, 400, lambda: per_iteration, 10) == 1600
+    assert dyn.next_rung(None, 1600, lambda: per_iteration, 10) == 25600
+
+
+def test_a_large_linkage_climbs_no_rung_past_its_work_budget() -> None:
+    """100 joints may take 6400 iterations a step (6.4e5), not 25 600."""
+    per_iteration = 0.9913 ** (1.0 / 100.0)
+    assert dyn.next_rung(None, 1600, lambda: per_iteration, 100) is None
+    assert dyn.next_rung(None, 1600, lambda: 0.95 ** 0.01, 100) == 6400
+
+
+def test_an_unstable_run_says_what_it_lacked() -> None:
+    """0.9913 per 100 iterations leaves 0.87 a step at 1600; a quarter needs
+    100·ln 0.25 / ln 0.9913 ≈ 15 870 iterations. A stable step says nothing."""
+    per_iteration = 0.9913 ** (1.0 / 100.0)
+    why = dyn.instability(1600, per_iteration, 10)
+    assert "left 0.87 of the constraint solve's slowest mode at 1600 iterations" in why
+    assert "about 1.59e+04 iterations" in why and "ladder ends at 102400" in why
+    assert "ladder ends at 1600" in dyn.instability(1600, per_iteration, 1000)
+    assert dyn.instability(1600, 0.9 ** 0.01, 10) == ""
+
+
+def test_the_scissor_lift_64_mm_down_needs_more_iterations_than_its_ladder_allows() -> None:
+    """Open limit (docs/limitations.md): 64 mm down the stroke (condition number 544) a
+    stable step needs more Gauss–Seidel iterations than the 102 400 the ladder allows a
+    linkage of 10 joints, so a driven pymunk run there ends `not_settled`, saying so."""
+    case = raising_scissor_lift(-0.064)
+    q = analytic_results(case, np.array([-0.064])).pose.q[0]
+    per_iteration = dyn.iteration_contraction(case, q)
+    last = dyn.rungs(len(case.linkage.joints))[-1]
+    assert last == 102400
+    assert per_iteration ** last > dyn.STABLE_STEP_CONTRACTION
+    assert "ladder ends at 102400" in dyn.instability(last, per_iteration, len(case.linkage.joints))
