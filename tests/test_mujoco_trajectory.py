@@ -1,0 +1,371 @@
+"""MuJoCo's trajectories (backend ``mujoco``, :mod:`mechcheck.sim_models.mujoco.trajectory`)
+against closed forms written here: pendulums released from rest (the exact nonlinear swing,
+from the energy integral, in Jacobi's elliptic functions), a block between springs (free,
+pushed by a constant force, pushed by a ramp), and the order of convergence of the
+integrators with the time step. Nothing here compares with mechcheck's own reference.
+
+The target of a trajectory is 1e-3 (positions over the linkage's size, angles in rad: the
+trajectory row of the tolerance policy, design of ``mechcheck simulate``); the tests hold
+MuJoCo to what its integrators promise, which is tighter.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from scipy.special import ellipj, ellipk
+
+from mechcheck.analytic.case import Case
+from mechcheck.casefile import parse_cases, parse_toml
+from mechcheck.sim_models.mujoco.backend import simulate
+from mechcheck.sim_models.mujoco.trajectory import (
+    DEFAULT_INTEGRATOR,
+    DEFAULT_TIMESTEP,
+    STEP_BUDGET,
+    Rung,
+    ladder,
+    output_grid,
+    simulate_case,
+)
+
+G = 9.81
+#: The accuracy a trajectory is judged by (positions over the size, angles in rad).
+TRAJECTORY_TOLERANCE = 1e-3
+
+
+def case_of(text: str) -> Case:
+    return parse_cases(parse_toml(text, "<test>"), "<test>")[0][0]
+
+
+def swing(theta0: float, w0: float, t: np.ndarray) -> np.ndarray:
+    """A pendulum's angle from its stable direction, released from rest at ``theta0``
+    (rad), small-swing frequency ``w0`` (rad/s): the energy integral gives
+    sin(θ/2) = k·sn(K − w0·t | k²) with k = sin(θ0/2) (exact, any amplitude)."""
+    k = math.sin(theta0 / 2.0)
+    sn = ellipj(ellipk(k * k) - w0 * t, k * k)[0]
+    return np.asarray(2.0 * np.arcsin(k * sn))
+
+
+def pendulum(theta0: float, end: float, extra: str = "", gravity: float = G,
+             length: float = 1.0, mass: str = 'com = "B"') -> Case:
+    """A bob (or a bar) on a pin at O, drawn at ``theta0`` from hanging straight down."""
+    bx, by = length * math.sin(theta0), -length * math.cos(theta0)
+    return case_of(f"""
+[[case]]
+name = "pendulum"
+mechanism = "linkage"
+gravity = [0.0, {-gravity}]
+[case.points]
+O = [0.0, 0.0]
+B = [{bx!r}, {by!r}]
+M = [{bx / 2!r}, {by / 2!r}]
+[[case.links]]
+name = "ground"
+points = ["O"]
+[[case.links]]
+name = "arm"
+points = ["O", "B", "M"]
+[[case.joints]]
+name = "pivot"
+kind = "revolute"
+links = ["ground", "arm"]
+at = "O"
+[[case.masses]]
+link = "arm"
+mass = 2.0
+{mass}
+{extra}
+[case.simulate]
+end = {end}
+outputs = 21
+""")
+
+
+#: A fine rung, to keep the tests short (the backend's own ladder goes to its step budget):
+#: RK4 at 0.5 ms, ω·dt ≤ 0.008 for every case here.
+FINE = Rung(5e-4, "RK4")
+
+
+def fine(case: Case) -> np.ndarray:
+    """The coordinates of a fine RK4 run."""
+    run = simulate_case(case, (FINE,))[0]
+    assert run.status == "ok", run.message
+    return run.coordinates
+
+
+def test_simple_pendulum_swings_as_the_elliptic_solution() -> None:
+    theta0 = math.radians(60.0)
+    case = pendulum(theta0, 2.0)
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    # φ is the rotation from the drawn pose: θ(t) − θ0.
+    expected = swing(theta0, math.sqrt(G / 1.0), t) - theta0
+    runs = simulate(case)
+    errors = [float(np.abs(r.coordinates[:, 2] - expected).max()) for r in runs]
+    # RK4 at any step of the ladder: the point mass's floor inertia (1e-9·m·L²) moves the
+    # swing by ~2.6e-9 rad after one period (measured), the integration error is below it.
+    assert errors[-1] < 1e-8
+    # MuJoCo's defaults (semi-implicit Euler, 2 ms) are first order: 1.6 rad/s × dt after
+    # one period of this swing (measured 3.1e-3 at 2 ms), past the target; 0.5 ms meets it.
+    error_at = {(r.settings["dt"], r.settings["integrator"]): e
+                for r, e in zip(runs, errors, strict=True)}
+    default = next(e for r, e in zip(runs, errors, strict=True) if r.default)
+    assert error_at[(5e-4, "Euler")] < TRAJECTORY_TOLERANCE < default
+
+
+def test_compound_pendulum_and_its_point_trajectory() -> None:
+    """A uniform bar (mass at its middle, I = m·L²/12): w0² = m·g·(L/2)/(m·L²/3)."""
+    theta0, length = math.radians(120.0), 0.5
+    case = pendulum(theta0, 1.0, length=length,
+                    mass=f'com = "M"\ninertia = {2.0 * length**2 / 12.0!r}')
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    theta = swing(theta0, math.sqrt(1.5 * G / length), t)
+    coordinates = fine(case)
+    assert np.abs(coordinates[:, 2] - (theta - theta0)).max() < 1e-8
+    # The bar turns about O, which stays put: t = O − R(φ)·O = 0 (O is the origin).
+    assert np.abs(coordinates[:, :2]).max() < 1e-9
+
+
+def test_fixed_direction_load_swings_like_gravity() -> None:
+    """No gravity, a force of fixed direction F = (4, 0) N at the bob: a pendulum about +x,
+    w0² = F/(m·L), released at 60° from +x (drawn at 150° from hanging down)."""
+    case = pendulum(math.radians(150.0), 1.0, gravity=0.0,
+                    extra='[[case.loads]]\nlink = "arm"\nat = "B"\nforce = { x = 4.0, y = 0.0 }')
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    theta0 = math.radians(60.0)
+    expected = swing(theta0, math.sqrt(4.0 / 2.0), t) - theta0
+    assert np.abs(fine(case)[:, 2] - expected).max() < 1e-8
+
+
+def parallelogram(theta0: float, end: float) -> Case:
+    """Two cranks of 1 m (uniform bars of 0.5 kg) and a coupler of 2 kg carried as a point
+    mass: the coupler translates on a circle, so the linkage swings as one pendulum
+    (a loop closed by a connect in MuJoCo)."""
+    s, c = math.sin(theta0), -math.cos(theta0)
+    return case_of(f"""
+[[case]]
+name = "parallelogram"
+mechanism = "linkage"
+gravity = [0.0, {-G}]
+[case.points]
+O1 = [0.0, 0.0]
+O2 = [1.0, 0.0]
+A = [{s!r}, {c!r}]
+B = [{1.0 + s!r}, {c!r}]
+[[case.links]]
+name = "ground"
+points = ["O1", "O2"]
+[[case.links]]
+name = "left"
+points = ["O1", "A"]
+[[case.links]]
+name = "coupler"
+points = ["A", "B"]
+[[case.links]]
+name = "right"
+points = ["O2", "B"]
+[[case.joints]]
+name = "P1"
+kind = "revolute"
+links = ["ground", "left"]
+at = "O1"
+[[case.joints]]
+name = "PA"
+kind = "revolute"
+links = ["left", "coupler"]
+at = "A"
+[[case.joints]]
+name = "PB"
+kind = "revolute"
+links = ["coupler", "right"]
+at = "B"
+[[case.joints]]
+name = "P2"
+kind = "revolute"
+links = ["ground", "right"]
+at = "O2"
+[[case.masses]]
+link = "left"
+mass = 0.5
+com = [{s / 2!r}, {c / 2!r}]
+inertia = {0.5 / 12.0!r}
+[[case.masses]]
+link = "right"
+mass = 0.5
+com = [{1.0 + s / 2!r}, {c / 2!r}]
+inertia = {0.5 / 12.0!r}
+[[case.masses]]
+link = "coupler"
+mass = 2.0
+com = [{0.5 + s!r}, {c!r}]
+inertia = 1e-12
+[case.simulate]
+end = {end}
+outputs = 11
+""")
+
+
+def test_parallelogram_with_a_loop_closure_swings_as_its_pendulum() -> None:
+    """T = ½(2·m_c·L²/3 + M·L²)·θ̇², V = −(m_c + M)·g·L·cos θ: w0² = (m_c + M)·g /
+    ((2·m_c/3 + M)·L) with m_c = 0.5, M = 2, L = 1."""
+    theta0 = math.radians(45.0)
+    case = parallelogram(theta0, 1.0)
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    expected = swing(theta0, math.sqrt(2.5 * G / (1.0 / 3.0 + 2.0)), t) - theta0
+    runs = simulate_case(case, (Rung(DEFAULT_TIMESTEP, DEFAULT_INTEGRATOR), Rung(1e-3, "RK4"),
+                                FINE))
+    last = runs[-1]
+    k = case.linkage.link_number["left"]
+    error = np.abs(last.coordinates[:, 3 * k + 2] - expected).max()
+    # The coupler's point mass has the floor inertia 1e-5·m·L² (MuJoCo refuses none): it
+    # adds ~4e-6 of the inertia; the soft closure (time constant 2·dt) bends by its gap.
+    assert error < 1e-5
+    assert last.diagnostics["closure_gap_m"] < 1e-6
+    # Every rung reports its gap, and the coarse ones within the target.
+    assert all(r.diagnostics["closure_gap_m"] < TRAJECTORY_TOLERANCE for r in runs)
+
+
+BLOCK = """
+[[case]]
+name = "exam-q2-block"
+mechanism = "linkage"
+length_unit = "mm"
+gravity = [0.0, -9.81]
+[case.points]
+W1 = [-300.0, 0.0]
+W2 = [300.0, 0.0]
+A = [40.0, 0.0]
+[[case.links]]
+name = "ground"
+points = ["W1", "W2"]
+[[case.links]]
+name = "block"
+points = ["A"]
+[[case.joints]]
+name = "slide"
+kind = "prismatic"
+links = ["ground", "block"]
+at = "A"
+axis = [1.0, 0.0]
+[[case.masses]]
+link = "block"
+mass = 2.0
+com = "A"
+[[case.springs]]
+name = "k1"
+ends = [["ground", "W1"], ["block", "A"]]
+stiffness = 300.0
+free_length = 300.0
+[[case.springs]]
+name = "k2"
+ends = [["block", "A"], ["ground", "W2"]]
+stiffness = 200.0
+free_length = 300.0
+{driver}
+[case.simulate]
+end = 1.0
+outputs = 21
+"""
+#: Exam Q2 (seed 002): m = 2 kg between k1 = 300 N/m and k2 = 200 N/m, both unstretched at
+#: x = 0; the block drawn at x0 = 40 mm and released from rest: m·ẍ + (k1 + k2)·x = F.
+MASS, STIFFNESS, X0 = 2.0, 500.0, 0.040
+OMEGA = math.sqrt(STIFFNESS / MASS)
+
+
+def block_case(driver: str = "") -> Case:
+    return case_of(BLOCK.format(driver=driver))
+
+
+def test_block_between_springs_oscillates_as_x0_cos() -> None:
+    case = block_case()
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    # t_x is the displacement from the drawn pose x0: x − x0 = x0·(cos ωt − 1).
+    expected = X0 * (np.cos(OMEGA * t) - 1.0)
+    assert np.abs(fine(case)[:, 0] - expected).max() / case.scale < 1e-9
+
+
+def test_constant_force_moves_the_centre_of_the_oscillation() -> None:
+    """A driver with force = 5 N on the slide: x = F/K + (x0 − F/K)·cos ωt."""
+    case = block_case('[[case.drivers]]\njoint = "slide"\nforce = 5.0')
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    centre = 5.0 / STIFFNESS
+    expected = centre + (X0 - centre) * np.cos(OMEGA * t) - X0
+    assert np.abs(fine(case)[:, 0] - expected).max() / case.scale < 1e-9
+
+
+def test_a_force_table_is_followed_row_by_row() -> None:
+    """force = c·t for 0.5 s, then held (rows [0, 0], [0.5, 10]): from x0 at rest,
+    x = x0·cos ωt + (c/K)·(t − sin ωt/ω) up to 0.5 s, and after it the oscillation about
+    F_end/K from the state there (closed form of m·ẍ + K·x = F(t))."""
+    case = block_case('[[case.drivers]]\njoint = "slide"\nforce = [[0.0, 0.0], [0.5, 10.0]]')
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    c, t1 = 20.0, 0.5
+
+    def ramp(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        x = X0 * np.cos(OMEGA * s) + c / STIFFNESS * (s - np.sin(OMEGA * s) / OMEGA)
+        v = -X0 * OMEGA * np.sin(OMEGA * s) + c / STIFFNESS * (1.0 - np.cos(OMEGA * s))
+        return x, v
+
+    x1, v1 = ramp(np.array(t1))
+    centre = c * t1 / STIFFNESS
+    late = centre + (x1 - centre) * np.cos(OMEGA * (t - t1)) + v1 / OMEGA * np.sin(OMEGA * (t - t1))
+    expected = np.where(t <= t1, ramp(t)[0], late) - X0
+    assert np.abs(fine(case)[:, 0] - expected).max() / case.scale < 1e-9
+
+
+def block_errors(rungs: tuple[Rung, ...]) -> list[float]:
+    case = block_case()
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    expected = X0 * (np.cos(OMEGA * t) - 1.0)
+    return [float(np.abs(r.coordinates[:, 0] - expected).max()) for r in simulate_case(case, rungs)]
+
+
+@pytest.mark.parametrize(("integrator", "order"), [("Euler", 1.0), ("implicitfast", 1.0),
+                                                   ("RK4", 4.0)])
+def test_error_falls_with_the_integrators_order(integrator: str, order: float) -> None:
+    """The error against x0·cos ωt at dt, dt/2, dt/4 (ω·dt = 0.032 … 0.008): the observed
+    order log2(e(dt)/e(dt/2)) is the integrator's (semi-implicit Euler 1, RK4 4) within 0.3."""
+    dts = (2e-3, 1e-3, 5e-4)
+    errors = block_errors(tuple(Rung(dt, integrator) for dt in dts))
+    orders = [math.log2(a / b) for a, b in itertools.pairwise(errors)]
+    assert all(abs(p - order) < 0.3 for p in orders), (errors, orders)
+
+
+def test_ladder_runs_the_defaults_first_and_the_finest_rk4_last() -> None:
+    case = block_case()
+    simulation = case.simulation
+    assert simulation is not None
+    rungs = ladder(simulation)
+    assert rungs[0] == Rung(DEFAULT_TIMESTEP, DEFAULT_INTEGRATOR, default=True)
+    assert sum(r.default for r in rungs) == 1
+    assert rungs[-1].integrator == "RK4" and rungs[-1].dt == min(r.dt for r in rungs)
+    assert simulation.end / rungs[-1].dt <= STEP_BUDGET < 2 * simulation.end / rungs[-1].dt
+    # 21 outputs over 1 s: every 0.05 s, which 2 ms divides.
+    assert output_grid(simulation.outputs) == pytest.approx(0.05)
+
+
+def test_outputs_between_steps_are_read_between_them() -> None:
+    """Andrews-like spacing (1 ms) under MuJoCo's default 2 ms: the default rung reads every
+    other output between two steps; those readings are as accurate as the stepped ones."""
+    case = case_of(BLOCK.format(driver="").replace("end = 1.0\noutputs = 21",
+                                                   "end = 0.03\noutputs = 31"))
+    simulation = case.simulation
+    assert simulation is not None
+    rungs = ladder(simulation)
+    assert rungs[0].dt == DEFAULT_TIMESTEP and rungs[1].dt == pytest.approx(1e-3)
+    t = np.array(simulation.outputs)
+    run = simulate_case(case, rungs[:1])[0]
+    error = np.abs(run.coordinates[:, 0] - X0 * (np.cos(OMEGA * t) - 1.0))
+    # Semi-implicit Euler's own error grows as t; the interpolated outputs (odd ones) lie
+    # on the same curve: no reading error of their own above 1e-3 of it.
+    assert error[1::2].max() <= 1.5 * error[::2].max()
+
+
+def test_a_run_past_the_step_budget_is_refused_naming_what_helps() -> None:
+    case = case_of(BLOCK.format(driver="").replace("end = 1.0", "end = 1000.0"))
+    runs = simulate(case)
+    assert all(r.status == "not_applicable" for r in runs)
+    assert "simulate.end" in runs[0].message and str(STEP_BUDGET) in runs[0].message
+    assert np.isnan(runs[0].coordinates).all()
