@@ -22,8 +22,9 @@ The ladder: MuJoCo's default settings first (its default integrator and time ste
 model as mechcheck builds it: its stiffest constraints, a time constant of 2·dt), then each
 of Euler, implicitfast and RK4 at the time steps ``dt0``, ``dt0/2``, … (``dt0`` the largest
 step ≤ MuJoCo's default on the output grid) down to the finest whose run stays within
-:data:`STEP_BUDGET` steps; the last rung, the finest RK4 run, decides the verdict. A case
-whose every run would pass the budget is refused (``not_applicable``, saying so).
+:data:`STEP_BUDGET` steps (:data:`FRICTION_STEP_BUDGET` with Coulomb friction); the last
+rung, the finest RK4 run, decides the verdict. A run past the budget is refused
+(``not_applicable``, saying so and what would help).
 
 Coulomb friction (:mod:`.linkage_friction`) is applied as the driven runs apply it: before
 each step, from the reactions MuJoCo reports with the senses of its own joint velocities,
@@ -68,6 +69,9 @@ DEFAULT_INTEGRATOR = next(name for name, code in INTEGRATORS.items()
 #: Steps a run may take (the finest rung's): about a second for a small linkage (RK4 four
 #: times that). A case whose coarsest step already needs more is refused.
 STEP_BUDGET = 100_000
+#: The same with Coulomb friction, whose reactions are read in Python before every step
+#: (~0.4 ms a step on exam Q2, measured): a few seconds a run.
+FRICTION_STEP_BUDGET = 10_000
 #: Most time steps on the ladder (each half the one before).
 MAX_LEVELS = 12
 #: An output time is on the step grid when t/dt is this close to an integer.
@@ -96,13 +100,18 @@ def output_grid(outputs: tuple[float, ...]) -> float | None:
     return last / math.lcm(*(f.denominator for f in fractions))
 
 
-def ladder(simulation: Simulation) -> tuple[Rung, ...]:
+def step_budget(case: Case) -> int:
+    """The steps a run of ``case`` may take (:data:`STEP_BUDGET`, :data:`FRICTION_STEP_BUDGET`)."""
+    return FRICTION_STEP_BUDGET if case.has_coulomb_friction else STEP_BUDGET
+
+
+def ladder(simulation: Simulation, budget: int = STEP_BUDGET) -> tuple[Rung, ...]:
     """MuJoCo's default rung, then every integrator at each time step from ``dt0`` halving
-    down to the finest within :data:`STEP_BUDGET` (module doc); the finest RK4 run last."""
+    down to the finest within ``budget`` steps (module doc); the finest RK4 run last."""
     grid = output_grid(simulation.outputs)
     dt0 = DEFAULT_TIMESTEP if grid is None else grid / math.ceil(grid / DEFAULT_TIMESTEP - 1e-9)
     levels = 1
-    while levels < MAX_LEVELS and simulation.end / (dt0 / 2**levels) <= STEP_BUDGET:
+    while levels < MAX_LEVELS and simulation.end / (dt0 / 2**levels) <= budget:
         levels += 1
     rungs = [Rung(dt0 / 2**k, name, default=(k == 0 and dt0 == DEFAULT_TIMESTEP
                                                and name == DEFAULT_INTEGRATOR))
@@ -115,7 +124,7 @@ def ladder(simulation: Simulation) -> tuple[Rung, ...]:
 def simulate_case(case: Case, rungs: tuple[Rung, ...] | None = None) -> tuple[Trajectory, ...]:
     """The ``mujoco`` backend's runs of a trajectory case, one per rung (:func:`ladder`)."""
     assert case.simulation is not None
-    rungs = rungs or ladder(case.simulation)
+    rungs = rungs or ladder(case.simulation, step_budget(case))
     why = refusal(case)
     if why is not None:
         return (refused(case, rungs[-1], why),)
@@ -145,9 +154,10 @@ def run_rung(case: Case, rung: Rung) -> Trajectory:
     read at every output (module doc)."""
     assert case.simulation is not None
     steps = math.ceil(case.simulation.end / rung.dt - ON_STEP)
-    if steps > STEP_BUDGET:
+    budget = step_budget(case)
+    if steps > budget:
         return refused(case, rung, (
-            f"{steps} steps of {rung.dt:g} s exceed mujoco's step budget of {STEP_BUDGET}: "
+            f"{steps} steps of {rung.dt:g} s exceed mujoco's step budget of {budget}: "
             "a shorter simulate.end would help"))
     tic = time.perf_counter()
     try:
