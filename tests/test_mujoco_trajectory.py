@@ -29,6 +29,7 @@ from mechcheck.sim_models.mujoco.trajectory import (
     ladder,
     output_grid,
     simulate_case,
+    step_budget,
 )
 
 G = 9.81
@@ -337,7 +338,7 @@ def test_ladder_runs_the_defaults_first_and_the_finest_rk4_last() -> None:
     case = block_case()
     simulation = case.simulation
     assert simulation is not None
-    rungs = ladder(simulation)
+    rungs = ladder(simulation, step_budget(case))
     assert rungs[0] == Rung(DEFAULT_TIMESTEP, DEFAULT_INTEGRATOR, default=True)
     assert sum(r.default for r in rungs) == 1
     assert rungs[-1].integrator == "RK4" and rungs[-1].dt == min(r.dt for r in rungs)
@@ -401,3 +402,111 @@ def test_coulomb_friction_stops_the_block_as_the_piecewise_solution() -> None:
     errors = [float(np.abs(r.coordinates[:, 0] - expected).max()) / case.scale for r in runs]
     assert errors[1] < TRAJECTORY_TOLERANCE
     assert 1.6 < errors[0] / errors[1] < 2.4
+
+
+ROTOR = """
+[[case]]
+name = "rotor"
+mechanism = "linkage"
+[case.points]
+O = [0.0, 0.0]
+R = [0.1, 0.0]
+[[case.links]]
+name = "ground"
+points = ["O"]
+[[case.links]]
+name = "disk"
+points = ["O", "R"]
+[[case.joints]]
+name = "axle"
+kind = "revolute"
+links = ["ground", "disk"]
+at = "O"
+[[case.drivers]]
+joint = "axle"
+torque = 0.2
+[[case.masses]]
+link = "disk"
+mass = 1.0
+com = "O"
+inertia = 0.5
+[case.simulate]
+end = 1.0
+outputs = 11
+"""
+
+
+def test_a_drive_torque_accelerates_a_rotor_as_each_integrator_promises() -> None:
+    """τ = 0.2 N·m on I = 0.5 kg·m²: φ = a·t²/2 with a = τ/I. RK4 is exact on a quadratic;
+    semi-implicit Euler (v += a·dt, then q += v·dt) gives a·dt²·n(n+1)/2, i.e. exactly
+    a·t·dt/2 more (implicitfast too: nothing depends on velocity)."""
+    case = case_of(ROTOR)
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    a, dt = 0.2 / 0.5, 1e-2
+    runs = simulate_case(case, (Rung(dt, "Euler"), Rung(dt, "implicitfast"), Rung(dt, "RK4")))
+    for run in runs[:2]:
+        np.testing.assert_allclose(run.coordinates[:, 2], a * t**2 / 2 + a * t * dt / 2,
+                                   rtol=0, atol=1e-12)
+    np.testing.assert_allclose(runs[2].coordinates[:, 2], a * t**2 / 2, rtol=0, atol=1e-12)
+
+
+def test_a_prescribed_driver_carries_the_pendulum_at_constant_speed() -> None:
+    """A carriage driven along x at 0.3 m/s (a driver without an effort: prescribed motion)
+    with a pendulum hung from it: a frame moving at constant speed is inertial, so the arm
+    swings as the fixed pendulum and the carriage is at 0.3·t."""
+    theta0 = math.radians(40.0)
+    bx, by = math.sin(theta0), -math.cos(theta0)
+    case = case_of(f"""
+[[case]]
+name = "carriage"
+mechanism = "linkage"
+gravity = [0.0, {-G}]
+[case.points]
+W = [-1.0, 0.0]
+C = [0.0, 0.0]
+B = [{bx!r}, {by!r}]
+[[case.links]]
+name = "ground"
+points = ["W"]
+[[case.links]]
+name = "carriage"
+points = ["C"]
+[[case.links]]
+name = "arm"
+points = ["C", "B"]
+[[case.joints]]
+name = "rail"
+kind = "prismatic"
+links = ["ground", "carriage"]
+at = "C"
+axis = [1.0, 0.0]
+[[case.joints]]
+name = "hinge"
+kind = "revolute"
+links = ["carriage", "arm"]
+at = "C"
+[[case.drivers]]
+joint = "rail"
+displacement = 0.0
+velocity = 0.3
+[[case.masses]]
+link = "carriage"
+mass = 1.0
+com = "C"
+[[case.masses]]
+link = "arm"
+mass = 2.0
+com = "B"
+[case.simulate]
+end = 1.0
+outputs = 21
+""")
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    coordinates = fine(case)
+    carriage, arm = (3 * case.linkage.link_number[k] for k in ("carriage", "arm"))
+    # The rail's equality follows the clock (a 1e9 kg·m² flywheel turning at 1 rad/s) with
+    # a soft constraint of time constant 2·dt: measured 6e-10 m off 0.3·t, and the arm
+    # 1.5e-9 rad off its swing (the bob's floor inertia), at 0.5 ms with RK4.
+    assert np.abs(coordinates[:, carriage] - 0.3 * t).max() < 1e-8
+    expected = swing(theta0, math.sqrt(G), t) - theta0
+    assert np.abs(coordinates[:, arm + 2] - expected).max() < 1e-8

@@ -22,8 +22,8 @@ The ladder: MuJoCo's default settings first (its default integrator and time ste
 model as mechcheck builds it: its stiffest constraints, a time constant of 2·dt), then each
 of Euler, implicitfast and RK4 at the time steps ``dt0``, ``dt0/2``, … (``dt0`` the largest
 step ≤ MuJoCo's default on the output grid) down to the finest whose run stays within
-:data:`STEP_BUDGET` steps (:data:`FRICTION_STEP_BUDGET` with Coulomb friction); the last
-rung, the finest RK4 run, decides the verdict. A run past the budget is refused
+:func:`step_budget` steps (:data:`STEP_BUDGET`, fewer for a large linkage or with Coulomb
+friction); the last rung, the finest RK4 run, decides the verdict. A run past the budget is refused
 (``not_applicable``, saying so and what would help).
 
 Coulomb friction (:mod:`.linkage_friction`) is applied as the driven runs apply it: before
@@ -46,6 +46,7 @@ from scipy.interpolate import CubicHermiteSpline
 from mechcheck.analytic.case import Case, Simulation
 from mechcheck.analytic.solution import Status
 from mechcheck.analytic.trajectory import Trajectory
+from mechcheck.analytic.values import CaseError
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction
 from mechcheck.sim_models.mujoco.linkage_model import Unbuildable
 from mechcheck.sim_models.mujoco.linkage_rig import Array, LinkageRig
@@ -67,10 +68,13 @@ INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
 DEFAULT_INTEGRATOR = next(name for name, code in INTEGRATORS.items()
                           if int(code) == int(mujoco.MjOption().integrator))
 #: Steps a run may take (the finest rung's): about a second for a small linkage (RK4 four
-#: times that). A case whose coarsest step already needs more is refused.
+#: times that). A run past its budget is refused.
 STEP_BUDGET = 100_000
-#: The same with Coulomb friction, whose reactions are read in Python before every step
-#: (~0.4 ms a step on exam Q2, measured): a few seconds a run.
+#: And at most this many link-steps (steps × moving links): a step's cost grows with the
+#: linkage (the N four-bar's 81 links gets 8 600 steps, Andrews' 7 the whole budget).
+WORK_BUDGET = 700_000
+#: With Coulomb friction, whose reactions are read in Python before every step (~0.4 ms a
+#: step on exam Q2, measured): a few seconds a run.
 FRICTION_STEP_BUDGET = 10_000
 #: Most time steps on the ladder (each half the one before).
 MAX_LEVELS = 12
@@ -101,8 +105,10 @@ def output_grid(outputs: tuple[float, ...]) -> float | None:
 
 
 def step_budget(case: Case) -> int:
-    """The steps a run of ``case`` may take (:data:`STEP_BUDGET`, :data:`FRICTION_STEP_BUDGET`)."""
-    return FRICTION_STEP_BUDGET if case.has_coulomb_friction else STEP_BUDGET
+    """The steps a run of ``case`` may take (:data:`STEP_BUDGET`, :data:`WORK_BUDGET`,
+    :data:`FRICTION_STEP_BUDGET`)."""
+    budget = min(STEP_BUDGET, WORK_BUDGET // len(case.linkage.moving_links))
+    return min(budget, FRICTION_STEP_BUDGET) if case.has_coulomb_friction else budget
 
 
 def ladder(simulation: Simulation, budget: int = STEP_BUDGET) -> tuple[Rung, ...]:
@@ -162,7 +168,7 @@ def run_rung(case: Case, rung: Rung) -> Trajectory:
     tic = time.perf_counter()
     try:
         (run, warnings) = raised_during(lambda: Run(case, rung).through())
-    except Unbuildable as why:
+    except (Unbuildable, CaseError) as why:
         return refused(case, rung, str(why))
     wall = time.perf_counter() - tic
     message = " | ".join(warnings)
@@ -195,12 +201,17 @@ class Run:
         self.rig = rig = trajectory_rig(case, rung.dt)
         m, d = rig.model, rig.data
         m.opt.integrator = INTEGRATORS[rung.integrator]
+        # MuJoCo's own choice (sparse from 60 dofs: 0.57 against 0.81 ms a step on the N
+        # four-bar's 81 links, measured); nothing here reads the dense efc_J the build asks.
+        m.opt.jacobian = mujoco.mjtJacobian.mjJAC_AUTO
         mujoco.mj_resetData(m, d)
         prescribe(rig)
         qpos, qvel = initial_state(case, rig)
         rig.set_state(qpos, qvel)
         d.ctrl[load_actuators(rig)] = 1.0
         self.efforts = effort_actuators(rig)
+        self.switches = sorted({t for _, driver in self.efforts if driver.effort is not None
+                                for t in driver.effort.times})
         self.friction = case.has_coulomb_friction
         self.steps = 0
         self.coordinates = np.full((len(self.simulation.outputs), 3 * len(rig.moving_links)),
@@ -210,23 +221,29 @@ class Run:
         self.finite = True
 
     def through(self) -> Run:
-        """Step to every output time and read it (between two steps where it is not one)."""
+        """Step to every output time and read it (between two steps where it is not one);
+        once MuJoCo's state blows up (it then resets it), the rows left stay NaN."""
         for k, t in enumerate(self.simulation.outputs):
             n, exact = step_of(t, self.dt)
-            self.advance(n)
-            before = self.read()
+            before = self.read_at(n)
+            if before is None:
+                break
             if exact:
                 self.coordinates[k] = before[0]
                 continue
-            self.advance(n + 1)
-            after = self.read()
+            after = self.read_at(n + 1)
+            if after is None:
+                break
             spline = CubicHermiteSpline([n * self.dt, (n + 1) * self.dt],
                                         np.stack([before[0], after[0]]),
                                         np.stack([before[1], after[1]]))
             self.coordinates[k] = spline(t)
-        if not self.finite:
-            self.coordinates[~np.all(np.isfinite(self.coordinates), axis=1)] = np.nan
         return self
+
+    def read_at(self, n: int) -> tuple[Array, Array] | None:
+        """:meth:`read` at step ``n``, or None where the state blew up on the way."""
+        self.advance(n)
+        return self.read() if self.finite else None
 
     def advance(self, n: int) -> None:
         """Step to step ``n``, switching each effort's slope at its table's rows."""
@@ -240,8 +257,7 @@ class Run:
 
     def next_switch(self) -> int:
         """The first step after the current one at or past a row of an effort table."""
-        rows = [math.ceil(t / self.dt - ON_STEP) for _, d in self.efforts
-                for t in d.effort.times] if self.efforts else []  # type: ignore[union-attr]
+        rows = [math.ceil(t / self.dt - ON_STEP) for t in self.switches]
         return min([r for r in rows if r > self.steps], default=self.steps + 10**12)
 
     def set_efforts(self) -> None:
