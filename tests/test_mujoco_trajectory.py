@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -511,3 +512,14 @@ outputs = 21
     assert np.abs(coordinates[:, carriage] - 0.3 * t).max() < 1e-8
     expected = swing(theta0, math.sqrt(G), t) - theta0
     assert np.abs(coordinates[:, arm + 2] - expected).max() < 1e-8
+
+
+def test_a_gear_mesh_is_refused_with_the_reason() -> None:
+    """The catalogue's gear pair released (its driver without an effort turning the pinion):
+    one not_applicable run saying why, no number."""
+    text = (Path(__file__).resolve().parents[1] / "compare" / "cases" / "catalogue"
+            / "gear_pair.toml").read_text()
+    case = case_of(text + "\n[case.simulate]\nend = 0.1\noutputs = 3\n")
+    (run,) = simulate(case)
+    assert run.status == "not_applicable" and "gear mesh" in run.message
+    assert np.isnan(run.coordinates).all() and run.coordinates.shape == (3, 6)

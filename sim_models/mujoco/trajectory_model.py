@@ -168,7 +168,13 @@ def independent_linkage(case: Case) -> Linkage:
     linkage = case.linkage
     assert case.simulation is not None
     drivers = [Driver(d.joint, d.value, d.velocity) for d in linkage.drivers]
-    drivers += [Driver(j, 0.0, rate) for j, rate in case.simulation.rates.items()]
+    for j, rate in case.simulation.rates.items():
+        if not linkage.joint(j).kind.drivable:
+            raise Unbuildable(f"simulate.rates.{j}: the start's velocities are solved with "
+                              "each given rate as a driver's, and a "
+                              f"{linkage.joint(j).kind.name} joint takes no driver: give the "
+                              "rate of a revolute or prismatic joint instead")
+        drivers.append(Driver(j, 0.0, rate))
     rank = _rank(linkage, drivers)
     size = 3 * len(linkage.moving_links)
     for joint in linkage.joints:
