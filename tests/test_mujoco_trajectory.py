@@ -23,6 +23,7 @@ from mechcheck import backends
 from mechcheck.analytic.case import Case
 from mechcheck.casefile import parse_cases, parse_toml
 from mechcheck.sim_models.mujoco.backend import simulate
+from mechcheck.sim_models.mujoco.linkage_model import spanning_tree
 from mechcheck.sim_models.mujoco.trajectory import (
     DEFAULT_INTEGRATOR,
     DEFAULT_TIMESTEP,
@@ -145,7 +146,7 @@ def test_fixed_direction_load_swings_like_gravity() -> None:
     assert np.abs(fine(case)[:, 2] - expected).max() < 1e-8
 
 
-def parallelogram(theta0: float, end: float) -> Case:
+def parallelogram(theta0: float, end: float, extra: str = "") -> Case:
     """Two cranks of 1 m (uniform bars of 0.5 kg) and a coupler of 2 kg carried as a point
     mass: the coupler translates on a circle, so the linkage swings as one pendulum
     (a loop closed by a connect in MuJoCo)."""
@@ -207,6 +208,7 @@ link = "coupler"
 mass = 2.0
 com = [{0.5 + s!r}, {c!r}]
 inertia = 1e-12
+{extra}
 [case.simulate]
 end = {end}
 outputs = 11
@@ -231,6 +233,28 @@ def test_parallelogram_with_a_loop_closure_swings_as_its_pendulum() -> None:
     assert last.diagnostics["closure_gap_m"] < 1e-6
     # Every rung reports its gap, and the coarse ones within the target.
     assert all(r.diagnostics["closure_gap_m"] < TRAJECTORY_TOLERANCE for r in runs)
+
+
+def test_dampers_on_every_joint_of_the_loop_damp_it_as_the_linear_oscillator() -> None:
+    """Viscous friction c on all four pins, one of which closes the loop (a damper there is
+    a tendon over the hinges): each pin turns at ±θ̇, so J·θ̈ + 4·c·θ̇ + W·sin θ = 0 with
+    J = 2·m_c·L²/3 + M·L², W = (m_c + M)·g·L. Released at θ0 = 0.01 rad: the linear
+    oscillator θ0·e^(−ζωt)·(cos ω_d·t + ζω/ω_d·sin ω_d·t), whose neglected θ³/6 moves the
+    swing by ~θ0³ (1e-6 rad)."""
+    theta0, c = 0.01, 0.1
+    viscous = ", ".join(f"{j} = {c}" for j in ("P1", "PA", "PB", "P2"))
+    case = parallelogram(theta0, 2.0, f"[case.friction]\nviscous = {{ {viscous} }}")
+    assert any(j.name in ("P1", "PA", "PB", "P2") for j in spanning_tree(case.linkage).closures)
+    t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
+    inertia, weight = 1.0 / 3.0 + 2.0, 2.5 * G
+    omega = math.sqrt(weight / inertia)
+    zeta = 4.0 * c / (2.0 * math.sqrt(inertia * weight))
+    damped = omega * math.sqrt(1.0 - zeta**2)
+    theta = theta0 * np.exp(-zeta * omega * t) * (np.cos(damped * t)
+                                                  + zeta * omega / damped * np.sin(damped * t))
+    k = case.linkage.link_number["left"]
+    coordinates = fine(case)
+    assert np.abs(coordinates[:, 3 * k + 2] - (theta - theta0)).max() < 3e-6
 
 
 BLOCK = """
