@@ -6,6 +6,8 @@ constraint state.
 - :func:`solve_at_pose` — backend ``mujoco_solve``: exact constraint forces at the analytic
   pose from MuJoCo's constraint Jacobian (:mod:`.solve`).
 - :func:`sweep` — either backend over the first driver.
+- :func:`simulate` — backend ``mujoco`` on a trajectory case: the linkage moving freely on a
+  ladder of time steps and integrators (:mod:`.trajectory`).
 """
 
 from __future__ import annotations
@@ -15,11 +17,13 @@ from numpy.typing import ArrayLike
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.solution import Solution
+from mechcheck.analytic.trajectory import Trajectory
 from mechcheck.sim_models.linkage_motion import gated_sweep
 from mechcheck.sim_models.mujoco.linkage import settle_linkage, solve_linkage_at_pose, sweep_linkage
 from mechcheck.sim_models.mujoco.mjwarnings import noting_warnings
+from mechcheck.sim_models.mujoco.trajectory import simulate_case
 
-__all__ = ["settle", "solve_at_pose", "sweep"]
+__all__ = ["settle", "simulate", "solve_at_pose", "sweep"]
 
 
 def settle(case: Case) -> Solution:
@@ -39,3 +43,9 @@ def sweep(case: Case, grid: ArrayLike, backend: str = "mujoco") -> list[Solution
     (:func:`~mechcheck.sim_models.linkage_motion.gated_sweep`)."""
     return gated_sweep(case, np.asarray(grid, dtype=float), backend,
                        lambda values, results: sweep_linkage(case, values, backend, results))
+
+
+def simulate(case: Case) -> tuple[Trajectory, ...]:
+    """The ``mujoco`` backend on a trajectory case: one run per rung of its ladder of time
+    steps and integrators, the finest last (:func:`.trajectory.simulate_case`)."""
+    return simulate_case(case)

@@ -75,9 +75,9 @@ from mechcheck.sim_models.mujoco import _fast
 from mechcheck.sim_models.mujoco.joint_kinds import builder_of
 from mechcheck.sim_models.mujoco.linkage_friction import apply_friction, clear_friction
 from mechcheck.sim_models.mujoco.linkage_mesh import pushing
-from mechcheck.sim_models.mujoco.linkage_model import INERTIA_FLOOR_FRACTION, spanning_tree
+from mechcheck.sim_models.mujoco.linkage_model import spanning_tree
 from mechcheck.sim_models.mujoco.linkage_rig import LinkageRig, Snapshot
-from mechcheck.sim_models.mujoco.model import Settings
+from mechcheck.sim_models.mujoco.model import INERTIA_FLOOR_FRACTION, Settings
 
 #: Dynamics: first time step 2.5e-5 s (refined by halving). With dt = 1e-3 the
 #: clock-driven torque was 2–4e-2 off (SIMULATORS.md): the soft constraint's time constant

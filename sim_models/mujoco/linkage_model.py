@@ -54,7 +54,6 @@ from mechcheck.sim_models.mujoco.linkage_mesh import drawn_sites, site_names, te
 from mechcheck.sim_models.mujoco.model import (
     CLOCK_ARMATURE,
     DRIVE_ARMATURE_INERTIA,
-    INERTIA_FLOOR_FRACTION,
     SETTLE_MASS,
     SOLVER_TOLERANCE,
     STATIC,
@@ -233,7 +232,7 @@ def model_inertial(linkage: Linkage, link: str, settings: Settings) -> Inertial:
         reference = max((m.mass for m in linkage.masses), default=1.0)
         m = settings.fictitious_scale * settings.fictitious_fraction * reference
         return Inertial(m, centroid(linkage, link), m * length**2 / 12.0)
-    floor = INERTIA_FLOOR_FRACTION * real.mass * length**2
+    floor = settings.inertia_floor * real.mass * length**2
     return real if real.inertia >= floor else Inertial(real.mass, real.com,
                                                        real.inertia + floor)
 

@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from typing import TypeVar
 
 import mujoco
 
 from mechcheck.analytic.solution import Solution
+
+T = TypeVar("T")
 
 #: Messages raised since the last :func:`noting_warnings` collected them.
 _RAISED: list[str] = []
@@ -29,12 +32,20 @@ def install() -> None:
     mujoco.set_mju_user_warning(_keep)
 
 
+def raised_during(compute: Callable[[], T]) -> tuple[T, list[str]]:
+    """``compute()`` and the MuJoCo warnings it raised (each once), taken off the list."""
+    start = len(_RAISED)
+    try:
+        value = compute()
+    finally:
+        raised = list(dict.fromkeys(_RAISED[start:]))
+        del _RAISED[start:]
+    return value, raised
+
+
 def noting_warnings(compute: Callable[[], Solution]) -> Solution:
     """``compute()``, with any MuJoCo warning raised meanwhile in its ``warnings`` diagnostic."""
-    start = len(_RAISED)
-    solution = compute()
-    raised = list(dict.fromkeys(_RAISED[start:]))
-    del _RAISED[start:]
+    solution, raised = raised_during(compute)
     if not raised:
         return solution
     return dataclasses.replace(

@@ -80,7 +80,8 @@ class Settings:
     multiplies every inertia the Case does not have — the settle mass, a
     massless link's mass and inertia, a point mass's floor inertia — so that a
     driven run can be repeated with twice of it and extrapolated to none
-    (:mod:`.linkage_dynamics`).
+    (:mod:`.linkage_dynamics`). ``inertia_floor`` is the inertia a point mass gets, as a
+    fraction of m·L² (:data:`INERTIA_FLOOR_FRACTION`).
     """
 
     timestep: float = 1e-3
@@ -93,6 +94,7 @@ class Settings:
     armature: float = 0.0
     clock: bool = False
     drive_armature: bool = False
+    inertia_floor: float = INERTIA_FLOOR_FRACTION
 
     @property
     def solref(self) -> tuple[float, float]:
