@@ -70,6 +70,10 @@ RTOL = 1e-12
 #: taken as zero: within 1e-10 of a change point the predicted rates keep the component
 #: the constraints no longer decide (the smooth branch's), elsewhere the solves are exact.
 RCOND = 1e-10
+#: A joint named in ``rates`` becomes an independent coordinate where the scaled constraint
+#: Jacobian with its row added keeps its smallest singular value above this (dimensionless:
+#: rows and columns in lengths of the linkage's size).
+INDEPENDENT = 1e-6
 #: Switches of stick and slip (and of friction's sense at a joint) before a run gives up: a
 #: linkage chattering between them would otherwise never reach its end time.
 MAX_PHASES = 10_000
@@ -88,14 +92,19 @@ class DynamicsError(Exception):
 
 def independent_joints(linkage: Linkage, rates: tuple[str, ...] = ()) -> tuple[str, ...]:
     """The joints whose coordinates are the independent ones: the drivers' joints, then the
-    free joints the linkage needs beyond them (its dof), the joints named in ``rates``
-    first, each chosen so that the constraint Jacobian with its row added is best
+    free joints the linkage needs beyond them (its dof): those named in ``rates`` first
+    (their rates at time 0 are then the state's own), each where it leaves the constraint
+    Jacobian regular, then each chosen so that the Jacobian with its row added is best
     conditioned at the drawn pose."""
     chosen = [d.joint for d in linkage.drivers]
     free = linkage.dof - len(chosen)
     candidates = [j.name for j in linkage.joints if j.kind.drivable and j.name not in chosen]
-    candidates.sort(key=lambda name: name not in rates)   # stable: the file's order otherwise
-    for _ in range(free):
+    for name in [n for n in rates if n in candidates]:
+        if len(chosen) < len(linkage.drivers) + free and \
+                _smallest_singular_value(linkage, [*chosen, name]) > INDEPENDENT:
+            chosen.append(name)
+            candidates.remove(name)
+    while len(chosen) < len(linkage.drivers) + free:
         best = max(candidates, key=lambda name: _smallest_singular_value(linkage, [*chosen, name]))
         chosen.append(best)
         candidates.remove(best)
@@ -170,21 +179,27 @@ class Tracker:
         else:
             raise DynamicsError("the joints' constraints no longer close: the linkage locks "
                                 f"at {_coordinates_text(self.linkage, x)}")
-        found = self._rates(q, x, xdot, jac, near, cols)
+        # One more step, through the factorisation the rates need anyway: near a change
+        # point a residual within the closure leaves the position uncertain by
+        # closure / σ_min along the direction the constraints hardly hold, which would be
+        # noise in the right-hand side; after it, by rounding / σ_min.
+        inverse = _PseudoInverse(jac)
+        q = q - cols * inverse.corrected(np.zeros(q.size), phi)
+        found = self._rates(q, x, xdot, inverse, near, cols)
         if keep:
             self.last = found
             self.visited.append(found)
         return found
 
-    def _rates(self, q: Array, x: Array, xdot: Array, jac: Array, near: Kinematics,
-               cols: Array) -> Kinematics:
-        """S and q̈₀ at the closed pose q (``jac``: its scaled Jacobian), each the
-        correction of ``near``'s that J demands, through one factorisation (an SVD)."""
+    def _rates(self, q: Array, x: Array, xdot: Array, inverse: _PseudoInverse,
+               near: Kinematics, cols: Array) -> Kinematics:
+        """S and q̈₀ at the closed pose q (``inverse``: its scaled Jacobian's), each the
+        correction of ``near``'s that J demands."""
         rows = unit_scales(self.linkage)[0]
-        inverse = _PseudoInverse(jac)
         d = x.size
-        unit = np.zeros((jac.shape[0], d))
-        unit[jac.shape[0] - d:] = np.eye(d)
+        m = inverse.jac.shape[0]
+        unit = np.zeros((m, d))
+        unit[m - d:] = np.eye(d)
         rates = cols[:, None] * inverse.corrected(near.rates / cols[:, None], unit * rows[:, None])
         qdot = rates @ xdot
         bias_rhs = -quadratic_terms(self.linkage, q[None, :], qdot[None, :])[0] * rows
@@ -556,6 +571,18 @@ class _Outputs:
         self.coordinates = np.full((n, self.size), np.nan)
         self.energy = np.full((4, n), np.nan)
 
+    def within(self, start: float, stop: float, *, last: bool) -> tuple[list[int], Array]:
+        """The rows not yet filled at times within start … stop (the ``last`` phase: every
+        row left, one a rounding past the end read at the end), and the phase's t_eval:
+        their times, then ``stop``."""
+        times = self.times[self.filled:]
+        count = times.size if last else int(np.searchsorted(times, stop, side="right"))
+        rows = list(range(self.filled, self.filled + count))
+        t_eval = np.clip(times[:count], start, stop)
+        if not t_eval.size or t_eval[-1] < stop:
+            t_eval = np.append(t_eval, stop)
+        return rows, t_eval
+
     def pending(self, until: float) -> list[int]:
         """The rows not yet filled at times up to ``until``."""
         stop = int(np.searchsorted(self.times, until, side="right"))
@@ -653,12 +680,16 @@ def _phases(case: Case, equations: Equations, y: Array, atol: Array, outputs: _O
                 t = decided
                 continue
             switches = _switches(equations)
+        # The outputs of the phase as t_eval (and its end): the dense output (three more
+        # right-hand sides per step with DOP853) is formed only on the steps that hold one.
+        rows, t_eval = outputs.within(t, stop, last=stop >= end)
         solved = solve_ivp(equations.rhs, (t, stop), y, method=METHOD, rtol=RTOL, atol=atol,
-                           events=switches or None, dense_output=True)
+                           events=switches or None, t_eval=t_eval)
         if solved.status == -1:
-            raise DynamicsError(f"the integrator stopped at {solved.t[-1]:.9g} s: {solved.message}")
-        t, y = float(solved.t[-1]), solved.y[:, -1].copy()
-        _fill(equations, outputs, t if t < stop or stop < end else math.inf, solved.sol)
+            raise DynamicsError(f"the integrator stopped at {t:.9g} s: {solved.message}")
+        reached = solved.t.size
+        _fill(equations, outputs, rows[:reached], solved.y[:, :min(reached, len(rows))])
+        t, y = _end_of_phase(solved, stop)
         if solved.status == 1:
             _switched(equations, solved.t_events, t, y, events)
         equations.tracker.visited = [equations.tracker.last]
@@ -666,16 +697,24 @@ def _phases(case: Case, equations: Equations, y: Array, atol: Array, outputs: _O
                         f"{end:g} s: the motion chatters")
 
 
-def _fill(equations: Equations, outputs: _Outputs, until: float,
-          dense: Callable[[float], Array]) -> None:
-    """The output rows up to ``until`` from the phase's dense output: positions closed from
-    the nearest state the phase visited."""
+def _end_of_phase(solved: Any, stop: float) -> tuple[float, Array]:
+    """Where a phase ended: at its terminal event, or at ``stop`` (its last t_eval)."""
+    if solved.status == 1:
+        for times, states in zip(solved.t_events, solved.y_events, strict=True):
+            if times.size:
+                return float(times[0]), np.asarray(states[0], dtype=np.float64).copy()
+    return stop, np.asarray(solved.y[:, -1], dtype=np.float64).copy()
+
+
+def _fill(equations: Equations, outputs: _Outputs, rows: list[int], states: Array) -> None:
+    """The output ``rows`` from their states: positions closed from the nearest state the
+    phase visited."""
     model = equations.model
     m = model.moving.size
     tracker = equations.tracker
-    for row in outputs.pending(until):
+    for row, y in zip(rows, states.T, strict=True):
         t = float(outputs.times[row])
-        y = np.asarray(dense(t))
+        outputs.filled = row + 1
         x, v, _ = model.coordinates(t, y[:m], y[m:2 * m])
         kin = tracker.solve(x, v, tracker.nearest(x), keep=False)
         _write(outputs, row, kin, model.linkage, y[2 * m], y[2 * m + 1])
