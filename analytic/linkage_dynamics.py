@@ -70,6 +70,11 @@ RTOL = 1e-12
 #: taken as zero: within 1e-10 of a change point the predicted rates keep the component
 #: the constraints no longer decide (the smooth branch's), elsewhere the solves are exact.
 RCOND = 1e-10
+#: Rates S that change by more than this share of their size between two states closed one
+#: from the other mean another branch (:meth:`Tracker.solve`): the state is then reached
+#: through half-way states, at most :data:`HALVINGS` deep.
+JUMP = 0.5
+HALVINGS = 30
 #: A joint named in ``rates`` becomes an independent coordinate where the scaled constraint
 #: Jacobian with its row added keeps its smallest singular value above this (dimensionless:
 #: rows and columns in lengths of the linkage's size).
@@ -168,8 +173,30 @@ class Tracker:
         """The state at coordinates x and rates ẋ, closed from ``start`` (default: the last
         state); ``keep`` False: an output's, which the motion does not continue from."""
         near = self.last if start is None else start
+        found = self._reach(near, x, xdot, HALVINGS)
+        if keep:
+            self.last = found
+            self.visited.append(found)
+        return found
+
+    def _reach(self, near: Kinematics, x: Array, xdot: Array, depth: int) -> Kinematics:
+        """x closed from ``near``; where Newton does not close it, or closes it on another
+        branch (the rates jump: near a change point the predictor's error can exceed the
+        branches' distance), through the half-way state first."""
+        found = self.close(near, x, xdot)
+        if found is not None and not _jumps(near.rates, found.rates, unit_scales(self.linkage)[1]):
+            return found
+        if depth == 0:
+            raise DynamicsError("the joints' constraints no longer close on the branch the "
+                                f"motion follows: the linkage locks at "
+                                f"{_coordinates_text(self.linkage, x)}")
+        half = self._reach(near, 0.5 * (near.x + x), xdot, depth - 1)
+        return self._reach(half, x, xdot, depth - 1)
+
+    def close(self, near: Kinematics, x: Array, xdot: Array) -> Kinematics | None:
+        """Newton's method from the predictor near.q + S·Δx (None: it did not close)."""
         q = near.q + near.rates @ (x - near.x)
-        rows, cols = unit_scales(self.linkage)
+        cols = unit_scales(self.linkage)[1]
         tol = CLOSURE_RTOL * self.linkage.scale
         for _ in range(NEWTON_ITERATIONS + 1):
             phi, jac = _scaled_jacobian(self.linkage, q, x)
@@ -177,19 +204,14 @@ class Tracker:
                 break
             q = q - cols * np.linalg.lstsq(jac, phi, rcond=RCOND)[0]
         else:
-            raise DynamicsError("the joints' constraints no longer close: the linkage locks "
-                                f"at {_coordinates_text(self.linkage, x)}")
+            return None
         # One more step, through the factorisation the rates need anyway: near a change
         # point a residual within the closure leaves the position uncertain by
         # closure / σ_min along the direction the constraints hardly hold, which would be
         # noise in the right-hand side; after it, by rounding / σ_min.
         inverse = _PseudoInverse(jac)
         q = q - cols * inverse.corrected(np.zeros(q.size), phi)
-        found = self._rates(q, x, xdot, inverse, near, cols)
-        if keep:
-            self.last = found
-            self.visited.append(found)
-        return found
+        return self._rates(q, x, xdot, inverse, near, cols)
 
     def _rates(self, q: Array, x: Array, xdot: Array, inverse: _PseudoInverse,
                near: Kinematics, cols: Array) -> Kinematics:
@@ -215,6 +237,14 @@ class Tracker:
         if not self.visited:
             return self.last
         return self.visited[int(np.argmin(np.abs((found - x) * lengths).max(axis=1)))]
+
+
+def _jumps(before: Array, after: Array, cols: Array) -> bool:
+    """The rates S changed by more than :data:`JUMP` of their size (in lengths): another
+    branch, not the one followed (along it S changes smoothly with x)."""
+    a, b = before / cols[:, None], after / cols[:, None]
+    size = max(np.abs(a).max(initial=0.0), np.abs(b).max(initial=0.0))
+    return bool(size > 0.0 and np.abs(b - a).max() > JUMP * size)
 
 
 class _PseudoInverse:
@@ -639,7 +669,11 @@ def _start(case: Case, model: Model) -> tuple[Equations, Array]:
     n, d = q.shape[1], x.size
     still = Kinematics(x, v, q[0], np.zeros((n, d)), np.zeros(n), np.zeros(n))
     tracker = Tracker(model.linkage, still)
-    tracker.solve(x, v)
+    first = tracker.close(still, x, v)     # no rates before it to keep to
+    if first is None:
+        raise DynamicsError("the linkage does not close at its drivers' values at time 0: "
+                            + _coordinates_text(model.linkage, x))
+    tracker.last = first
     return Equations(model, tracker), np.concatenate([x0, v0, [0.0, 0.0]])
 
 
