@@ -33,6 +33,7 @@ integrator's tolerance (its ``energy_residual``).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -42,7 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
-from mechcheck.analytic.linkage import Driver, Effort, LinearSpring, Linkage, TorsionSpring
+from mechcheck.analytic.linkage import Driver, LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.linkage_forces import (
     CoulombTerm,
     coefficient_matrix,
@@ -488,7 +489,7 @@ def effort_with_friction(pose: LinkagePose, frictional: tuple[tuple[str, float],
              for j in linkage.joints if j.kind.nonlinear_coefficient(j) > 0.0]
     friction = [CoulombTerm(linkage.joint(name), c, np.full(n, senses[name]))
                 for name, c in frictional]
-    x = np.linalg.solve(k, -b[:, :, None])[:, :, 0]
+    x = np.asarray(np.linalg.solve(k, -b[:, :, None])[:, :, 0], dtype=np.float64)
     x, converged = solve_with_friction(pose, k, b, x, terms + friction)
     if not converged.all():
         raise DynamicsError("the friction equations have no solution in the senses of "
@@ -864,7 +865,7 @@ def _effort_leaves(model: Model, low: float, high: float, t: float, end: float) 
     if effort is None:
         return end
     knots = [t, *[k for k in effort.times if t < k < end], end]
-    for a, b in zip(knots, knots[1:], strict=False):
+    for a, b in itertools.pairwise(knots):
         fa, fb = float(effort.at(a)), float(effort.at(b))
         for bound in (low, high):
             if (fa - bound) * (fb - bound) < 0.0:   # a linear piece crosses the bound
