@@ -340,6 +340,9 @@ def model_of(case: Case) -> Model:
 def refusal(case: Case) -> str | None:
     """Why the reference does not integrate a case (None: it does)."""
     linkage = case.linkage
+    if not linkage.masses and linkage.dof > len(linkage.drivers) - len(linkage.efforts):
+        return ("the linkage has no mass: its free coordinates have no equations of motion "
+                "(give its links [[case.masses]])")
     if linkage.elastic_links:
         return ("the reference integrates rigid links: members with axial_stiffness would "
                 "need their stretch as coordinates of their own")
@@ -432,8 +435,7 @@ class Equations:
         mass = per_unit[:, moving].T
         applied = model.applied(t)
         acceleration = known.copy()
-        acceleration[moving] = np.linalg.solve(mass, applied - h[moving]) if moving.size \
-            else np.zeros(0)
+        acceleration[moving] = _accelerations(mass, applied - h[moving])
         friction = np.zeros(kin.q.size)
         if self.senses:
             acceleration[0], friction = self._with_friction(
@@ -496,6 +498,18 @@ def effort_with_friction(pose: LinkagePose, frictional: tuple[tuple[str, float],
                             "motion (the linkage self-locks)")
     column = force_layout(linkage).driver_column(0)
     return float(x[0, column]), friction_residual(pose, friction, x)[0][0]
+
+
+def _accelerations(mass: Array, net: Array) -> Array:
+    """M ẍ = Q_applied − h; a singular M (a coordinate that moves no mass) stops the run."""
+    try:
+        found = np.linalg.solve(mass, net) if net.size else np.zeros(0)
+    except np.linalg.LinAlgError:
+        found = np.full(net.size, np.nan)
+    if not np.all(np.isfinite(found)):
+        raise DynamicsError("the reduced mass matrix is singular here: a free coordinate "
+                            "moves no mass or inertia (give its links [[case.masses]])")
+    return np.asarray(found, dtype=np.float64)
 
 
 def _pose(linkage: Linkage, kin: Kinematics, accelerations: Array) -> LinkagePose:
