@@ -14,6 +14,7 @@ motion in its independent coordinates (:mod:`.linkage_dynamics`).
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -108,5 +109,28 @@ def trajectory_quantities(linkage: Linkage, times: Array, coordinates: Array) ->
 
 def simulate(case: Case) -> tuple[Trajectory, ...]:
     """The analytic reference of a trajectory case: one run, at the integrator's tight
-    tolerances (:mod:`.linkage_dynamics`)."""
-    raise NotImplementedError("the analytic reference is being written")
+    tolerances (:mod:`.linkage_dynamics`); ``not_applicable`` where it does not integrate
+    the case (the message says what would be needed), ``no_solution`` from where the motion
+    cannot continue (the linkage locks)."""
+    from mechcheck.analytic import linkage_dynamics as dynamics
+
+    assert case.simulation is not None, "simulate() takes a trajectory case"
+    start = time.perf_counter()
+    times = np.array(case.simulation.outputs)
+    settings = {"method": dynamics.METHOD, "rtol": dynamics.RTOL,
+                "atol": dynamics.RTOL * case.linkage.scale}
+    refused = dynamics.refusal(case)
+    if refused is not None:
+        empty = np.full((times.size, 3 * len(case.linkage.moving_links)), np.nan)
+        return (Trajectory("analytic", times, empty, status="not_applicable", message=refused,
+                           settings=settings),)
+    run = dynamics.integrate(case)
+    energy = EnergyBalance(run.kinetic, run.potential, run.work, run.dissipated)
+    finite = np.isfinite(energy.residual)
+    worst = float(np.abs(energy.residual[finite]).max(initial=0.0))
+    scale = energy.scale if np.isfinite(energy.scale) else float("nan")
+    return (Trajectory("analytic", run.times, run.coordinates,
+                       status="no_solution" if run.message else "ok", message=run.message,
+                       settings=settings, wall_time=time.perf_counter() - start,
+                       steps=run.evaluations, energy=energy, events=run.events,
+                       diagnostics={"energy_residual": worst / scale if scale > 0.0 else worst}),)
