@@ -298,9 +298,8 @@ def output_toggles(linkage: Linkage, first: np.ndarray) -> np.ndarray:
     Between two neighbouring poses whose velocity ratios (velocity per unit driver rate)
     point opposite ways, the stop is found by Brent's method on the ratio's component along
     the first pose's direction, and kept where the whole ratio vanishes there: a point that
-    only turns (on a crank) is no toggle. Sorted, each toggle once."""
-    from scipy.optimize import brentq
-
+    only turns (on a crank) is no toggle; a grid pose where it has stopped is one itself.
+    Sorted, each toggle once."""
     from mechcheck.analytic.rigid import link_column
 
     loaded = [p for p in _loaded(linkage) if link_column(linkage, p.link) >= 0]
@@ -311,20 +310,34 @@ def output_toggles(linkage: Linkage, first: np.ndarray) -> np.ndarray:
     size = linkage.scale
     slides = not linkage.joint(linkage.drivers[0].joint).kind.rotates
     found: list[float] = []
-    for k, (probe, v) in enumerate(zip(loaded, ratios, strict=True)):
+    for probe, v in zip(loaded, ratios, strict=True):
         stopped = TOGGLE_SPEED_RTOL * (size if probe.at is not None else 1.0) \
             / (size if slides else 1.0)
+        speed = np.linalg.norm(v, axis=1)
+        at_pose = speed == 0.0     # a pose of the grid on the toggle itself: no direction
+        found += list(grid[at_pose])
         turn = np.einsum("ij,ij->i", v[:-1], v[1:])
-        for i in np.flatnonzero(turn < 0.0):
-            u = v[i] / np.linalg.norm(v[i])
-
-            def along(t: float, k: int = k, u: np.ndarray = u) -> float:
-                return float(_velocity_ratios(linkage, np.array([t]), [loaded[k]])[0][0] @ u)
-
-            t = float(brentq(along, grid[i], grid[i + 1], xtol=1e-14 * max(1.0, abs(grid[i]))))
-            if np.linalg.norm(_velocity_ratios(linkage, np.array([t]), [probe])[0][0]) <= stopped:
+        for i in np.flatnonzero((turn < 0.0) & ~at_pose[:-1] & ~at_pose[1:]):
+            t = _stop_between(linkage, probe, grid[i], grid[i + 1], v[i] / speed[i])
+            if t is not None and np.linalg.norm(
+                    _velocity_ratios(linkage, np.array([t]), [probe])[0][0]) <= stopped:
                 found.append(t)
     return _distinct(np.sort(np.array(found)), 1e-9 * max(1.0, float(np.ptp(grid))))
+
+
+def _stop_between(linkage: Linkage, probe: _Loaded, a: float, b: float,
+                  u: np.ndarray) -> float | None:
+    """Where the velocity ratio's component along ``u`` (its direction at ``a``) passes
+    zero between ``a`` and ``b``, by Brent's method; None where it does not there."""
+    from scipy.optimize import brentq
+
+    def along(t: float) -> float:
+        return float(_velocity_ratios(linkage, np.array([t]), [probe])[0][0] @ u)
+
+    try:
+        return float(brentq(along, a, b, xtol=1e-14 * max(1.0, abs(a))))
+    except ValueError:  # no sign change once recomputed (a rounding-level grazing)
+        return None
 
 
 def _loaded(linkage: Linkage) -> list[_Loaded]:
