@@ -9,7 +9,8 @@ joint, so they are assembled as entries (row, column, values at N poses), never 
   which is fastest for a few links at 10⁶ poses;
 - **large**: one sparse matrix per pose, factorised by SuperLU; the 2-norm condition number
   from the largest and smallest singular values by Lanczos iteration (ARPACK), the smallest
-  through the factorisation; the rank by counting the singular values below the threshold.
+  through the factorisation; the rank by counting the singular values below the threshold;
+  the spectral radius of a⁻¹·b (the Coulomb loop's gain) from the small matrix of b's rows.
 
 So memory grows with the number of entries (linearly with the links), and time with the
 factorisations' fill, which for the chains and trees of a linkage stays close to linear.
@@ -199,6 +200,14 @@ class Batched:
             out[pose] = np.sqrt(np.asarray(m.multiply(m).sum(axis=1)).ravel())
         return out
 
+    def times(self, x: Array) -> Array:
+        """(N, rows): the matrix times x (N, cols) at every pose, from the entries."""
+        out = np.zeros((self.rows, self.poses))
+        if self._r:
+            r, c = self.index()
+            np.add.at(out, r, self.values() * x.T[c])
+        return out.T
+
     def plus(self, other: Batched) -> Batched:
         out = Batched(self.rows, self.cols, self.poses)
         out._r, out._c = self._r + other._r, self._c + other._c
@@ -279,6 +288,49 @@ def _solve_sparse(m: sparse.csc_matrix, b: Array) -> Array:
     scale = float(np.abs(b).max(initial=0.0)) or 1.0
     found = splinalg.lsmr(m, b / scale, atol=1e-15, btol=1e-15, maxiter=20 * max(m.shape))
     return np.asarray(found[0] * scale, dtype=np.float64)
+
+
+def spectral_radius(a: Batched, b: Batched) -> Array:
+    """The largest |λ| of a⁻¹·b at every pose (both square, of one size); NaN where a is
+    singular or not finite. Dense eigenvalues when small; else those of the smaller matrix
+    that has the same non-zero eigenvalues (:func:`_spectral_radius_sparse`)."""
+    out = np.full(a.poses, np.nan)
+    finite = np.isfinite(a.values()).all(axis=0) & np.isfinite(b.values()).all(axis=0)
+    if a.small:
+        with np.errstate(all="ignore"):
+            try:
+                loop = np.linalg.solve(a.dense()[finite], b.dense()[finite])
+            except np.linalg.LinAlgError:  # a singular pose has no loop
+                return out
+            out[finite] = np.abs(np.linalg.eigvals(loop)).max(axis=1, initial=0.0)
+        return out
+    for pose in np.flatnonzero(finite):
+        out[pose] = _spectral_radius_sparse(a.at(int(pose)), b.at(int(pose)))
+    return out
+
+
+def _spectral_radius_sparse(a: sparse.csc_matrix, b: sparse.csc_matrix) -> float:
+    """With b's non-zero rows R and columns C, b = E_R·M·E_Cᵀ, and a⁻¹·b has the non-zero
+    eigenvalues of M·(a⁻¹·E_R)[C] (AB and BA share them), a matrix of |R| rows solved through
+    a's sparse factorisation. Exact, where Arnoldi iteration stalls on the many zero
+    eigenvalues a low-rank b gives; its memory is the rows of a times |R|."""
+    from scipy.sparse import linalg as splinalg
+
+    b = b.tocoo()
+    keep = b.data != 0.0
+    rows, cols = np.unique(b.row[keep]), np.unique(b.col[keep])
+    if rows.size == 0:   # nothing to loop: every eigenvalue is 0
+        return 0.0
+    try:
+        lu = splinalg.splu(a)
+    except RuntimeError:
+        return math.nan
+    inject = np.zeros((a.shape[0], rows.size))
+    inject[rows, np.arange(rows.size)] = 1.0
+    small = b.tocsr()[rows][:, cols].toarray() @ lu.solve(inject)[cols]
+    if not np.isfinite(small).all():   # a nearly singular a: no loop to speak of
+        return math.nan
+    return float(np.abs(np.linalg.eigvals(small)).max(initial=0.0))
 
 
 def condition(a: Batched) -> Array:

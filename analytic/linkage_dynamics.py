@@ -46,7 +46,7 @@ from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Driver, LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.linkage_forces import (
     CoulombTerm,
-    coefficient_matrix,
+    coefficient_entries,
     friction_residual,
     solve_with_friction,
 )
@@ -484,7 +484,8 @@ def effort_with_friction(pose: LinkagePose, frictional: tuple[tuple[str, float],
     member-equilibrium solve (:func:`.linkage_forces.solve_with_friction`); and the
     friction forces on the links (3n,)."""
     linkage = pose.linkage
-    k = coefficient_matrix(pose)
+    entries = coefficient_entries(pose)
+    k = entries.dense()
     b = known_vector(pose)
     n = 1
     terms = [CoulombTerm(j, j.kind.nonlinear_coefficient(j), np.ones(n), friction=False)
@@ -492,7 +493,7 @@ def effort_with_friction(pose: LinkagePose, frictional: tuple[tuple[str, float],
     friction = [CoulombTerm(linkage.joint(name), c, np.full(n, senses[name]))
                 for name, c in frictional]
     x = np.asarray(np.linalg.solve(k, -b[:, :, None])[:, :, 0], dtype=np.float64)
-    x, converged = solve_with_friction(pose, k, b, x, terms + friction)
+    x, converged = solve_with_friction(pose, entries, b, x, terms + friction)
     if not converged.all():
         raise DynamicsError("the friction equations have no solution in the senses of "
                             "motion (the linkage self-locks)")

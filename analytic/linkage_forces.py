@@ -20,7 +20,7 @@ this is exactly the seed's method: three equations per member, solved at once.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property, partial
 
 import numpy as np
@@ -46,6 +46,11 @@ SINGULAR_CONDITION = 1.0e8
 #: Coulomb friction: Newton's convergence (relative to the largest unknown) and budget.
 FRICTION_RTOL = 1e-13
 FRICTION_ITERATIONS = 50
+#: ... or, on a large linkage whose rounding (condition number × ε) is above FRICTION_RTOL,
+#: a step that has stopped shrinking (at least half the one before: no longer Newton's
+#: quadratic descent but rounding) below this fraction of the largest unknown, 1e-2 of
+#: the analytic backends' tolerance.
+FRICTION_ROUNDING = 1e-11
 #: A joint whose relative speed is below this fraction of the pose's speed scale counts
 #: as not moving: its Coulomb friction may take any value there (``indeterminate``).
 REVERSAL_RTOL = 1e-12
@@ -112,35 +117,47 @@ def coulomb_terms(pose: LinkagePose) -> list[CoulombTerm]:
     return terms
 
 
-def friction_residual(pose: LinkagePose, terms: list[CoulombTerm], x: Array) -> tuple[Array, Array]:
-    """φ(x) (N, 3n) and ∂φ/∂x (N, 3n, unknowns) of the Coulomb terms, each as its joint's
-    kind applies it."""
+def friction_residual(pose: LinkagePose, terms: list[CoulombTerm],
+                      x: Array) -> tuple[Array, Batched]:
+    """φ(x) (N, 3n) and the entries of ∂φ/∂x (3n × unknowns) of the Coulomb terms, each as
+    its joint's kind applies it."""
     layout = force_layout(pose.linkage)
     n = x.shape[0]
     phi = np.zeros((n, layout.rows))
-    dphi = np.zeros((n, layout.rows, layout.columns))
+    dphi = Batched(layout.rows, layout.columns, n)
     for t in terms:
         t.joint.kind.coulomb(pose, layout, t.joint, t.coefficient, t.sense, x, phi, dphi)
     return phi, dphi
 
 
-def solve_with_friction(pose: LinkagePose, k: Array, b: Array, x: Array,
+def solve_with_friction(pose: LinkagePose, k: Batched, b: Array, x: Array,
                         terms: list[CoulombTerm]) -> tuple[Array, NDArray[np.bool_]]:
-    """Newton's method on K x + b + φ(x) = 0 from the frictionless x; (x, converged)."""
+    """Newton's method on K x + b + φ(x) = 0 from the frictionless x; (x, converged).
+    A small K is solved densely over all poses at once, a large one as a sparse matrix per
+    pose (:mod:`.linalg`), so memory grows with the entries, not with their square."""
+    dense = k.dense() if k.small else None
     converged = np.zeros(x.shape[0], dtype=bool)
+    previous = np.full(x.shape[0], np.inf)
     for _ in range(FRICTION_ITERATIONS):
         phi, dphi = friction_residual(pose, terms, x)
-        residual = np.einsum("nij,nj->ni", k, x) + b + phi
-        step = solve_batched(k + dphi, residual)
+        if dense is not None:
+            residual = np.einsum("nij,nj->ni", dense, x) + b + phi
+            step = solve_batched(dense + dphi.dense(), residual)
+        else:
+            with np.errstate(all="ignore"):   # poses that do not assemble stay NaN
+                step = linalg.solve(k.plus(dphi), k.times(x) + b + phi)
         x = x - step
         size = np.maximum(np.abs(x).max(axis=1), 1e-300)
-        converged = np.abs(step).max(axis=1) <= FRICTION_RTOL * size
+        length = np.abs(step).max(axis=1)
+        converged = (length <= FRICTION_RTOL * size) \
+            | ((length >= 0.5 * previous) & (length <= FRICTION_ROUNDING * size))
+        previous = length
         if converged.all():
             break
     return x, converged
 
 
-def friction_loop_gain(pose: LinkagePose, k: Array, x: Array,
+def friction_loop_gain(pose: LinkagePose, k: Batched, x: Array,
                        terms: list[CoulombTerm]) -> Array:
     """Per pose, the gain of the loop that takes the Coulomb terms from the last reactions,
     as both simulators do step by step: the spectral radius of K⁻¹·∂φ/∂x at the solution.
@@ -149,21 +166,10 @@ def friction_loop_gain(pose: LinkagePose, k: Array, x: Array,
     slide whose rod makes φ with its axis, μ·|tan φ| ≥ 1). A term at exactly zero force is
     taken at the side of positive force: |N|'s slope is ±1 on either, and the gain's
     size the same."""
-    out = np.full(x.shape[0], np.nan)
-    finite = np.isfinite(x).all(axis=1) & np.isfinite(k).all(axis=(1, 2))
-    if not finite.any() or k.shape[1] != k.shape[2]:
-        return out
-    rows = np.flatnonzero(finite)
-    probe = np.where(x[rows] == 0.0, np.finfo(float).tiny, x[rows])
-    terms = [replace(t, sense=t.sense[rows]) for t in terms]
-    dphi = friction_residual(pose.take(rows), terms, probe)[1]
-    with np.errstate(all="ignore"):
-        try:
-            loop = np.linalg.solve(k[finite], dphi)
-        except np.linalg.LinAlgError:  # a singular pose has no forces, nor a loop
-            return out
-        out[finite] = np.abs(np.linalg.eigvals(loop)).max(axis=1, initial=0.0)
-    return out
+    if k.rows != k.cols:
+        return np.full(x.shape[0], np.nan)
+    probe = np.where(x == 0.0, np.finfo(float).tiny, x)
+    return linalg.spectral_radius(k, friction_residual(pose, terms, probe)[1])
 
 
 def condition(pose: LinkagePose, k: Batched | Array) -> Array:
@@ -339,12 +345,11 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     converged = np.ones(x.shape[0], dtype=bool)
     reversing = np.full(x.shape[0], "", dtype=object)
     gain: Callable[[], Array] | None = None
-    if terms:   # nonlinear reactions are solved densely (such linkages are small)
-        k = entries.dense()
-        x, converged = solve_with_friction(pose, k, b, x, terms)
+    if terms:
+        x, converged = solve_with_friction(pose, entries, b, x, terms)
         friction = [t for t in terms if t.friction]
         if friction:
-            gain = partial(friction_loop_gain, pose, k, x.copy(), friction)
+            gain = partial(friction_loop_gain, pose, entries, x.copy(), friction)
         for t in terms:
             stops = t.sense == 0.0
             reversing[stops] = np.where(reversing[stops] == "", t.joint.name,

@@ -271,3 +271,112 @@ def mechanical_advantage(case: Case) -> list[tuple[str, float, float]]:
         effort = float(solve_batched(k, -b)[0, column])
         out.append((f"load on {load.link}", math.hypot(*load.force), effort))
     return out
+
+
+#: A loaded point has stopped (an output toggle) where its speed per unit rate of the driver
+#: is below this fraction of the linkage's size (a link's turning rate: of 1); Brent's
+#: method puts the stop to rounding, so a point that only turns (a crank's) stays far above.
+TOGGLE_SPEED_RTOL = 1e-6
+
+
+@dataclass(frozen=True)
+class _Loaded:
+    """What a load acts on: a point fixed to ``link`` (drawn at ``at``), or the link's turning
+    (``at`` None) for a couple."""
+
+    link: str
+    at: tuple[float, float] | None
+
+
+def output_toggles(linkage: Linkage, first: np.ndarray) -> np.ndarray:
+    """The output toggles the first driver passes on the ascending grid ``first`` (its unit,
+    rad or m, from the drawn pose; the other drivers held): values where a loaded point (a
+    force's point, a weight's centre of mass) or a link loaded by a couple stops while the
+    driver moves. There the load's share of the drive effort passes through zero, although
+    the load does not change, and the reactions stay finite (the statics is well posed).
+
+    Between two neighbouring poses whose velocity ratios (velocity per unit driver rate)
+    point opposite ways, the stop is found by Brent's method on the ratio's component along
+    the first pose's direction, and kept where the whole ratio vanishes there: a point that
+    only turns (on a crank) is no toggle; a grid pose where it has stopped is one itself.
+    Sorted, each toggle once."""
+    from mechcheck.analytic.rigid import link_column
+
+    loaded = [p for p in _loaded(linkage) if link_column(linkage, p.link) >= 0]
+    grid = np.asarray(first, dtype=float)
+    if not loaded or not linkage.drivers or grid.size < 2:
+        return np.zeros(0)
+    ratios = _velocity_ratios(linkage, grid, loaded)
+    size = linkage.scale
+    slides = not linkage.joint(linkage.drivers[0].joint).kind.rotates
+    found: list[float] = []
+    for probe, v in zip(loaded, ratios, strict=True):
+        stopped = TOGGLE_SPEED_RTOL * (size if probe.at is not None else 1.0) \
+            / (size if slides else 1.0)
+        speed = np.linalg.norm(v, axis=1)
+        at_pose = speed == 0.0     # a pose of the grid on the toggle itself: no direction
+        found += list(grid[at_pose])
+        turn = np.einsum("ij,ij->i", v[:-1], v[1:])
+        for i in np.flatnonzero((turn < 0.0) & ~at_pose[:-1] & ~at_pose[1:]):
+            t = _stop_between(linkage, probe, grid[i], grid[i + 1], v[i] / speed[i])
+            if t is not None and np.linalg.norm(
+                    _velocity_ratios(linkage, np.array([t]), [probe])[0][0]) <= stopped:
+                found.append(t)
+    return _distinct(np.sort(np.array(found)), 1e-9 * max(1.0, float(np.ptp(grid))))
+
+
+def _stop_between(linkage: Linkage, probe: _Loaded, a: float, b: float,
+                  u: np.ndarray) -> float | None:
+    """Where the velocity ratio's component along ``u`` (its direction at ``a``) passes
+    zero between ``a`` and ``b``, by Brent's method; None where it does not there."""
+    from scipy.optimize import brentq
+
+    def along(t: float) -> float:
+        return float(_velocity_ratios(linkage, np.array([t]), [probe])[0][0] @ u)
+
+    try:
+        return float(brentq(along, a, b, xtol=1e-14 * max(1.0, abs(a))))
+    except ValueError:  # no sign change once recomputed (a rounding-level grazing)
+        return None
+
+
+def _loaded(linkage: Linkage) -> list[_Loaded]:
+    """What the linkage's loads act on: forces' points, couples' links, and the centres of
+    mass when there is gravity."""
+    out = []
+    for load in linkage.loads:
+        if any(load.force):
+            out.append(_Loaded(load.link, load.at))
+        if load.torque:
+            out.append(_Loaded(load.link, None))
+    if any(linkage.gravity):
+        out += [_Loaded(m.link, m.com) for m in linkage.masses]
+    return list(dict.fromkeys(out))
+
+
+def _velocity_ratios(linkage: Linkage, first: np.ndarray, loaded: list[_Loaded]) -> list[np.ndarray]:
+    """Per loaded thing, its velocity per unit rate of the first driver at each value of it:
+    (N, 2) for a point, (N, 1) for a link's turning."""
+    from mechcheck.analytic.linkage_kinematics import solve_pose
+
+    d = len(linkage.drivers)
+    values = np.tile([drv.value for drv in linkage.drivers], (first.size, 1)).astype(float)
+    values[:, 0] = first
+    rates = np.zeros((first.size, d))
+    rates[:, 0] = 1.0
+    pose = solve_pose(linkage, values, rates, np.zeros((first.size, d)))
+    out = []
+    for p in loaded:
+        if p.at is None:
+            out.append(pose.link_state(p.link, pose.qdot)[1][:, None])
+        else:
+            out.append(pose.point(p.link, p.at)[1])
+    return out
+
+
+def _distinct(values: np.ndarray, gap: float) -> np.ndarray:
+    """Sorted values without repeats closer than ``gap`` (several loads stopping at once)."""
+    if values.size == 0:
+        return values
+    keep = np.concatenate([[True], np.diff(values) > gap])
+    return values[keep]

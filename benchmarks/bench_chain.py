@@ -2,7 +2,7 @@
 loops (tests/chains.py), static, through the one engine, against a bare sparse solve of
 the same member-equilibrium equations timed in the same run.
 
-Usage:  python benchmarks/bench_chain.py [--loops 16 64 256 1000] [--repeats 5]
+Usage:  python benchmarks/bench_chain.py [--loops 16 64 256 1000] [--repeats 5] [--friction]
 
 For each n, in a fresh process each repeat (so that memory is that case's alone):
 
@@ -11,6 +11,10 @@ For each n, in a fresh process each repeat (so that memory is that case's alone)
 - ``reference``: the same equilibrium equations assembled straight from the drawing with
   scipy.sparse and solved by ``spsolve``: no validation, no verdict, no condition number,
   the linear algebra's floor;
+- with ``--friction``, friction circles (μ = 0.2, r = 5 mm) at the pins of the first
+  :data:`FRICTION_LOOPS` loops, a Coulomb case solved by Newton's method; its reference is
+  then ``dense``: the same ``mechcheck.solve`` with every matrix held dense (the path every
+  Coulomb case took before, and the one small linkages take);
 - peak memory of the mechcheck process (``ru_maxrss``) above the interpreter with
   mechcheck, its case-file reader, its engine and scipy imported (imports are not timed).
 
@@ -28,8 +32,13 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 HERE = Path(__file__).resolve().parent
+#: With ``--friction``: the loops whose pins carry friction circles. Each loop turns slower
+#: than the one before, and a pin whose relative motion is below 1e-12 of the driver's
+#: has no defined friction sense (``indeterminate``), so friction stays on the first loops.
+FRICTION_LOOPS = 16
 
 CHILD = r"""
 import json, resource, sys, time
@@ -44,7 +53,9 @@ base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 path, which = sys.argv[1], sys.argv[2]
 start = time.perf_counter()
 case = mechcheck.load_cases(path)[0]
-if which == "mechcheck":
+if which == "dense":
+    mechcheck.analytic.linalg.DENSE_COLUMNS = 10**9
+if which in ("mechcheck", "dense"):
     solution = mechcheck.solve(case)
     assert solution.status == "ok", solution.message
     value = solution.values["Q_J_O0"]
@@ -91,10 +102,21 @@ def spread(values: list[float], fmt: str = ".3g") -> str:
     return f"{statistics.median(values):{fmt}} (min {min(values):{fmt}}, max {max(values):{fmt}})"
 
 
+def with_friction(table: dict[str, Any]) -> dict[str, Any]:
+    """The chain with friction circles at the pins of its first :data:`FRICTION_LOOPS`
+    loops, its driver turning forwards (the sense friction opposes)."""
+    pins = {j["name"]: 5.0 for j in table["joints"]
+            if int(j["name"].lstrip("J_ABO")) <= FRICTION_LOOPS}
+    drivers = [d | {"sense": "increasing"} for d in table["drivers"]]
+    return table | {"friction": {"mu": 0.2, "pin_radius": pins}, "drivers": drivers}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--loops", type=int, nargs="+", default=[16, 64, 256, 1000])
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--friction", action="store_true",
+                        help="Coulomb friction circles, against the dense path")
     args = parser.parse_args()
     sys.path.insert(0, str(HERE.parent / "tests"))
     from chains import four_bar_chain, toml_of
@@ -103,15 +125,20 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for loops in args.loops:
             path = Path(tmp) / f"chain{loops}.toml"
-            path.write_text(toml_of(four_bar_chain(loops, name=f"chain{loops}")))
-            ours, ref, memory = [], [], []
+            table = four_bar_chain(loops, name=f"chain{loops}")
+            if args.friction:
+                table = with_friction(table)
+            path.write_text(toml_of(table))
+            reference = "dense" if args.friction else "reference"
+            ours, ref, memory, ref_memory = [], [], [], []
             for _ in range(args.repeats):   # alternating, so that drift hits both alike
                 a = run(path, "mechcheck")
-                b = run(path, "reference")
+                b = run(path, reference)
                 assert math.isclose(a["value"], b["value"], rel_tol=1e-9), (a, b)
                 ours.append(a["time"])
                 ref.append(b["time"])
                 memory.append(a["memory_kb"] / 1024)
+                ref_memory.append(b["memory_kb"] / 1024)
             ratio = [x / y for x, y in zip(ours, ref, strict=True)]
             t, m = statistics.median(ours), statistics.median(memory)
             growth = ""
@@ -121,8 +148,8 @@ def main() -> None:
                 growth = (f"; growth exponent time {math.log(t / t0) / k:.2f}, "
                           f"memory {math.log(max(m, 1e-3) / max(m0, 1e-3)) / k:.2f}")
             print(f"{loops:5d} loops ({3 * loops + 1} joints): mechcheck {spread(ours)} s, "
-                  f"reference {spread(ref)} s, ratio {spread(ratio)}; "
-                  f"memory {spread(memory)} MB{growth}")
+                  f"{reference} {spread(ref)} s, ratio {spread(ratio)}; "
+                  f"memory {spread(memory)} MB ({reference} {spread(ref_memory)} MB){growth}")
             previous = (loops, t, m)
 
 

@@ -2,8 +2,8 @@
 
 Panels: drive torque per backend; reaction magnitudes; relative error per
 backend on a log scale against its tolerance; the transmission angle (a
-linkage's condition number). Singular poses (toggle and change points) are
-marked with vertical lines on every panel, near-singular ones ticked.
+linkage's condition number, with its output toggles dotted). Singular poses (toggle and
+change points) are marked with vertical lines on every panel, near-singular ones ticked.
 
 A figure is made in two steps, so that the drawing can run in a sweep's worker pool:
 :func:`sweep_plot` reduces the sweep's tables to the curves drawn, thinned to at most
@@ -15,13 +15,14 @@ from __future__ import annotations
 
 import io
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from mechcheck.analytic.case import Case, preset_of
+from mechcheck.analytic.theory import output_toggles
 from mechcheck.analytic.transmission import transmission_angle
 from mechcheck.backends import REFERENCE
 from mechcheck.output import file_stem
@@ -104,6 +105,8 @@ class SweepPlot:
     lower_is_condition: bool
     singular: np.ndarray
     near_singular: np.ndarray
+    #: A linkage's output toggles on the sweep's axis (:func:`.theory.output_toggles`).
+    toggles: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def _names(case: Case, axis: str | None = None) -> tuple[str, str, list[tuple[str, str]], str]:
@@ -121,10 +124,12 @@ def _names(case: Case, axis: str | None = None) -> tuple[str, str, list[tuple[st
 
 
 def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
-               comparison: pd.DataFrame, axis: str | None = None) -> SweepPlot:
+               comparison: pd.DataFrame, axis: str | None = None,
+               unit: str | None = None) -> SweepPlot:
     """The curves of one case's sweep figure from its long results, statuses and
     comparisons (each thinned to at most :data:`MAX_POINTS` points); ``axis``: the sweep's
-    axis by name and unit (:func:`mechcheck.sweep.driver_axis`)."""
+    axis by name and unit (:func:`mechcheck.sweep.driver_axis`), ``unit`` its unit (a
+    sliding driver's length unit; default the case's own)."""
     drive, drive_unit, reactions, x_label = _names(case, axis)
     backends = [str(b) for b in pd.unique(results["backend"])]
     drive_curves = [Curve.of(b, _series(results, b, drive)) for b in backends]
@@ -152,7 +157,23 @@ def sweep_plot(case: Case, results: pd.DataFrame, status: pd.DataFrame,
         lower_is_condition=not case.is_preset,
         singular=np.sort(ref.loc[ref["status"] == "singular", "theta12"].to_numpy(
             dtype=float))[:MAX_SINGULAR_LINES],
-        near_singular=thin(near_theta, near_theta)[0])
+        near_singular=thin(near_theta, near_theta)[0],
+        toggles=np.zeros(0) if case.is_preset else _toggles(case, ref, unit))
+
+
+def _toggles(case: Case, ref_status: pd.DataFrame, unit: str | None) -> np.ndarray:
+    """A linkage's output toggles between the sweep's poses, on its axis: computed from the
+    analytic kinematics, which a simulator's forces never enter."""
+    from mechcheck.sweep import axis_unit, grid_si
+
+    unit = unit or axis_unit(case)
+    grid = np.unique(ref_status["theta12"].to_numpy(dtype=float))
+    # Brackets need no more poses than the figure draws; Brent's method does the rest.
+    grid = np.unique(np.append(grid[::-(-grid.size // MAX_POINTS) or 1], grid[-1:]))
+    si = grid_si(case, grid, unit)
+    toggles = output_toggles(case.linkage, si)
+    # Back on the axis: grid_si is linear in the grid.
+    return toggles * (grid[-1] - grid[0]) / (si[-1] - si[0]) if grid.size > 1 else toggles
 
 
 def _series(results: pd.DataFrame, backend: str, quantity: str) -> pd.Series:
@@ -236,6 +257,11 @@ def _draw_lower(ax: Axes, plot: SweepPlot) -> None:
         ax.set_yscale("log")
         ax.set_ylabel("condition number (analytic)")
         ax.set_title("Distance from toggles (dotted: near-singular line)")
+        for theta in plot.toggles:   # output toggles: the condition number stays flat there
+            ax.axvline(theta, color="tab:purple", lw=1.0, ls=":")
+            ax.annotate("toggle", (theta, 0.5), xycoords=("data", "axes fraction"),
+                        xytext=(2, 0), textcoords="offset points", fontsize=7,
+                        color="tab:purple", rotation=90)
         return
     ax.axhline(40.0, color="grey", lw=0.8, ls=":")
     ax.set_ylabel("transmission angle μ [deg]")

@@ -71,10 +71,11 @@ def draw_figures(executor: Executor, cases: list[Case], results: pd.DataFrame,
     """Each case's figure (PNG bytes, to come), drawn in the sweep's worker pool: this
     process only reduces the tables to the thinned curves
     (:func:`mechcheck.figures.sweep_plot`); ``axes``: each case's axis (:func:`sweep_axes`)."""
-    labels = {name: label for name, (label, _) in (axes or {}).items()}
+    axes = axes or {}
     return {c.name: executor.submit(draw_sweep, sweep_plot(
         c, results[results["case"] == c.name], statuses[statuses["case"] == c.name],
-        comparison[comparison["case"] == c.name], labels.get(c.name))) for c in cases}
+        comparison[comparison["case"] == c.name], *axes.get(c.name, (None, None))))
+        for c in cases}
 
 
 def sweep_axes(tasks: list[SweepTask]) -> dict[str, tuple[str, str]]:

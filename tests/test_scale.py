@@ -16,6 +16,8 @@ from typer.testing import CliRunner
 
 from mechcheck import solve
 from mechcheck.analytic import linalg
+from mechcheck.analytic.linkage_forces import solve_linkage
+from mechcheck.analytic.rigid import force_layout
 from mechcheck.casefile import parse_cases
 from mechcheck.cli import app
 from tests.builtin import builtin
@@ -76,6 +78,19 @@ def test_the_sparse_path_agrees_with_the_dense_one(table: dict[str, Any]) -> Non
     """Random linkages solved with every system forced through the sparse path (SuperLU,
     LSMR, Lanczos) and through the dense one (LAPACK): the same verdict, forces and condition
     number."""
+    sparse_and_dense_agree(table)
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.filter_too_much,
+                                                                  HealthCheck.too_slow])
+@given(table=linkage_tables(friction=True))
+def test_the_sparse_path_agrees_with_the_dense_one_with_friction(table: dict[str, Any]) -> None:
+    """The same with Coulomb and viscous friction: Newton's iteration on sparse matrices
+    gives the dense iteration's verdict and forces."""
+    sparse_and_dense_agree(table)
+
+
+def sparse_and_dense_agree(table: dict[str, Any]) -> None:
     case = parse_cases({"case": [table]}, "random.toml")[0][0]
     dense = solve(case)
     saved = linalg.DENSE_COLUMNS
@@ -92,6 +107,49 @@ def test_the_sparse_path_agrees_with_the_dense_one(table: dict[str, Any]) -> Non
     for name, value in dense.values.items():
         scale = forces * case.linkage.scale if name.startswith("Q_") else max(forces, 1.0)
         assert sparse.values[name] == pytest.approx(value, abs=RTOL * cond * scale), name
+
+
+def friction_chain(loops: int) -> Any:
+    """A chain with friction circles (μ = 0.2, r = 5 mm) at every pin, driven forwards."""
+    table = four_bar_chain(loops)
+    table["friction"] = {"mu": 0.2, "pin_radius": {j["name"]: 5.0 for j in table["joints"]}}
+    table["drivers"][0]["sense"] = "increasing"
+    return parse_cases({"case": [table]}, "chain.toml")[0][0]
+
+
+def test_coulomb_friction_on_a_large_linkage_is_solved_without_a_dense_matrix(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 20-loop chain with friction circles at all 61 pins (123 unknowns, past the dense
+    limit): Newton's iteration and the friction loop's gain go through sparse matrices (a
+    dense one is refused), and give what the dense path (LAPACK) gives for the same
+    equations: reactions within the analytic rule, the gain to 1e-9 (it is exact both ways,
+    only rounding between them)."""
+    saved = linalg.DENSE_COLUMNS
+    try:
+        linalg.DENSE_COLUMNS = 10**9
+        dense = solve_linkage(friction_chain(20).linkage)
+        assert dense.friction_gain is not None
+        dense_gain = float(dense.friction_gain[0])   # computed when first read
+    finally:
+        linalg.DENSE_COLUMNS = saved
+    linkage = friction_chain(20).linkage
+    assert force_layout(linkage).columns > linalg.DENSE_COLUMNS
+    small_only = linalg.Batched.dense
+
+    def refuse_large(self: linalg.Batched) -> Any:
+        assert self.small, f"a dense {self.rows} × {self.cols} matrix"
+        return small_only(self)
+
+    monkeypatch.setattr(linalg.Batched, "dense", refuse_large)
+    sparse = solve_linkage(linkage)
+    assert sparse.converged.all() and dense.converged.all()
+    forces = [q for q in dense.values if q.startswith(("F_", "Q_"))]
+    scale = max(abs(float(dense.values[q][0])) for q in forces)
+    for q in forces:
+        assert float(sparse.values[q][0]) == pytest.approx(float(dense.values[q][0]),
+                                                           abs=RTOL * scale), q
+    assert sparse.friction_gain is not None
+    assert float(sparse.friction_gain[0]) == pytest.approx(dense_gain, rel=1e-9)
 
 
 def test_ranks_by_the_sparse_path_count_redundant_constraints() -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import math
 import re
 import subprocess
 import sys
@@ -15,10 +16,12 @@ import pandas as pd
 import pytest
 
 from mechcheck import sweep_run
-from mechcheck.figures import MAX_POINTS, sweep_plot, thin
+from mechcheck.figures import MAX_POINTS, draw_sweep, sweep_plot, thin
 from mechcheck.sweep import LocalExecutor, parse_range, plan, run_sweep
+from mechcheck.tolerance import NEAR_SINGULAR_CONDITION, rule
 
 from .builtin import builtin
+from .test_user_mechanisms import toggle_angle, user_case
 
 
 def bucket_extremes(y: np.ndarray, edges: np.ndarray) -> list[tuple[float, float]]:
@@ -139,3 +142,34 @@ def test_a_sweep_without_figures_reports_the_same_without_them(tmp_path: Path) -
     assert "](figures/" not in (tmp_path / "report.md").read_text()
     assert sweep() == 0
     assert sorted(p.name for p in (tmp_path / "figures").glob("*.png")) == figures
+
+
+def test_the_toggle_panel_marks_the_presss_output_toggle_at_the_hand_angle(
+        tmp_path: Path) -> None:
+    """The toggle press swept ±30° about its drawing: the fourth panel keeps the condition
+    number (flat through the toggle, below the near-singular line) and marks one output
+    toggle, where the ram stops, at the hand toggle (crank 19.94° from the drawing: upper
+    and lower link in line, by bisection on the user's hand kinematics)."""
+    case = user_case("toggle_press.toml", "toggle-press-5deg")
+    grid = parse_range("-30:30:5", "--driver")
+    outcome = run_sweep(plan([case], [], grid, grid), tmp_path, LocalExecutor())
+    plot = sweep_plot(case, outcome.read(), outcome.read(kind="status"), pd.DataFrame(
+        columns=["backend", "theta12", "rel_err", "tolerance"]), "rotation of O2, deg", "deg")
+    assert plot.lower_is_condition and plot.lower.y.max() < NEAR_SINGULAR_CONDITION
+    assert math.degrees(toggle_angle()) == pytest.approx(19.94, abs=0.005)
+    tol = rule("virtual_work", "pose", "static")   # the analytic family's: only rounding
+    assert len(plot.toggles) == 1
+    assert math.radians(plot.toggles[0]) == pytest.approx(toggle_angle(), rel=tol.rtol), \
+        tol.reason
+    assert draw_sweep(plot).startswith(b"\x89PNG")
+
+
+def test_a_sweep_whose_loads_never_stop_marks_no_toggle(tmp_path: Path) -> None:
+    """The press swept −10° to 10°: its ram moves all the way (the toggle is at 19.94°), so
+    no toggle is marked; neither is the crank's weight, which turns but never stops."""
+    case = user_case("toggle_press.toml", "toggle-press-5deg")
+    grid = parse_range("-10:10:5", "--driver")
+    outcome = run_sweep(plan([case], [], grid, grid), tmp_path, LocalExecutor())
+    plot = sweep_plot(case, outcome.read(), outcome.read(kind="status"), pd.DataFrame(
+        columns=["backend", "theta12", "rel_err", "tolerance"]))
+    assert plot.toggles.size == 0

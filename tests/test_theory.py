@@ -18,6 +18,7 @@ from mechcheck.analytic.transmission import transmission_angle
 from mechcheck.cli import app
 from mechcheck.theory_cli import GRASHOF_CATALOGUE, MOBILITY_CATALOGUE, parse_joints
 
+from .builtin import builtin
 from .strategies import assembling
 
 #: A brute-force search on a 0.001° grid locates an extreme to within the grid
@@ -193,3 +194,20 @@ def test_theory_command_line() -> None:
     result = runner.invoke(app, ["theory", "grashof", "--ground", "250", "--crank", "100",
                                  "--coupler", "220", "--rocker", "150"])
     assert result.output.startswith("crank-rocker")
+
+
+@pytest.mark.parametrize("grid", ["-60:300:5", "-57:303:5"])
+def test_a_centric_slider_cranks_toggles_are_its_dead_centres(grid: str) -> None:
+    """Seed E2 as a linkage (crank 200 mm, rod 800 mm, drawn at θ12 = 55°, 100 N on the
+    slider): its slider stops where x_B = a2·cos θ + √(a3² − a2²·sin² θ) has
+    dx_B/dθ = −a2·sin θ·(1 + a2·cos θ / √(a3² − a2²·sin² θ)) = 0, at θ = 0 and 180° (the
+    bracket is never 0 since a3 > a2): −55° and 125° from the drawing. On a grid through
+    them and on one beside them; the crank's pin, which only turns, is never marked."""
+    from mechcheck.analytic.theory import output_toggles
+    from mechcheck.sweep import parse_range
+    from mechcheck.tolerance import rule
+
+    case = builtin("e2-linkage-frictionless")
+    found = np.degrees(output_toggles(case.linkage, np.radians(parse_range(grid, "--driver"))))
+    tol = rule("virtual_work", "pose", "static")   # the analytic family's: only rounding
+    assert found == pytest.approx([-55.0, 125.0], rel=tol.rtol), tol.reason

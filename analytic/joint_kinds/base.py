@@ -203,9 +203,9 @@ class JointKind(ABC):
 
     @abstractmethod
     def coulomb(self, pose: LinkagePose, layout: ForceLayout, joint: Joint, coefficient: float,
-                sense: Array, x: Array, phi: Array, dphi: Array) -> None:
+                sense: Array, x: Array, phi: Array, dphi: Batched) -> None:
         """Add its Coulomb load −coefficient·sense·|reaction| to φ (N, 3n) and its
-        derivative to ∂φ/∂x (N, 3n, columns), from all the unknowns x."""
+        derivative to the entries of ∂φ/∂x (3n × columns), from all the unknowns x."""
 
     @abstractmethod
     def sliding_friction(self, coefficient: float, sense: Array, x: Array) -> Array:

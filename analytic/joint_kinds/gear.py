@@ -283,7 +283,7 @@ class Gear(JointKind):
         return 0.0
 
     def coulomb(self, pose: LinkagePose, layout: ForceLayout, joint: Joint, coefficient: float,
-                sense: Array, x: Array, phi: Array, dphi: Array) -> None:
+                sense: Array, x: Array, phi: Array, dphi: Batched) -> None:
         """The radial part tan α·|F_t| along n at the pitch point, on gear b and back on a."""
         frame = self.frame(pose, joint)
         assert frame.n is not None
@@ -297,7 +297,7 @@ class Gear(JointKind):
                 continue
             for offset, arm in ((0, frame.n[:, 0]), (1, frame.n[:, 1]), (2, moment)):
                 phi[:, r + offset] += sign * arm * size
-                dphi[:, r + offset, col] += sign * arm * slope
+                dphi.add(r + offset, col, sign * arm * slope)
 
     def sliding_friction(self, coefficient: float, sense: Array, x: Array) -> Array:
         return np.zeros(x.shape[0])

@@ -143,7 +143,7 @@ class Prismatic(JointKind):
         return friction.coefficient(joint.name)
 
     def coulomb(self, pose: LinkagePose, layout: ForceLayout, joint: Joint, coefficient: float,
-                sense: Array, x: Array, phi: Array, dphi: Array) -> None:
+                sense: Array, x: Array, phi: Array, dphi: Batched) -> None:
         frame = self.frame(pose, joint)
         assert frame.u is not None
         c0 = layout.joint_columns(joint)[0]
@@ -156,7 +156,7 @@ class Prismatic(JointKind):
                 continue
             for offset, coef in ((0, frame.u[:, 0]), (1, frame.u[:, 1]), (2, lever)):
                 phi[:, r + offset] += sign * coef * along
-                dphi[:, r + offset, c0] += sign * coef * d_along
+                dphi.add(r + offset, c0, sign * coef * d_along)
 
     def sliding_friction(self, coefficient: float, sense: Array, x: Array) -> Array:
         return -coefficient * sense * np.abs(x[:, 0])

@@ -100,7 +100,7 @@ class Revolute(JointKind):
         return friction.coefficient(joint.name) * friction.pin_radius.get(joint.name, 0.0)
 
     def coulomb(self, pose: LinkagePose, layout: ForceLayout, joint: Joint, coefficient: float,
-                sense: Array, x: Array, phi: Array, dphi: Array) -> None:
+                sense: Array, x: Array, phi: Array, dphi: Batched) -> None:
         c0, c1 = layout.joint_columns(joint)
         mag = np.hypot(x[:, c0], x[:, c1])
         safe = np.where(mag > 0.0, mag, 1.0)
@@ -111,8 +111,8 @@ class Revolute(JointKind):
             if r < 0:
                 continue
             phi[:, r + 2] += sign * moment
-            dphi[:, r + 2, c0] += sign * grad[:, 0]
-            dphi[:, r + 2, c1] += sign * grad[:, 1]
+            dphi.add(r + 2, c0, sign * grad[:, 0])
+            dphi.add(r + 2, c1, sign * grad[:, 1])
 
     def sliding_friction(self, coefficient: float, sense: Array, x: Array) -> Array:
         return np.zeros(x.shape[0])
