@@ -1,4 +1,4 @@
-"""The ``mechcheck`` command line: ``run``, ``validate``, ``sweep``, ``draw``, ``study``,
+"""The ``mechcheck`` command line: ``run``, ``simulate``, ``validate``, ``sweep``, ``draw``, ``study``,
 ``theory``, ``reports``, ``new`` and ``backends`` (see docs/cli.md).
 
 ``mechcheck run FILE... [--backend NAME]... [--out DIR]`` writes
@@ -103,13 +103,8 @@ def run_command(
     from mechcheck.tables import diagnostics_frame, results_frame
 
     verdicts = parse_fail_on(fail_on)
-    _, specs = read_case_files(files)
-    names = list(backend) if backend else registry.available()
-    try:
-        for name in names:
-            registry.load(name)
-    except registry.BackendUnavailable as error:
-        raise fail_input(str(error)) from None
+    _, specs = read_case_files(files, trajectory=False)
+    names = chosen_backends(backend)
     check_outputs(out, junit)
     cases = [case for case, _ in specs]
     progress = None if quiet else progress_printer()
@@ -136,16 +131,32 @@ def run_command(
     raise typer.Exit(result.exit_status)
 
 
-def read_case_files(files: list[Path] | None) -> tuple[list[Path], list[tuple[Case, AnySpec]]]:
-    """The files read and their validated cases, as `run` and `validate` read them (no file:
-    the built-in suite); an unusable one is its one line and exit 2."""
+def read_case_files(files: list[Path] | None, *, trajectory: bool | None = None,
+                    builtin: list[Path] | None = None) -> tuple[list[Path],
+                                                            list[tuple[Case, AnySpec]]]:
+    """The files read and their validated cases, as `run`, `simulate` and `validate` read
+    them (no file: ``builtin``, by default the built-in suite); ``trajectory``: True, every
+    case must move over time, False, none may, None: either. An unusable one is its one
+    line and exit 2."""
     from mechcheck.casefile import builtin_case_files, load_specs
 
-    paths = list(files) if files else builtin_case_files()
+    paths = list(files) if files else (builtin_case_files() if builtin is None else builtin)
     try:
-        return paths, load_specs(paths)
+        return paths, load_specs(paths, trajectory=trajectory)
     except CaseError as error:
         raise fail_input(str(error)) from None
+
+
+def chosen_backends(backend: list[str] | None) -> list[str]:
+    """The backends of ``--backend`` (default: every available one), each importable, or the
+    one line naming the one that is not and exit 2."""
+    names = list(backend) if backend else registry.available()
+    try:
+        for name in names:
+            registry.load(name)
+    except registry.BackendUnavailable as error:
+        raise fail_input(str(error)) from None
+    return names
 
 
 def check_outputs(out: Path, junit: Path | None) -> None:
@@ -159,6 +170,69 @@ def check_outputs(out: Path, junit: Path | None) -> None:
             check_writable_file(junit, "--junit")
     except OutputError as error:
         raise fail_input(str(error)) from None
+
+
+@app.command("simulate", help="Run each trajectory case (a linkage moving freely over "
+             "time, [case.simulate]) through every backend that simulates and compare each run "
+             "with the analytic reference over time; tables and a report.")
+def simulate_command(
+    files: Annotated[list[Path] | None, typer.Argument(
+        help="Case files (TOML) whose cases have a [case.simulate] table. None: the built-in "
+             "trajectory cases.")] = None,
+    backend: Annotated[list[str] | None, typer.Option(
+        "--backend", "-b", help="Backend to check against analytic (repeatable). "
+        "Default: every available one (those without a run over time report not_applicable)."
+        )] = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
+        Path("mechcheck-simulate"),
+    fail_on: Annotated[str, typer.Option(
+        help="Comma-separated backend verdicts that fail the run "
+             f"(from {', '.join(VERDICTS)}; 'none' for none).")] = ",".join(DEFAULT_FAIL_ON),
+    junit: Annotated[Path | None, typer.Option(
+        help="Also write a JUnit XML file: one test case per comparison.")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
+) -> None:
+    from mechcheck.casefile import builtin_trajectory_files
+    from mechcheck.figures import figure_file
+    from mechcheck.junit import junit_xml
+    from mechcheck.output import OutputError, locked_folder, write_all
+    from mechcheck.simulate_report import figures, render_simulate
+    from mechcheck.simulate_run import RUNS_FILE, TRAJECTORIES_FILE, simulate
+    from mechcheck.tables import diagnostics_frame
+
+    verdicts = parse_fail_on(fail_on)
+    builtin = builtin_trajectory_files()
+    if not files and not builtin:
+        raise fail_input("mechcheck simulate: no case file given, and this installation has no "
+                         "built-in trajectory cases (mechcheck/cases/trajectories/ is empty)")
+    _, specs = read_case_files(files, trajectory=True, builtin=builtin)
+    names = chosen_backends(backend)
+    check_outputs(out, junit)
+    progress = None if quiet else progress_printer()
+    try:
+        with locked_folder(out, "--out"):
+            result = simulate([case for case, _ in specs], names, progress=progress,
+                              fail_on=verdicts)
+            pictures = figures(result)
+            markdown, page = render_simulate(result, {c.name: s for c, s in specs},
+                                             pictures=pictures)
+            write_all(out, {
+                TRAJECTORIES_FILE: result.table().to_parquet(index=False),
+                RUNS_FILE: result.rungs.to_csv(index=False),
+                "comparison.csv": result.comparison.to_csv(index=False),
+                "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
+                "report.md": markdown,
+                "report.html": page,
+            })
+            if pictures:  # the Markdown report links to them; the HTML holds them
+                write_all(out / "figures",
+                          {figure_file(name): png for name, png in pictures.items()})
+            if junit is not None:
+                write_all(junit.parent, {junit.name: junit_xml(result)})
+    except OutputError as error:
+        raise fail_input(str(error)) from None
+    typer.echo(f"{result.summary} -> {out}/report.md")
+    raise typer.Exit(result.exit_status)
 
 
 @app.command("sweep", help="Move each case's driver over a range (θ12, or a linkage's first "
@@ -206,7 +280,7 @@ def sweep_command(
     verdicts = parse_fail_on(fail_on)
     paths = list(files) if files else builtin_sweep_files()
     try:
-        specs = load_specs(paths, sweep=True)
+        specs = load_specs(paths, sweep=True, trajectory=False)
         grid = parse_range(theta12)
         driver_grid = None if driver is None else parse_range(driver, "--driver")
         names = list(backend) if backend else registry.available()
@@ -346,7 +420,7 @@ def new_command(
 def validate_command(
     files: CaseFiles = None,
 ) -> None:
-    paths, specs = read_case_files(files)   # exactly as `run` reads them
+    paths, specs = read_case_files(files)   # as `run` and `simulate` read them
     n, m = len(specs), len(paths)
     typer.echo(f"{n} case{'s' * (n != 1)} in {m} file{'s' * (m != 1)}: valid")
 
