@@ -377,7 +377,8 @@ def study_command(
 
 @app.command("reports", help="Regenerate the committed reports: the built-in suite, seed "
              "001's catalogue of linkages, the whole-cycle sweeps of the seed four-bar and "
-             "slider-crank through every backend, and the assumption studies.")
+             "slider-crank through every backend, the built-in trajectory cases, and the "
+             "assumption studies.")
 def reports_command(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path("reports"),
 ) -> None:
@@ -389,7 +390,8 @@ def reports_command(
     catalogue = [str(path) for path in catalogue_case_files()]
     for args in (["run", "-q", "--out", str(out / "suite")],
                  ["run", "-q", *catalogue, "--out", str(out / "catalogue")],
-                 ["sweep", "-q", "--fresh", "--out", str(out / "sweep")]):
+                 ["sweep", "-q", "--fresh", "--out", str(out / "sweep")],
+                 ["simulate", "-q", "--out", str(out / "trajectories")]):
         # Without standalone mode click returns the exit status instead of exiting.
         code = app(args, standalone_mode=False)
         codes.append(int(code or 0))
