@@ -47,6 +47,7 @@ EXAMPLES = {
     "slider_crank": "a slider-crank (offset, slide friction) at its input angle θ12",
     "linkage": "any planar linkage drawn as points, links and joints, moved by its drivers",
     "linkage_sketch": "a linkage sketched roughly, made exact by its lengths and angles",
+    "trajectory": "a linkage released to move over time, pushed by a force (mechcheck simulate)",
 }
 
 
