@@ -14,8 +14,9 @@ import gc
 import os
 import signal
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 
@@ -27,6 +28,7 @@ from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
 if TYPE_CHECKING:
     from mechcheck.analytic.case import Case
     from mechcheck.casefile import AnySpec
+    from mechcheck.run import RunResult
 
 # pandas, matplotlib, pydantic and the simulators are imported inside the commands
 # that need them, so that `mechcheck --help` and `mechcheck backends` start fast
@@ -60,6 +62,19 @@ CaseFiles = Annotated[list[Path] | None, typer.Argument(
     help="Case files (TOML). None: the built-in suite (seed examples and more).")]
 
 
+#: The options `run` and `simulate` share.
+DEFAULT_FAIL_ON_TEXT = ",".join(DEFAULT_FAIL_ON)
+Backends = Annotated[list[str] | None, typer.Option(
+    "--backend", "-b", help="Backend to check against analytic (repeatable). "
+    f"Default: every available one of {', '.join(registry.REGISTRY)}.")]
+FailOn = Annotated[str, typer.Option(
+    help="Comma-separated backend verdicts that fail the run "
+         f"(from {', '.join(VERDICTS)}; 'none' for none).")]
+Junit = Annotated[Path | None, typer.Option(
+    help="Also write a JUnit XML file: one test case per comparison.")]
+Quiet = Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")]
+
+
 def fail_input(message: str) -> typer.Exit:
     """One clear line on stderr, exit status 2."""
     typer.echo(f"mechcheck: error: {message}", err=True)
@@ -85,45 +100,64 @@ def progress_printer() -> Progress:
              "report.")
 def run_command(
     files: CaseFiles = None,
-    backend: Annotated[list[str] | None, typer.Option(
-        "--backend", "-b", help="Backend to check against analytic (repeatable). "
-        f"Default: every available one of {', '.join(registry.REGISTRY)}.")] = None,
+    backend: Backends = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
         Path("mechcheck-out"),
-    fail_on: Annotated[str, typer.Option(
-        help="Comma-separated backend verdicts that fail the run "
-             f"(from {', '.join(VERDICTS)}; 'none' for none).")] = ",".join(DEFAULT_FAIL_ON),
-    junit: Annotated[Path | None, typer.Option(
-        help="Also write a JUnit XML file: one test case per comparison.")] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
+    fail_on: FailOn = DEFAULT_FAIL_ON_TEXT,
+    junit: Junit = None,
+    quiet: Quiet = False,
 ) -> None:
-    from mechcheck.junit import junit_xml
-    from mechcheck.output import OutputError, locked_folder, write_all
     from mechcheck.report import drawing_file, drawings, render
     from mechcheck.run import run
-    from mechcheck.tables import diagnostics_frame, results_frame
+    from mechcheck.tables import results_frame
 
     verdicts = parse_fail_on(fail_on)
     _, specs = read_case_files(files, trajectory=False)
     names = chosen_backends(backend)
     check_outputs(out, junit)
-    cases = [case for case, _ in specs]
     progress = None if quiet else progress_printer()
+
+    def work() -> Outputs:
+        result = run([case for case, _ in specs], names, progress=progress, fail_on=verdicts)
+        pictures = drawings(result)
+        markdown, page = render(result, {c.name: s for c, s in specs}, pictures=pictures)
+        tables: dict[str, str | bytes] = {
+            "results.csv": results_frame(result.solutions).to_csv(index=False)}
+        return (result, tables | report_files(result, markdown, page),
+                ("drawings", {drawing_file(name): png for name, png in pictures.items()}))
+
+    write_checked(out, junit, work)
+
+
+#: What a command computes and writes: its result, its files (name: content) and its
+#: pictures (folder, {name: PNG}).
+Outputs = tuple["RunResult", dict[str, str | bytes], tuple[str, dict[str, bytes]]]
+
+
+def report_files(result: RunResult, markdown: str, page: str) -> dict[str, str | bytes]:
+    """What `run` and `simulate` both write: the comparison, the verdicts and diagnostics,
+    the report."""
+    from mechcheck.tables import diagnostics_frame
+
+    return {"comparison.csv": result.comparison.to_csv(index=False),
+            "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
+            "report.md": markdown, "report.html": page}
+
+
+def write_checked(out: Path, junit: Path | None,
+                  work: Callable[[], Outputs]) -> NoReturn:
+    """Run ``work`` holding the lock on ``out`` and write what it returns: its files in
+    ``out``, its pictures in their folder (the Markdown report links to them, the HTML
+    holds them) and the JUnit file; then the one-line summary and the exit status."""
+    from mechcheck.junit import junit_xml
+    from mechcheck.output import OutputError, locked_folder, write_all
+
     try:
         with locked_folder(out, "--out"):
-            result = run(cases, names, progress=progress, fail_on=verdicts)
-            pictures = drawings(result)
-            markdown, page = render(result, {c.name: s for c, s in specs}, pictures=pictures)
-            write_all(out, {
-                "results.csv": results_frame(result.solutions).to_csv(index=False),
-                "comparison.csv": result.comparison.to_csv(index=False),
-                "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
-                "report.md": markdown,
-                "report.html": page,
-            })
-            if pictures:  # the Markdown report links to them; the HTML holds them
-                write_all(out / "drawings",
-                          {drawing_file(name): png for name, png in pictures.items()})
+            result, files, (folder, pictures) = work()
+            write_all(out, files)
+            if pictures:
+                write_all(out / folder, pictures)
             if junit is not None:
                 write_all(junit.parent, {junit.name: junit_xml(result)})
     except OutputError as error:
@@ -174,32 +208,23 @@ def check_outputs(out: Path, junit: Path | None) -> None:
 
 
 @app.command("simulate", help="Run each trajectory case (a linkage moving freely over "
-             "time, [case.simulate]) through every backend that simulates and compare each run "
+             "time, with a case.simulate table) through every backend that simulates and compare each run "
              "with the analytic reference over time; tables and a report.")
 def simulate_command(
     files: Annotated[list[Path] | None, typer.Argument(
-        help="Case files (TOML) whose cases have a [case.simulate] table. None: the built-in "
+        help="Case files (TOML) of trajectory cases (each with a case.simulate table). None: the built-in "
              "trajectory cases.")] = None,
-    backend: Annotated[list[str] | None, typer.Option(
-        "--backend", "-b", help="Backend to check against analytic (repeatable). "
-        "Default: every available one (those without a run over time report not_applicable)."
-        )] = None,
+    backend: Backends = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
         Path("mechcheck-simulate"),
-    fail_on: Annotated[str, typer.Option(
-        help="Comma-separated backend verdicts that fail the run "
-             f"(from {', '.join(VERDICTS)}; 'none' for none).")] = ",".join(DEFAULT_FAIL_ON),
-    junit: Annotated[Path | None, typer.Option(
-        help="Also write a JUnit XML file: one test case per comparison.")] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
+    fail_on: FailOn = DEFAULT_FAIL_ON_TEXT,
+    junit: Junit = None,
+    quiet: Quiet = False,
 ) -> None:
     from mechcheck.casefile import builtin_trajectory_files
     from mechcheck.figures import figure_file
-    from mechcheck.junit import junit_xml
-    from mechcheck.output import OutputError, locked_folder, write_all
     from mechcheck.simulate_report import figures, render_simulate
     from mechcheck.simulate_run import RUNS_FILE, TRAJECTORIES_FILE, simulate
-    from mechcheck.tables import diagnostics_frame
 
     verdicts = parse_fail_on(fail_on)
     builtin = builtin_trajectory_files()
@@ -210,30 +235,20 @@ def simulate_command(
     names = chosen_backends(backend)
     check_outputs(out, junit)
     progress = None if quiet else progress_printer()
-    try:
-        with locked_folder(out, "--out"):
-            result = simulate([case for case, _ in specs], names, progress=progress,
-                              fail_on=verdicts)
-            pictures = figures(result)
-            markdown, page = render_simulate(result, {c.name: s for c, s in specs},
-                                             pictures=pictures)
-            write_all(out, {
-                TRAJECTORIES_FILE: result.table().to_parquet(index=False),
-                RUNS_FILE: result.rungs.to_csv(index=False),
-                "comparison.csv": result.comparison.to_csv(index=False),
-                "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
-                "report.md": markdown,
-                "report.html": page,
-            })
-            if pictures:  # the Markdown report links to them; the HTML holds them
-                write_all(out / "figures",
-                          {figure_file(name): png for name, png in pictures.items()})
-            if junit is not None:
-                write_all(junit.parent, {junit.name: junit_xml(result)})
-    except OutputError as error:
-        raise fail_input(str(error)) from None
-    typer.echo(f"{result.summary} -> {out}/report.md")
-    raise typer.Exit(result.exit_status)
+
+    def work() -> Outputs:
+        result = simulate([case for case, _ in specs], names, progress=progress,
+                          fail_on=verdicts)
+        pictures = figures(result)
+        markdown, page = render_simulate(result, {c.name: s for c, s in specs},
+                                         pictures=pictures)
+        tables: dict[str, str | bytes] = {
+            TRAJECTORIES_FILE: result.table().to_parquet(index=False),
+            RUNS_FILE: result.rungs.to_csv(index=False)}
+        return (result, tables | report_files(result, markdown, page),
+                ("figures", {figure_file(name): png for name, png in pictures.items()}))
+
+    write_checked(out, junit, work)
 
 
 @app.command("sweep", help="Move each case's driver over a range (θ12, or a linkage's first "
