@@ -231,7 +231,9 @@ def render_simulate(result: SimulateResult, specs: Mapping[str, AnySpec],
     (default: :func:`figures`); the Markdown links to them in ``figures/``, the HTML holds
     them."""
     shown = figures(result) if pictures is None else pictures
-    model = view_model(result, specs, title, {})
+    # A seed's printed answers are values at one pose: a trajectory has none to set beside.
+    unseeded = {name: spec.model_copy(update={"seed": None}) for name, spec in specs.items()}
+    model = view_model(result, unseeded, title, {})
     model["cases"] = [trajectory_view(case, result, view, shown.get(case.name))
                       for case, view in zip(result.cases, model["cases"], strict=True)]
     return render_pair("simulate", model)
