@@ -103,39 +103,53 @@ def draw_energy(ax: Axes, reference: Trajectory) -> None:
     ax.legend(fontsize=7, loc="best")
 
 
-def ladder_lines(rungs: pd.DataFrame) -> dict[str, pd.DataFrame]:
-    """A simulator's runs split into the lines of the accuracy-against-cost plot: one per
-    integrator where its settings name one, in ladder order."""
-    lines: dict[str, pd.DataFrame] = {}
-    for backend, own in rungs.groupby("backend", sort=False):
-        integrators = own["settings"].str.extract(r"integrator=([^,]+)")[0].fillna("")
-        for integrator, group in own.groupby(integrators, sort=False):
-            lines[f"{backend} {integrator}".strip()] = group
+def ladder_lines(runs: tuple[Trajectory, ...]) -> dict[str, list[int]]:
+    """A simulator's runs split into the lines of the accuracy-against-cost plot, each line a
+    ladder of time steps: by the settings that take several values at one time step (its
+    integrators, its iteration counts), not by those that follow the step. Run indices in
+    ladder order, by label."""
+    steps: dict[object, list[Mapping[str, object]]] = {}
+    for run in runs:
+        steps.setdefault(run.settings.get("dt"), []).append(run.settings)
+    keys = [k for k in dict.fromkeys(k for run in runs for k in run.settings)
+            if k != "dt" and any(len({repr(s.get(k)) for s in same}) > 1
+                                 for same in steps.values())]
+    lines: dict[str, list[int]] = {}
+    for index, run in enumerate(runs):
+        label = ", ".join(f"{k}={run.settings.get(k)}" if k != "integrator"
+                          else str(run.settings.get(k)) for k in keys)
+        lines.setdefault(f"{run.backend} {label}".strip(), []).append(index)
     return lines
 
 
-def draw_cost(ax: Axes, rungs: pd.DataFrame, tolerance: float) -> None:
-    """Each run's error against its wall time, log-log: a line per simulator and integrator,
-    the default run ringed, the tolerance drawn."""
+def draw_cost(ax: Axes, rungs: pd.DataFrame, runs: Mapping[str, tuple[Trajectory, ...]],
+              tolerance: float) -> None:
+    """Each run's error against its wall time, log-log: a line per simulator and integrator
+    (or iteration count), the default runs ringed, the tolerance drawn."""
     shown = False
-    for label, group in ladder_lines(rungs).items():
-        ok = group[np.isfinite(group["error"]) & (group["wall_time"] > 0)]
-        if not len(ok):
-            continue
-        error = np.maximum(ok["error"].to_numpy(dtype=float), ERROR_FLOOR)
-        line = ax.loglog(ok["wall_time"], error, "o-", ms=4, lw=1.2, label=label)[0]
-        default = ok["default"].astype(bool).to_numpy()
-        ax.loglog(ok["wall_time"][default], error[default], "s", ms=11, mfc="none",
-                  color=line.get_color(), label=f"{label}: default")
-        shown = True
+    for backend, own in simulators(runs).items():
+        table = rungs[rungs["backend"] == backend].set_index("rung")
+        for label, indices in ladder_lines(own).items():
+            line = table.loc[[i for i in indices if i in table.index]]
+            line = line[np.isfinite(line["error"]) & (line["wall_time"] > 0)]
+            if not len(line):
+                continue
+            error = np.maximum(line["error"].to_numpy(dtype=float), ERROR_FLOOR)
+            drawn = ax.loglog(line["wall_time"], error, "o-", ms=3.5, lw=1.1, label=label)[0]
+            default = line["default"].astype(bool).to_numpy()
+            if default.any():
+                ax.loglog(line["wall_time"].to_numpy()[default], error[default], "s", ms=11,
+                          mfc="none", color=drawn.get_color(),
+                          label=None if shown else "default settings")
+                shown = True
     ax.axhline(tolerance, color="#b00020", lw=1.0, ls="--", label=f"tolerance {tolerance:.0e}")
-    if not shown:
+    if not ax.lines[:-1]:
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.text(0.5, 0.5, "no simulator's run to compare", ha="center", transform=ax.transAxes)
     ax.set_xlabel("wall time, s")
     ax.set_ylabel("error (worst over time; /scale, rad)")
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(fontsize=6.5, loc="best")
 
 
 def trajectory_figure(case: Case, runs: Mapping[str, tuple[Trajectory, ...]],
@@ -158,8 +172,7 @@ def trajectory_figure(case: Case, runs: Mapping[str, tuple[Trajectory, ...]],
     draw_trajectories(axes[0, 0], case, runs, [joint] if joint else [], ref)
     draw_trajectories(axes[0, 1], case, runs, point, ref)
     draw_energy(axes[1, 0], ref)
-    draw_cost(axes[1, 1], rungs[rungs["backend"] != REFERENCE],
-              rule(REFERENCE, "pose", TRAJECTORY).rtol)
+    draw_cost(axes[1, 1], rungs, runs, rule(REFERENCE, "pose", TRAJECTORY).rtol)
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=DPI)
     return buffer.getvalue()

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,9 +25,11 @@ import pandas as pd
 
 from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linkage import Linkage
 from mechcheck.analytic.linkage_backends import quantity_units
 from mechcheck.analytic.solution import Solution, kind_of_unit, table_values, unit_factor, wraps
 from mechcheck.analytic.trajectory import Trajectory
+from mechcheck.analytic.values import GROUND
 from mechcheck.run import RunResult, crash_message, non_finite_message
 from mechcheck.tables import COMPARISON_COLUMNS, ordered
 from mechcheck.tolerance import ENERGY, TRAJECTORY, of_tolerance, tolerance_for
@@ -118,13 +120,21 @@ class RunError:
         return math.nan if worst is None else self.errors[worst]
 
 
+def compared(linkage: Linkage, quantities: Iterable[str]) -> list[str]:
+    """The quantities a run is judged by, in table order: all but the positions of points on
+    the ground, which no backend moves."""
+    fixed = {f"{axis}_{point}" for point, link in linkage.carriers.items() if link == GROUND
+             for axis in "xy"}
+    return ordered(set(quantities) - fixed)
+
+
 def run_error(case: Case, reference: Trajectory, run: Trajectory) -> RunError:
-    """``run``'s error against ``reference`` (design: the worst over times and quantities)."""
+    """``run``'s error against ``reference``: per quantity, the worst over the output times."""
     ref, own = reference.quantities(case.linkage), run.quantities(case.linkage)
     units = quantity_units(case.linkage)
     errors: dict[str, float] = {}
     at: dict[str, int] = {}
-    for q in ordered(set(ref) & set(own)):
+    for q in compared(case.linkage, set(ref) & set(own)):
         diff = np.asarray(own[q], dtype=float) - np.asarray(ref[q], dtype=float)
         if wraps(q, units[q]):   # a link's direction: modulo a turn
             diff = np.remainder(diff + math.pi, math.tau) - math.pi

@@ -22,6 +22,7 @@ import mechcheck.analytic.trajectory as trajectory_module
 import mechcheck.casefile as casefile
 import mechcheck.sim_models as simulators
 from mechcheck import backends as registry
+from mechcheck.simulate_report import ladder_lines
 from mechcheck.simulate_run import RUNS_FILE, TRAJECTORIES_FILE
 
 from . import fake_trajectories as fake
@@ -64,6 +65,7 @@ def test_a_simulator_within_the_tolerance_at_its_finest_run_passes(fakes: Path) 
     assert out.startswith("1 case, ") and "(PASS)" in out
     table = pd.read_csv(fakes / "out" / "comparison.csv")
     mine = table[table["backend"] == "fakesim"].set_index("quantity")
+    assert set(mine.index) == {"x_A", "y_A", "phi_block", "q_slide"}  # W1, W2 on the ground
     assert mine.loc["x_A", "rel_err"] == pytest.approx(2e-4, rel=1e-9)
     assert mine.loc["q_slide", "rel_err"] == pytest.approx(2e-4, rel=1e-9)
     assert mine.loc["y_A", "rel_err"] == 0.0 and mine.loc["phi_block", "rel_err"] == 0.0
@@ -166,6 +168,24 @@ def test_a_crashing_reference_is_an_error_verdict(fakes: Path,
     reference = result.solutions[0]
     assert reference.status == "error" and "step size underflow" in reference.message
     assert result.exit_status == 1 and not len(result.comparison)
+
+
+def test_the_accuracy_against_cost_lines_follow_the_settings_that_vary_at_one_step() -> None:
+    """MuJoCo-like runs: two integrators at each of two steps, a time constant that follows
+    the step: one line per integrator; pymunk-like: two iteration counts at each step."""
+    t, xy = np.zeros(1), np.zeros((1, 3))
+
+    def run(**settings: object) -> trajectory_module.Trajectory:
+        return trajectory_module.Trajectory("sim", t, xy, settings=settings)
+
+    mujoco_like = tuple(run(dt=dt, integrator=i, timeconst=2 * dt)
+                        for dt in (1e-3, 5e-4) for i in ("Euler", "RK4"))
+    assert ladder_lines(mujoco_like) == {"sim Euler": [0, 2], "sim RK4": [1, 3]}
+    pymunk_like = tuple(run(dt=dt, iterations=n, integrator="Euler")
+                        for dt in (1e-3, 5e-4) for n in (10, 100))
+    assert ladder_lines(pymunk_like) == {"sim iterations=10": [0, 2],
+                                         "sim iterations=100": [1, 3]}
+    assert ladder_lines(tuple(run(dt=dt) for dt in (1e-3, 5e-4))) == {"sim": [0, 1]}
 
 
 # -- the tables ---------------------------------------------------------------------------
