@@ -62,6 +62,9 @@ CaseFiles = Annotated[list[Path] | None, typer.Argument(
     help="Case files (TOML). None: the built-in suite (seed examples and more).")]
 
 
+#: The long table of `mechcheck simulate` (its name here: `--help` imports no pandas).
+TRAJECTORIES = "trajectories.parquet"
+
 #: The options `run` and `simulate` share.
 DEFAULT_FAIL_ON_TEXT = ",".join(DEFAULT_FAIL_ON)
 Backends = Annotated[list[str] | None, typer.Option(
@@ -220,11 +223,15 @@ def simulate_command(
     fail_on: FailOn = DEFAULT_FAIL_ON_TEXT,
     junit: Junit = None,
     quiet: Quiet = False,
+    trajectories: Annotated[bool, typer.Option(
+        help=f"Write {TRAJECTORIES}: every run's quantities at every output time "
+             "(--no-trajectories: not; a long ladder of a large linkage makes millions of "
+             "rows).")] = True,
 ) -> None:
     from mechcheck.casefile import builtin_trajectory_files
     from mechcheck.figures import figure_file
     from mechcheck.simulate_report import figures, render_simulate
-    from mechcheck.simulate_run import RUNS_FILE, TRAJECTORIES_FILE, simulate
+    from mechcheck.simulate_run import RUNS_FILE, simulate
 
     verdicts = parse_fail_on(fail_on)
     builtin = builtin_trajectory_files()
@@ -242,9 +249,9 @@ def simulate_command(
         pictures = figures(result)
         markdown, page = render_simulate(result, {c.name: s for c, s in specs},
                                          pictures=pictures)
-        tables: dict[str, str | bytes] = {
-            TRAJECTORIES_FILE: result.table().to_parquet(index=False),
-            RUNS_FILE: result.rungs.to_csv(index=False)}
+        tables: dict[str, str | bytes] = {RUNS_FILE: result.rungs.to_csv(index=False)}
+        if trajectories:
+            tables[TRAJECTORIES] = result.table().to_parquet(index=False)
         return (result, tables | report_files(result, markdown, page),
                 ("figures", {figure_file(name): png for name, png in pictures.items()}))
 
@@ -407,7 +414,7 @@ def reports_command(
     for args in (["run", "-q", "--out", str(out / "suite")],
                  ["run", "-q", *catalogue, "--out", str(out / "catalogue")],
                  ["sweep", "-q", "--fresh", "--out", str(out / "sweep")],
-                 ["simulate", "-q", "--out", str(out / "trajectories")]):
+                 ["simulate", "-q", "--no-trajectories", "--out", str(out / "trajectories")]):
         # Without standalone mode click returns the exit status instead of exiting.
         code = app(args, standalone_mode=False)
         codes.append(int(code or 0))

@@ -45,9 +45,8 @@ TRAJECTORY_COMPARISON_COLUMNS = [*COMPARISON_COLUMNS, "time"]
 RUNG_COLUMNS = ["case", "backend", "rung", "settings", "default", "status", "error", "quantity",
                 "time", "wall_time", "steps", "message"]
 
-#: The files of a simulate run that ``run`` does not write: every run's quantities at every
-#: output time (long, Parquet: it may hold millions of rows), and one row per run.
-TRAJECTORIES_FILE = "trajectories.parquet"
+#: The file of a simulate run that ``run`` does not write: one row per run (its long table of
+#: every run's quantities at every output time is ``cli.TRAJECTORIES``).
 RUNS_FILE = "runs.csv"
 
 #: The quantity of the reference's energy check in the comparison table.
@@ -81,7 +80,7 @@ class SimulateResult(RunResult):
         if not parts:
             return pd.DataFrame({"case": [], "backend": [], "rung": [], "time": [],
                                  "quantity": [], "value": []})
-        table = pd.concat(parts, ignore_index=True)
+        table = pd.concat(parts, ignore_index=True)   # categories differing by case: objects
         for column in ("case", "backend", "quantity"):
             table[column] = table[column].astype("category")
         return table
@@ -95,9 +94,12 @@ def trajectory_rows(case: Case, backend: str, rung: int, run: Trajectory) -> pd.
     times = np.asarray(run.times, dtype=float)
     values = np.concatenate([table_values(q, quantities[q], units[q]) for q in names]) \
         if names else np.zeros(0)
+    # The names as codes into their categories: a long table holds millions of rows.
+    codes = np.repeat(np.arange(len(names), dtype=np.int32), len(times))
     return pd.DataFrame({"case": case.name, "backend": backend, "rung": rung,
                          "time": np.tile(times, len(names)),
-                         "quantity": np.repeat(names, len(times)), "value": values})
+                         "quantity": pd.Categorical.from_codes(codes, categories=pd.Index(names)),
+                         "value": values})
 
 
 @dataclass(frozen=True)

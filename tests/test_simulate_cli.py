@@ -22,8 +22,9 @@ import mechcheck.analytic.trajectory as trajectory_module
 import mechcheck.casefile as casefile
 import mechcheck.sim_models as simulators
 from mechcheck import backends as registry
+from mechcheck.cli import TRAJECTORIES as TRAJECTORIES_FILE
 from mechcheck.simulate_report import ladder_lines
-from mechcheck.simulate_run import RUNS_FILE, TRAJECTORIES_FILE
+from mechcheck.simulate_run import RUNS_FILE
 
 from . import fake_trajectories as fake
 from .builtin import rocker_load_case
@@ -217,6 +218,13 @@ def test_the_trajectories_table_reads_every_run_in_table_units(fakes: Path) -> N
     assert x["time"].to_numpy() == pytest.approx(t, abs=1e-15)
     assert x["value"].to_numpy() == pytest.approx(0.040 * np.cos(math.sqrt(250.0) * t),
                                                   abs=1e-15)
+
+
+def test_no_trajectories_leaves_the_long_table_out(fakes: Path) -> None:
+    code, _, err = simulate("block.toml", "-b", "fakesim", "-o", "out", "--no-trajectories")
+    assert code == 0, err
+    assert {p.name for p in (fakes / "out").iterdir()} >= WRITTEN - {TRAJECTORIES_FILE}
+    assert not (fakes / "out" / TRAJECTORIES_FILE).exists()
 
 
 def test_junit_holds_each_comparison_and_each_verdict(fakes: Path) -> None:
