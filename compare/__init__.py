@@ -7,6 +7,8 @@ The public Python API is these few names (README, "Python API"):
 - :func:`solve_poses`: one Case at many values of its driver in one vectorised call, a table;
 - :func:`check`: Cases through backends, compared with ``analytic`` under the
   tolerance policy: a :class:`RunResult` with ``exit_status`` and ``comparison``;
+- :func:`simulate`: trajectory Cases (``[case.simulate]``) through the backends that
+  simulate, each run compared with ``analytic`` over time: a :class:`SimulateResult`;
 - :func:`available_backends`: the backends this installation can run;
 - :func:`mechcheck.testing.assert_solution_close`, for a project's own tests.
 
@@ -37,9 +39,10 @@ if TYPE_CHECKING:
 
     from mechcheck.analytic.case import Case
     from mechcheck.run import RunResult
+    from mechcheck.simulate_run import SimulateResult
 
-__all__ = ["Case", "CaseError", "RunResult", "Solution", "available_backends", "check", "load_cases",
-           "solve", "solve_poses"]
+__all__ = ["Case", "CaseError", "RunResult", "SimulateResult", "Solution", "available_backends",
+           "check", "load_cases", "simulate", "solve", "solve_poses"]
 
 
 def load_cases(*paths: str | Path) -> list[Case]:
@@ -115,10 +118,38 @@ def check(cases: Sequence[Case], backends: Sequence[str] | None = None, *,
     table as a DataFrame, in table units (degrees), one row per quantity.
     """
     from mechcheck import backends as registry
+    from mechcheck.casefile import check_case_kind
     from mechcheck.run import run
 
+    for case in cases:
+        check_case_kind(case, trajectory=False)
     names = registry.available() if backends is None else list(backends)
     return run(cases, names, fail_on=fail_on)
+
+
+def simulate(cases: Sequence[Case] | None = None, backends: Sequence[str] | None = None, *,
+             fail_on: Sequence[str] = DEFAULT_FAIL_ON) -> SimulateResult:
+    """Trajectory Cases through every backend, as ``mechcheck simulate`` runs them; no cases:
+    the built-in trajectory cases.
+
+    Each backend that simulates runs each case (a simulator once per setting of its ladder),
+    and each run is compared with ``analytic`` over time; the others report
+    ``not_applicable``. The result is :func:`check`'s with the runs: ``exit_status``,
+    ``comparison`` (one row per simulator and quantity: its finest run's worst error over
+    time, and the reference's energy check), ``rungs`` (one row per run: settings, error,
+    wall time, steps), ``trajectories`` (each run, by case and backend) and ``table()``
+    (every run's quantities at every output time). A case without ``[case.simulate]``
+    raises :class:`CaseError`.
+    """
+    from mechcheck import backends as registry
+    from mechcheck.casefile import builtin_trajectory_files, check_case_kind, load_cases as load
+    from mechcheck.simulate_run import simulate as run_all
+
+    chosen = list(cases) if cases is not None else load(*builtin_trajectory_files())
+    for case in chosen:
+        check_case_kind(case, trajectory=True)
+    names = registry.available() if backends is None else list(backends)
+    return run_all(chosen, names, fail_on=fail_on)
 
 
 def available_backends() -> list[str]:
@@ -129,7 +160,7 @@ def available_backends() -> list[str]:
 
 
 def __getattr__(name: str) -> object:
-    # Case (numpy) and RunResult (pandas) are imported only when asked for, so that
+    # Case (numpy), RunResult and SimulateResult (pandas) are imported only when asked for, so that
     # `import mechcheck`, `mechcheck --help` and the pytest plugin stay light.
     if name == "Case":
         from mechcheck.analytic.case import Case
@@ -139,4 +170,8 @@ def __getattr__(name: str) -> object:
         from mechcheck.run import RunResult
 
         return RunResult
+    if name == "SimulateResult":
+        from mechcheck.simulate_run import SimulateResult
+
+        return SimulateResult
     raise AttributeError(f"module 'mechcheck' has no attribute {name!r}")

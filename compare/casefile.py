@@ -299,10 +299,12 @@ def load_file(path: str | Path) -> list[tuple[Case, AnySpec]]:
     return parse_cases(parse_toml(read_case_text(path), source), source)
 
 
-def load_specs(paths: Iterable[str | Path], *,
-               sweep: bool = False) -> list[tuple[Case, AnySpec]]:
+def load_specs(paths: Iterable[str | Path], *, sweep: bool = False,
+               trajectory: bool | None = None) -> list[tuple[Case, AnySpec]]:
     """Every case of every file, with case names unique across the run; ``sweep``: every case
-    can be swept (a linkage has a driver to move)."""
+    can be swept (a linkage has a driver to move); ``trajectory``: True, every case moves
+    over time (``mechcheck simulate``), False, none does (``run``, ``sweep``), None: either
+    (``validate``)."""
     seen: dict[str, str] = {}
     out = []
     for path in paths:
@@ -310,11 +312,25 @@ def load_specs(paths: Iterable[str | Path], *,
             if case.name in seen:
                 raise CaseError(f"duplicate case name (also in {seen[case.name]})",
                                 key="name", case=case.name, file=str(path))
+            if trajectory is not None:
+                check_case_kind(case, trajectory)
             if sweep and not case.is_preset and not case.linkage.drivers:
                 raise CaseError(NOTHING_TO_SWEEP, key="drivers", case=case.name, file=str(path))
             seen[case.name] = str(path)
             out.append((case, spec))
     return out
+
+
+def check_case_kind(case: Case, trajectory: bool) -> None:
+    """Refuse a case the command cannot run: a trajectory (it has ``[case.simulate]``) where
+    one pose is solved (``trajectory`` False), a case at one pose where a trajectory is run."""
+    if case.is_trajectory and not trajectory:
+        raise CaseError("the case moves over time ([case.simulate]): run it with mechcheck "
+                        "simulate", key="simulate", case=case.name, file=case.source)
+    if trajectory and not case.is_trajectory:
+        raise CaseError("no [case.simulate] table: the case stands at one pose; run it with "
+                        "mechcheck run, or give it a [case.simulate] table to run it with "
+                        "mechcheck simulate", key="simulate", case=case.name, file=case.source)
 
 
 def load_cases(*paths: str | Path) -> list[Case]:
@@ -335,6 +351,12 @@ def catalogue_case_files() -> list[Path]:
     """Seed 001's catalogue of mechanisms as case files (``cases/catalogue/``), shipped with
     the package beside the built-in suite."""
     return sorted((Path(__file__).parent / "cases" / "catalogue").glob("*.toml"))
+
+
+def builtin_trajectory_files() -> list[Path]:
+    """The trajectory cases shipped with the package (``cases/trajectories/``), run by
+    ``mechcheck simulate`` without files; none when the folder is empty or missing."""
+    return sorted((Path(__file__).parent / "cases" / "trajectories").glob("*.toml"))
 
 
 def builtin_sweep_files() -> list[Path]:

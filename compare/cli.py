@@ -1,4 +1,4 @@
-"""The ``mechcheck`` command line: ``run``, ``validate``, ``sweep``, ``draw``, ``study``,
+"""The ``mechcheck`` command line: ``run``, ``simulate``, ``validate``, ``sweep``, ``draw``, ``study``,
 ``theory``, ``reports``, ``new`` and ``backends`` (see docs/cli.md).
 
 ``mechcheck run FILE... [--backend NAME]... [--out DIR]`` writes
@@ -14,8 +14,9 @@ import gc
 import os
 import signal
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 
@@ -27,6 +28,7 @@ from mechcheck.verdicts import DEFAULT_FAIL_ON, VERDICTS, Progress
 if TYPE_CHECKING:
     from mechcheck.analytic.case import Case
     from mechcheck.casefile import AnySpec
+    from mechcheck.run import RunResult
 
 # pandas, matplotlib, pydantic and the simulators are imported inside the commands
 # that need them, so that `mechcheck --help` and `mechcheck backends` start fast
@@ -47,6 +49,7 @@ EXAMPLES = {
     "slider_crank": "a slider-crank (offset, slide friction) at its input angle θ12",
     "linkage": "any planar linkage drawn as points, links and joints, moved by its drivers",
     "linkage_sketch": "a linkage sketched roughly, made exact by its lengths and angles",
+    "trajectory": "a linkage released to move over time, pushed by a force (mechcheck simulate)",
 }
 
 
@@ -57,6 +60,22 @@ def example_path(mechanism: str) -> Path:
 #: The case files of `run` and `validate`.
 CaseFiles = Annotated[list[Path] | None, typer.Argument(
     help="Case files (TOML). None: the built-in suite (seed examples and more).")]
+
+
+#: The long table of `mechcheck simulate` (its name here: `--help` imports no pandas).
+TRAJECTORIES = "trajectories.parquet"
+
+#: The options `run` and `simulate` share.
+DEFAULT_FAIL_ON_TEXT = ",".join(DEFAULT_FAIL_ON)
+Backends = Annotated[list[str] | None, typer.Option(
+    "--backend", "-b", help="Backend to check against analytic (repeatable). "
+    f"Default: every available one of {', '.join(registry.REGISTRY)}.")]
+FailOn = Annotated[str, typer.Option(
+    help="Comma-separated backend verdicts that fail the run "
+         f"(from {', '.join(VERDICTS)}; 'none' for none).")]
+Junit = Annotated[Path | None, typer.Option(
+    help="Also write a JUnit XML file: one test case per comparison.")]
+Quiet = Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")]
 
 
 def fail_input(message: str) -> typer.Exit:
@@ -84,50 +103,64 @@ def progress_printer() -> Progress:
              "report.")
 def run_command(
     files: CaseFiles = None,
-    backend: Annotated[list[str] | None, typer.Option(
-        "--backend", "-b", help="Backend to check against analytic (repeatable). "
-        f"Default: every available one of {', '.join(registry.REGISTRY)}.")] = None,
+    backend: Backends = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
         Path("mechcheck-out"),
-    fail_on: Annotated[str, typer.Option(
-        help="Comma-separated backend verdicts that fail the run "
-             f"(from {', '.join(VERDICTS)}; 'none' for none).")] = ",".join(DEFAULT_FAIL_ON),
-    junit: Annotated[Path | None, typer.Option(
-        help="Also write a JUnit XML file: one test case per comparison.")] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress.")] = False,
+    fail_on: FailOn = DEFAULT_FAIL_ON_TEXT,
+    junit: Junit = None,
+    quiet: Quiet = False,
 ) -> None:
-    from mechcheck.junit import junit_xml
-    from mechcheck.output import OutputError, locked_folder, write_all
     from mechcheck.report import drawing_file, drawings, render
     from mechcheck.run import run
-    from mechcheck.tables import diagnostics_frame, results_frame
+    from mechcheck.tables import results_frame
 
     verdicts = parse_fail_on(fail_on)
-    _, specs = read_case_files(files)
-    names = list(backend) if backend else registry.available()
-    try:
-        for name in names:
-            registry.load(name)
-    except registry.BackendUnavailable as error:
-        raise fail_input(str(error)) from None
+    _, specs = read_case_files(files, trajectory=False)
+    names = chosen_backends(backend)
     check_outputs(out, junit)
-    cases = [case for case, _ in specs]
     progress = None if quiet else progress_printer()
+
+    def work() -> Outputs:
+        result = run([case for case, _ in specs], names, progress=progress, fail_on=verdicts)
+        pictures = drawings(result)
+        markdown, page = render(result, {c.name: s for c, s in specs}, pictures=pictures)
+        tables: dict[str, str | bytes] = {
+            "results.csv": results_frame(result.solutions).to_csv(index=False)}
+        return (result, tables | report_files(result, markdown, page),
+                ("drawings", {drawing_file(name): png for name, png in pictures.items()}))
+
+    write_checked(out, junit, work)
+
+
+#: What a command computes and writes: its result, its files (name: content) and its
+#: pictures (folder, {name: PNG}).
+Outputs = tuple["RunResult", dict[str, str | bytes], tuple[str, dict[str, bytes]]]
+
+
+def report_files(result: RunResult, markdown: str, page: str) -> dict[str, str | bytes]:
+    """What `run` and `simulate` both write: the comparison, the verdicts and diagnostics,
+    the report."""
+    from mechcheck.tables import diagnostics_frame
+
+    return {"comparison.csv": result.comparison.to_csv(index=False),
+            "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
+            "report.md": markdown, "report.html": page}
+
+
+def write_checked(out: Path, junit: Path | None,
+                  work: Callable[[], Outputs]) -> NoReturn:
+    """Run ``work`` holding the lock on ``out`` and write what it returns: its files in
+    ``out``, its pictures in their folder (the Markdown report links to them, the HTML
+    holds them) and the JUnit file; then the one-line summary and the exit status."""
+    from mechcheck.junit import junit_xml
+    from mechcheck.output import OutputError, locked_folder, write_all
+
     try:
         with locked_folder(out, "--out"):
-            result = run(cases, names, progress=progress, fail_on=verdicts)
-            pictures = drawings(result)
-            markdown, page = render(result, {c.name: s for c, s in specs}, pictures=pictures)
-            write_all(out, {
-                "results.csv": results_frame(result.solutions).to_csv(index=False),
-                "comparison.csv": result.comparison.to_csv(index=False),
-                "diagnostics.csv": diagnostics_frame(result.solutions).to_csv(index=False),
-                "report.md": markdown,
-                "report.html": page,
-            })
-            if pictures:  # the Markdown report links to them; the HTML holds them
-                write_all(out / "drawings",
-                          {drawing_file(name): png for name, png in pictures.items()})
+            result, files, (folder, pictures) = work()
+            write_all(out, files)
+            if pictures:
+                write_all(out / folder, pictures)
             if junit is not None:
                 write_all(junit.parent, {junit.name: junit_xml(result)})
     except OutputError as error:
@@ -136,16 +169,32 @@ def run_command(
     raise typer.Exit(result.exit_status)
 
 
-def read_case_files(files: list[Path] | None) -> tuple[list[Path], list[tuple[Case, AnySpec]]]:
-    """The files read and their validated cases, as `run` and `validate` read them (no file:
-    the built-in suite); an unusable one is its one line and exit 2."""
+def read_case_files(files: list[Path] | None, *, trajectory: bool | None = None,
+                    builtin: list[Path] | None = None) -> tuple[list[Path],
+                                                            list[tuple[Case, AnySpec]]]:
+    """The files read and their validated cases, as `run`, `simulate` and `validate` read
+    them (no file: ``builtin``, by default the built-in suite); ``trajectory``: True, every
+    case must move over time, False, none may, None: either. An unusable one is its one
+    line and exit 2."""
     from mechcheck.casefile import builtin_case_files, load_specs
 
-    paths = list(files) if files else builtin_case_files()
+    paths = list(files) if files else (builtin_case_files() if builtin is None else builtin)
     try:
-        return paths, load_specs(paths)
+        return paths, load_specs(paths, trajectory=trajectory)
     except CaseError as error:
         raise fail_input(str(error)) from None
+
+
+def chosen_backends(backend: list[str] | None) -> list[str]:
+    """The backends of ``--backend`` (default: every available one), each importable, or the
+    one line naming the one that is not and exit 2."""
+    names = list(backend) if backend else registry.available()
+    try:
+        for name in names:
+            registry.load(name)
+    except registry.BackendUnavailable as error:
+        raise fail_input(str(error)) from None
+    return names
 
 
 def check_outputs(out: Path, junit: Path | None) -> None:
@@ -159,6 +208,54 @@ def check_outputs(out: Path, junit: Path | None) -> None:
             check_writable_file(junit, "--junit")
     except OutputError as error:
         raise fail_input(str(error)) from None
+
+
+@app.command("simulate", help="Run each trajectory case (a linkage moving freely over "
+             "time, with a case.simulate table) through every backend that simulates and compare each run "
+             "with the analytic reference over time; tables and a report.")
+def simulate_command(
+    files: Annotated[list[Path] | None, typer.Argument(
+        help="Case files (TOML) of trajectory cases (each with a case.simulate table). None: the built-in "
+             "trajectory cases.")] = None,
+    backend: Backends = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
+        Path("mechcheck-simulate"),
+    fail_on: FailOn = DEFAULT_FAIL_ON_TEXT,
+    junit: Junit = None,
+    quiet: Quiet = False,
+    trajectories: Annotated[bool, typer.Option(
+        help=f"Write {TRAJECTORIES}: every run's quantities at every output time "
+             "(--no-trajectories: not; a long ladder of a large linkage makes millions of "
+             "rows).")] = True,
+) -> None:
+    from mechcheck.casefile import builtin_trajectory_files
+    from mechcheck.figures import figure_file
+    from mechcheck.simulate_report import figures, render_simulate
+    from mechcheck.simulate_run import RUNS_FILE, simulate
+
+    verdicts = parse_fail_on(fail_on)
+    builtin = builtin_trajectory_files()
+    if not files and not builtin:
+        raise fail_input("mechcheck simulate: no case file given, and this installation has no "
+                         "built-in trajectory cases (mechcheck/cases/trajectories/ is empty)")
+    _, specs = read_case_files(files, trajectory=True, builtin=builtin)
+    names = chosen_backends(backend)
+    check_outputs(out, junit)
+    progress = None if quiet else progress_printer()
+
+    def work() -> Outputs:
+        result = simulate([case for case, _ in specs], names, progress=progress,
+                          fail_on=verdicts)
+        pictures = figures(result)
+        markdown, page = render_simulate(result, {c.name: s for c, s in specs},
+                                         pictures=pictures)
+        tables: dict[str, str | bytes] = {RUNS_FILE: result.rungs.to_csv(index=False)}
+        if trajectories:
+            tables[TRAJECTORIES] = result.table().to_parquet(index=False)
+        return (result, tables | report_files(result, markdown, page),
+                ("figures", {figure_file(name): png for name, png in pictures.items()}))
+
+    write_checked(out, junit, work)
 
 
 @app.command("sweep", help="Move each case's driver over a range (θ12, or a linkage's first "
@@ -206,7 +303,7 @@ def sweep_command(
     verdicts = parse_fail_on(fail_on)
     paths = list(files) if files else builtin_sweep_files()
     try:
-        specs = load_specs(paths, sweep=True)
+        specs = load_specs(paths, sweep=True, trajectory=False)
         grid = parse_range(theta12)
         driver_grid = None if driver is None else parse_range(driver, "--driver")
         names = list(backend) if backend else registry.available()
@@ -303,7 +400,8 @@ def study_command(
 
 @app.command("reports", help="Regenerate the committed reports: the built-in suite, seed "
              "001's catalogue of linkages, the whole-cycle sweeps of the seed four-bar and "
-             "slider-crank through every backend, and the assumption studies.")
+             "slider-crank through every backend, the built-in trajectory cases, and the "
+             "assumption studies.")
 def reports_command(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path("reports"),
 ) -> None:
@@ -315,7 +413,8 @@ def reports_command(
     catalogue = [str(path) for path in catalogue_case_files()]
     for args in (["run", "-q", "--out", str(out / "suite")],
                  ["run", "-q", *catalogue, "--out", str(out / "catalogue")],
-                 ["sweep", "-q", "--fresh", "--out", str(out / "sweep")]):
+                 ["sweep", "-q", "--fresh", "--out", str(out / "sweep")],
+                 ["simulate", "-q", "--no-trajectories", "--out", str(out / "trajectories")]):
         # Without standalone mode click returns the exit status instead of exiting.
         code = app(args, standalone_mode=False)
         codes.append(int(code or 0))
@@ -346,7 +445,7 @@ def new_command(
 def validate_command(
     files: CaseFiles = None,
 ) -> None:
-    paths, specs = read_case_files(files)   # exactly as `run` reads them
+    paths, specs = read_case_files(files)   # as `run` and `simulate` read them
     n, m = len(specs), len(paths)
     typer.echo(f"{n} case{'s' * (n != 1)} in {m} file{'s' * (m != 1)}: valid")
 

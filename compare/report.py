@@ -255,8 +255,12 @@ def linkage_inputs(spec: LinkageCaseSpec) -> list[str]:
     for d in spec.drivers:
         move = (f"rotation {fmt(d.rotation)}°" if d.rotation is not None
                 else f"displacement {fmt(d.displacement or 0.0)}")
-        lines.append(f"driver {d.joint}: {move}, velocity {fmt(d.velocity)}, acceleration "
-                     f"{fmt(d.acceleration)}" + (f", sense {d.sense}" if d.sense else ""))
+        effort = next(((k, v) for k, v in (("torque", d.torque), ("force", d.force))
+                       if v is not None), None)
+        lines.append(f"driver {d.joint}: {move}, velocity {fmt(d.velocity)}, "
+                     + (f"{effort[0]} {effort[1]}" if effort else
+                        f"acceleration {fmt(d.acceleration)}")
+                     + (f", sense {d.sense}" if d.sense else ""))
     for ld in spec.loads:
         force = ", ".join(f"{k} = {fmt(v)}" for k, v in (ld.force or {}).items())
         lines.append(f"load on {ld.link} at {ld.at if isinstance(ld.at, str) else _pair(ld.at)}: "
@@ -271,6 +275,11 @@ def linkage_inputs(spec: LinkageCaseSpec) -> list[str]:
         lines.append(f"gravity {_pair(spec.gravity)} m/s²")
     if spec.friction is not None:
         lines.append(f"friction: {spec.friction.model_dump()}")
+    if spec.simulate is not None:
+        outputs = spec.simulate.outputs
+        count = outputs if isinstance(outputs, int) else len(outputs)
+        lines.append(f"simulate: end {fmt(spec.simulate.end)} s, {count} output times"
+                     + "".join(f", rate {j} = {fmt(v)}" for j, v in spec.simulate.rates.items()))
     return lines
 
 
@@ -403,8 +412,13 @@ def render(result: RunResult, specs: Mapping[str, AnySpec],
     """(Markdown, HTML) of a run. ``pictures``: each case's drawing by case name (default:
     :func:`drawings`); the Markdown links to them in ``drawings/``, the HTML holds them."""
     model = view_model(result, specs, title, drawings(result) if pictures is None else pictures)
-    return (_ENV.get_template("report.md.j2").render(**model),
-            _ENV.get_template("report.html.j2").render(**model, escape=html.escape))
+    return render_pair("report", model)
+
+
+def render_pair(template: str, model: Mapping[str, Any]) -> tuple[str, str]:
+    """(Markdown, HTML) of a view model through ``<template>.md.j2`` and ``.html.j2``."""
+    return (_ENV.get_template(f"{template}.md.j2").render(**model),
+            _ENV.get_template(f"{template}.html.j2").render(**model, escape=html.escape))
 
 
 def _pose_list(values: pd.Series, limit: int = 20, unit: str = "deg") -> str:

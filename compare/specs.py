@@ -43,10 +43,32 @@ class ToleranceSpec(Strict):
     atol: Annotated[float, Field(ge=0.0)] = 0.0
 
 
+#: The names pydantic gives the branches of a union in an error's location (``torque`` is a
+#: number or a table: ``('torque', 'list[list[float]]', 1, 1)``): not keys of the file.
+_BRANCHES = ("float", "int", "str", "bool")
+
+
+def _is_branch(part: int | str) -> bool:
+    return isinstance(part, str) and (part in _BRANCHES or "[" in part)
+
+
+def most_specific(errors: Sequence[ErrorDetails]) -> ErrorDetails:
+    """The error to report: the first, unless it is one branch of a union another branch of
+    which went deeper into the value (a table of numbers with a NaN in it is told about the
+    NaN, not that it is not a number)."""
+    first = errors[0]
+    head = [p for p in first["loc"] if not _is_branch(p)]
+    same = [e for e in errors if [p for p in e["loc"] if not _is_branch(p)][:len(head)] == head]
+    return max(same, key=lambda e: len(e["loc"]))
+
+
 def key_of(loc: Sequence[int | str]) -> str:
-    """pydantic's location tuple as a TOML-ish key: ``loads[1].force.x``."""
+    """pydantic's location tuple as a TOML-ish key: ``loads[1].force.x`` (a union's branch
+    names left out)."""
     out = ""
     for part in loc:
+        if _is_branch(part):
+            continue
         out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
     return out
 
@@ -83,7 +105,7 @@ def validated(model: type[Strict], data: Any, prefix: str = "") -> Any:
     try:
         return model.model_validate(data)
     except ValidationError as error:
-        first = error.errors()[0]
+        first = most_specific(error.errors())
         key = key_of(first["loc"])
         key = f"{prefix}.{key}" if prefix and key else (key or prefix)
         raise CaseError(in_user_terms(first), key=key) from None

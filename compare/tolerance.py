@@ -2,9 +2,10 @@
 
 A tolerance is looked up by (backend family, quantity kind, case kind): each backend
 declares the family it is judged by (:mod:`mechcheck.analytic.contract`). Quantity
-kinds are ``force``, ``torque`` and ``pose`` (:func:`mechcheck.analytic.solution.quantity_kind`);
-case kinds are ``static``, ``dynamic``, ``friction`` and ``near_singular``
-(:func:`case_kind`). Each entry carries the reason for its size.
+kinds are ``force``, ``torque`` and ``pose`` (:func:`mechcheck.analytic.solution.quantity_kind`),
+and ``energy`` for the analytic reference's own check of a trajectory;
+case kinds are ``static``, ``dynamic``, ``friction``, ``near_singular`` (:func:`case_kind`)
+and ``trajectory`` (``mechcheck simulate``). Each entry carries the reason for its size.
 
 The relative error of a value is measured against the *scale* of its kind in
 that case (:func:`mechcheck.tables.kind_scales`): a reaction component that
@@ -60,13 +61,30 @@ class Tolerance:
     overridden: bool = False
 
 
+REFERENCE_FAMILY: Family = "reference"
 ANALYTIC_FAMILY: Family = "analytic"
 EXACT_SOLVES: Family = "exact_solve"
 SETTLED: Family = "settled"
 
+#: The case kind of a trajectory (``mechcheck simulate``): a linkage moving freely over time.
+TRAJECTORY = "trajectory"
+
+#: The quantity kind of the analytic reference's own check on a trajectory: the residual of
+#: its energy balance over the energy it met (:class:`~mechcheck.analytic.trajectory.EnergyBalance`).
+ENERGY = "energy"
+
 _RULES: list[tuple[Family | Literal["*"], str, str, Tolerance]] = [
     # (backend family, quantity kind, case kind, tolerance); "*" matches anything; first
     # match wins.
+    (REFERENCE_FAMILY, ENERGY, TRAJECTORY, Tolerance(
+        1e-8, 0.0, "the reference's energy balance is an identity of its equations of motion: "
+        "only the adaptive integrator's tolerance, accumulated over its steps, breaks it; "
+        "the targets: 1e-9 on Andrews' squeezer, a drift below 1e-8 of the energy "
+        "over 10 s of the N four-bar")),
+    ("*", "pose", TRAJECTORY, Tolerance(
+        1e-3, 0.0, "a simulator's run over time against the analytic reference: positions "
+        "over the case's scale and angles in rad, the worst over the output times; the "
+        "accuracy asked of a simulator's trajectory")),
     (ANALYTIC_FAMILY, "*", "near_singular", Tolerance(
         1e-6, 0.0, "same equations by other algebra, but rounding is amplified by the "
         "condition number (up to 1e8 × 2.2e-16 ≈ 2e-8 before a pose is called singular)")),
