@@ -7,6 +7,7 @@ pymunk's own step; its convergence with the time step; the ladder and its refusa
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -365,7 +366,8 @@ def test_a_run_past_the_step_budget_is_refused_by_its_setting(tmp_path: Path) ->
     (lambda text: text.replace('[[case.masses]]\nlink = "bar"', '[[case.masses]]\nlink = "ground"'),
      "no mass"),
 ])
-def test_what_pymunk_cannot_integrate_is_refused(tmp_path: Path, change, named: str) -> None:  # type: ignore[no-untyped-def]
+def test_what_pymunk_cannot_integrate_is_refused(tmp_path: Path, change: Callable[[str], str],
+                                                named: str) -> None:
     """A link without mass, or one that turns without a moment, cannot be a pymunk body
     without changing the motion: ``not_applicable``, naming the link."""
     [run] = pm.simulate(case_of(change(PENDULUM), tmp_path))

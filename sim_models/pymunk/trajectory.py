@@ -3,24 +3,28 @@ released to move freely, run on a ladder of time steps and solver iterations.
 
 The model is the linkage builder's (:mod:`.linkage_model`, the joints of
 :mod:`.joint_kinds`, pymunk's own springs) with each link's **real** mass and moment
-(:func:`free_bodies`: no fictitious inertia, which a free motion could not remove). What
-moves it, applied inside each body's velocity integration at the pose of the step
-(:func:`.linkage_dynamics.install_loads`):
+(:func:`free_inertia`: no fictitious inertia, which a free motion could not remove). What
+moves it (:func:`install_free_loads`):
 
-- loads and weights, fixed in direction, at their points (:mod:`.loads`);
+- weights through the space's gravity (each body's centre of gravity is its link's centre
+  of mass);
+- loads, fixed in direction, at their points (:mod:`.loads`), applied inside the body's
+  velocity integration, at the pose of the step;
 - joint friction from pymunk's own reactions and joint rates, as the driven runs take it
   (:mod:`.linkage_friction`, :meth:`.linkage_dynamics.Twins.step_with_friction`);
 - a driver's **effort**: pymunk has no actuator of given torque (a ``SimpleMotor``
-  prescribes a rate), so the effort is a load pair on the joint's two bodies, as a
-  joint's friction is (:func:`add_efforts`): a couple +τ on ``links[1]`` and −τ on
-  ``links[0]`` at a revolute joint; a force +F along the axis at ``at`` on ``links[1]`` and
-  −F on ``links[0]`` at a sliding one; read from its table at the step's end time.
+  prescribes a rate), so the effort is a load pair on the joint's two bodies, applied as a
+  joint's friction is (:func:`.linkage_friction.apply_joint_friction`): a couple +τ on
+  ``links[1]`` and −τ on ``links[0]`` at a revolute joint; a force +F along the axis at
+  ``at`` on ``links[1]`` and −F on ``links[0]`` at a sliding one; read from its table at
+  the step's end time (the pose the step's velocity integration is at).
 
 A driver **without** an effort keeps its prescribed motion q(t) = value + velocity·t +
 acceleration·t²/2 through its lock, moved every step as a driven run moves it (the lock's
 target is where the next position update must land, its error correction complete); every
-other constraint keeps pymunk's default error correction (``error_bias`` (1 − 0.1)⁶⁰: 10 %
-of a joint's error left after 1/60 s).
+other constraint keeps pymunk's default error correction (``error_bias`` (1 − 0.1)⁶⁰: a
+joint's error shrinks by 10 % every 1/60 s, to 0.18 % of it after a second, whatever the
+step).
 
 The run starts at t = 0 on the linkage's pose with the drivers at their values and every
 free coordinate as drawn, its rates consistent with the constraints
@@ -31,8 +35,9 @@ keeping its turns. Steps land on every output time (:func:`step_times`).
 
 The ladder (:func:`ladder`): pymunk's defaults first (10 iterations a step, the step of a
 60 Hz frame, 1/60 s, or the outputs' spacing where that is finer), then the step halved
-down to the step budget, each at 10 and at :data:`MORE_ITERATIONS` iterations; the last
-rung is the finest. Its findings: docs/backends.md, "Trajectories in pymunk".
+:data:`HALVINGS` times, each at 10 and at :data:`MORE_ITERATIONS` iterations, the rungs
+within the step and solver budgets (:func:`affordable`); the last rung is the finest.
+Its findings: docs/backends.md, "Trajectories in pymunk".
 """
 
 from __future__ import annotations
@@ -381,13 +386,25 @@ def run(case: Case, start: Start, inertia: list[Inertia], rung: Rung) -> Traject
     rows, status, message = integrate(model, case.linkage.efforts, times,
                                       case.simulation.outputs)
     q = np.array(rows)
+    error_bias = model.settings.error_bias
     settings = {"dt": largest_step(case.simulation, rung.dt), "iterations": rung.iterations,
-                "error_bias": model.settings.error_bias, "integrator": "semi-implicit Euler"}
+                "error_bias": error_bias, "integrator": "semi-implicit Euler"}
     gaps = loop_violations(linkage, q[np.all(np.isfinite(q), axis=1)])
     return Trajectory(BACKEND, np.array(case.simulation.outputs), q, status=status,
                       message=message, settings=settings, default=rung.default,
                       wall_time=time.perf_counter() - began, steps=times.size - 1,
-                      diagnostics={"closure_gap_m": float(gaps.max(initial=0.0))})
+                      diagnostics={"closure_gap_m": float(gaps.max(initial=0.0)),
+                                   "error_correction_time_s": correction_time(error_bias)})
+
+
+def correction_time(error_bias: float) -> float:
+    """s, the time constant over which pymunk's error correction removes a joint's error
+    (it leaves ``error_bias`` of it after a second: e^(−t/τ)): the drift of a step is left
+    to pile up over about this long, whatever the step, so a joint's gap is about its drift
+    rate × τ (docs/backends.md, "Trajectories in pymunk")."""
+    if error_bias <= 0.0:
+        return 0.0
+    return -1.0 / math.log(error_bias) if error_bias < 1.0 else math.inf
 
 
 def integrate(model: LinkageModel, drivers: Sequence[Driver], times: Array,
