@@ -372,3 +372,17 @@ def test_what_pymunk_cannot_integrate_is_refused(tmp_path: Path, change: Callabl
     without changing the motion: ``not_applicable``, naming the link."""
     [run] = pm.simulate(case_of(change(PENDULUM), tmp_path))
     assert run.status == "not_applicable" and named in run.message and "bar" in run.message
+
+
+def test_a_run_that_diverges_says_so_and_reads_nothing_after(tmp_path: Path) -> None:
+    """A run whose bodies' positions become non-finite gives no numbers from there on
+    (``not_settled``, saying when), rather than NaN read as a position."""
+    case = case_of(PENDULUM, tmp_path)
+    start = pt.start_state(case)
+    assert not isinstance(start, str)
+    inertia = pt.free_inertia(case.linkage, start.q)
+    assert not isinstance(inertia, str)
+    lost = pt.Start(start.q, np.array([0.0, 0.0, math.nan]))
+    run = pt.run(case, lost, inertia, pt.Rung(0.01, 10))
+    assert run.status == "not_settled" and "diverged by t = 0.05 s" in run.message
+    assert np.all(run.coordinates[0] == 0.0) and np.isnan(run.coordinates[1:]).all()

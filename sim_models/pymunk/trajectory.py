@@ -449,6 +449,6 @@ def integrate(model: LinkageModel, drivers: Sequence[Driver], times: Array,
         shape = 3 * len(linkage.moving_links)
         rows = rows[:-1] if rows and not np.all(np.isfinite(rows[-1])) else rows
         rows += [np.full(shape, np.nan)] * (len(outputs) - len(rows))
-        return rows, "not_settled", (f"pymunk: the run diverged at t = {times[n]:.6g} s ({lost}); "
+        return rows, "not_settled", (f"pymunk: the run had diverged by t = {times[n]:.6g} s ({lost}); "
                                      "a smaller step or more iterations may hold it")
     return rows, "ok", ""
