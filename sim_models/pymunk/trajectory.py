@@ -194,20 +194,29 @@ def largest_step(simulation: Simulation, dt: float) -> float:
 
 # -- the start ----------------------------------------------------------------------------
 
-def independent_joints(linkage: Linkage, rates: Sequence[str]) -> list[str] | str:
-    """The joints whose coordinates make the linkage's state: every driver's, the joints
-    given a rate, then as many more as the linkage has free degrees of freedom, each the
-    joint whose coordinate, added, is least dependent on those chosen (at the drawn pose).
-    A string says why there are none (more rates than free coordinates)."""
-    chosen = [d.joint for d in linkage.drivers] + list(rates)
-    extra = linkage.dof - len(chosen)
-    if extra < 0:
-        return (f"rates for {len(rates)} joints, but the linkage has only "
-                f"{linkage.dof - len(linkage.drivers)} free coordinate(s)")
-    free = null_space(_scaled_joints(linkage, np.zeros(3 * len(linkage.moving_links))))
-    for _ in range(extra):
-        candidates = [j.name for j in linkage.joints if j.kind.drivable and j.name not in chosen]
-        chosen.append(max(candidates, key=lambda j: _independence(linkage, free, [*chosen, j])))
+#: A joint given a rate becomes an independent coordinate where the scaled constraint
+#: Jacobian with its row added keeps its smallest singular value above this (rows and
+#: columns in lengths of the linkage's size): the analytic reference's rule.
+INDEPENDENT = 1e-6
+
+
+def independent_joints(linkage: Linkage, rates: Sequence[str]) -> list[str]:
+    """The joints whose coordinates make the linkage's state, as the analytic reference
+    chooses them: every driver's; then, while the linkage has freedoms left, the joints
+    given a rate, each where the constraint Jacobian with its row added stays regular
+    (:data:`INDEPENDENT`); then each joint whose row leaves that Jacobian best
+    conditioned, at the drawn pose."""
+    chosen = [d.joint for d in linkage.drivers]
+    size = linkage.dof
+    candidates = [j.name for j in linkage.joints if j.kind.drivable and j.name not in chosen]
+    for name in [n for n in rates if n in candidates]:
+        if len(chosen) < size and _smallest_singular_value(linkage, [*chosen, name]) > INDEPENDENT:
+            chosen.append(name)
+            candidates.remove(name)
+    while len(chosen) < size:
+        best = max(candidates, key=lambda name: _smallest_singular_value(linkage, [*chosen, name]))
+        chosen.append(best)
+        candidates.remove(best)
     return chosen
 
 
@@ -217,14 +226,15 @@ def _scaled_joints(linkage: Linkage, q: Array) -> Array:
     return np.asarray(joint_system_at(linkage, q).at(0).toarray() * rows[:, None] * cols[None, :])
 
 
-def _independence(linkage: Linkage, free: Array, joints: list[str]) -> float:
-    """The smallest singular value of the coordinates of ``joints`` along the linkage's
-    free motions ``free`` (3n, f, in lengths): 0 where they do not fix the motion."""
+def _smallest_singular_value(linkage: Linkage, joints: list[str]) -> float:
+    """σ_min of the Jacobian of the joints' rows and a driver row on each of ``joints`` at
+    the drawn pose, in lengths."""
     held = replace(linkage, drivers=tuple(Driver(j, 0.0) for j in joints))
-    _, jac = constraint_system(held, np.zeros((1, free.shape[0])), np.zeros((1, len(joints))))
     rows, cols = unit_scales(held)
-    coordinate_rows = (jac.at(0).toarray() * rows[:, None] * cols[None, :])[-len(joints):]
-    return float(np.linalg.svd(coordinate_rows @ free, compute_uv=False)[-1])
+    _, jac = constraint_system(held, np.zeros((1, 3 * len(linkage.moving_links))),
+                               np.zeros((1, len(joints))))
+    scaled = jac.at(0).toarray() * rows[:, None] * cols[None, :]
+    return float(np.linalg.svd(scaled, compute_uv=False)[-1])
 
 
 def start_state(case: Case) -> Start | str:
@@ -236,8 +246,6 @@ def start_state(case: Case) -> Start | str:
     assert case.simulation is not None
     rates = case.simulation.rates
     joints = independent_joints(linkage, list(rates))
-    if isinstance(joints, str):
-        return joints
     own = {d.joint: d for d in linkage.drivers}
     held = replace(linkage, drivers=tuple(Driver(j, own[j].value if j in own else 0.0)
                                           for j in joints))
