@@ -337,9 +337,11 @@ def install_free_loads(model: LinkageModel, friction: JointLoads, efforts: Joint
 
         def velocity(b: pymunk.Body, gravity: tuple[float, float], damping: float, dt: float,
                      link: str = link, loads: Sequence[LoadLike] = loads) -> None:
-            apply_forces(loads, (), (0.0, 0.0), {link: b})
-            apply_joint_friction(model, link, b, friction)
-            apply_joint_friction(model, link, b, efforts)
+            if loads:
+                apply_forces(loads, (), (0.0, 0.0), {link: b})
+            for joint_loads in (friction, efforts):
+                if joint_loads:   # this runs for the body at every step
+                    apply_joint_friction(model, link, b, joint_loads)
             pymunk.Body.update_velocity(b, gravity, damping, dt)
 
         body.velocity_func = velocity
