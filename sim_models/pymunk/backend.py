@@ -6,6 +6,8 @@
 - :func:`solve_at_pose` — backend ``pymunk_solve``: pymunk's constraint solver at the
   fixed analytic pose (statics).
 - :func:`sweep` — either backend over the first driver (:mod:`.linkage_sweep`).
+- :func:`simulate` — backend ``pymunk`` on a trajectory case: the linkage moving freely,
+  on a ladder of time steps and iterations (:mod:`.trajectory`).
 
 The modules, one line each, and the fence around the speed code (``_fast/``): README.md.
 """
@@ -16,13 +18,14 @@ from numpy.typing import ArrayLike
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage_backends import analytic_results, quantity_units
 from mechcheck.analytic.solution import Solution
+from mechcheck.analytic.trajectory import Trajectory
 from mechcheck.sim_models.linkage_motion import gated_sweep, is_driven, unmodelled
-from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, linkage_sweep
+from mechcheck.sim_models.pymunk import linkage, linkage_dynamics, linkage_sweep, trajectory
 from mechcheck.sim_models.pymunk.joint_kinds import BUILDERS, builder
 from mechcheck.sim_models.pymunk.members import modelled, sliding_ends
 from mechcheck.sim_models.pymunk.settings import LINKAGE_SETTLE, LINKAGE_SOLVE, SolverSettings
 
-__all__ = ["settle", "solve_at_pose", "sweep"]
+__all__ = ["settle", "simulate", "solve_at_pose", "sweep"]
 
 
 def refused(case: Case, backend: str, stretches: bool = False) -> Solution | None:
@@ -88,3 +91,13 @@ def sweep(case: Case, grid: ArrayLike, backend: str = "pymunk") -> list[Solution
         return [no for _ in np.atleast_1d(np.asarray(grid, dtype=float))]
     return gated_sweep(case, np.asarray(grid, dtype=float), backend,
                        lambda values, results: linkage_sweep.sweep(case, values, backend, results))
+
+
+def simulate(case: Case) -> tuple[Trajectory, ...]:
+    """The ``pymunk`` backend on a trajectory case: one run per rung of its ladder, the
+    last the finest (:func:`mechcheck.sim_models.pymunk.trajectory.simulate`); one
+    ``not_applicable`` run for what the model has no counterpart for."""
+    no = refused(case, "pymunk")
+    if no is not None:
+        return (trajectory.refused(case, no.message),)
+    return trajectory.simulate(case)

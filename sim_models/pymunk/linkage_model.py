@@ -259,12 +259,14 @@ def make_space(settings: SolverSettings) -> pymunk.Space:
 
 
 def build_linkage_model(case: Case, settings: SolverSettings, q: Array,
-                        driven: bool = False) -> LinkageModel:
+                        driven: bool = False,
+                        bodies: dict[str, pymunk.Body] | None = None) -> LinkageModel:
     """The pymunk model of a linkage case, its bodies placed at coordinates q (3n,);
-    ``driven``: with the links' real inertia (:func:`make_bodies`)."""
+    ``driven``: with the links' real inertia (:func:`make_bodies`); ``bodies``: these
+    bodies instead, one per moving link in order (a free run's, :mod:`.trajectory`)."""
     linkage = case.linkage
     space = make_space(settings)
-    bodies = make_bodies(linkage, settings, driven)
+    bodies = make_bodies(linkage, settings, driven) if bodies is None else bodies
     model = LinkageModel(case, settings, space, bodies, {}, {}, {}, {}, {}, {},
                          {link: gyration_radius(linkage, link) for link in bodies})
     make_joints(model)
