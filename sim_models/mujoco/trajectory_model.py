@@ -40,7 +40,8 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linkage import Driver, Linkage
-from mechcheck.analytic.linkage_kinematics import residual_and_jacobian, solve_pose, unit_scales
+from mechcheck.analytic.linkage_dynamics import independent_joints
+from mechcheck.analytic.linkage_kinematics import solve_pose
 from mechcheck.analytic.values import GROUND
 from mechcheck.sim_models.inertia import real_inertial
 from mechcheck.sim_models.mujoco.joint_kinds import builder_of
@@ -161,41 +162,23 @@ def trajectory_rig(case: Case, dt: float) -> LinkageRig:
 # -- the state at time 0 -----------------------------------------------------------------
 
 def independent_linkage(case: Case) -> Linkage:
-    """The linkage with its independent coordinates as drivers at time 0: its drivers at
-    their values and rates, the joints of ``simulation.rates`` at their drawn place with
-    their rates, then joints at rest in their drawn place while a freedom is left (each
-    taken if it raises the rank of the constraints and drivers)."""
+    """The linkage with its independent coordinates as drivers at time 0, chosen as the
+    analytic reference chooses them (:func:`~mechcheck.analytic.linkage_dynamics.independent_joints`):
+    its drivers at their values and rates, the joints of ``simulation.rates`` at their drawn
+    place with their rates, then joints at rest in their drawn place."""
     linkage = case.linkage
     assert case.simulation is not None
-    drivers = [Driver(d.joint, d.value, d.velocity) for d in linkage.drivers]
-    for j, rate in case.simulation.rates.items():
+    rates = case.simulation.rates
+    for j in rates:
         if not linkage.joint(j).kind.drivable:
             raise Unbuildable(f"simulate.rates.{j}: the start's velocities are solved with "
                               "each given rate as a driver's, and a "
                               f"{linkage.joint(j).kind.name} joint takes no driver: give the "
                               "rate of a revolute or prismatic joint instead")
-        drivers.append(Driver(j, 0.0, rate))
-    rank = _rank(linkage, drivers)
-    size = 3 * len(linkage.moving_links)
-    for joint in linkage.joints:
-        if rank >= size:
-            break
-        if joint.kind.drivable and all(d.joint != joint.name for d in drivers):
-            more = _rank(linkage, [*drivers, Driver(joint.name, 0.0)])
-            if more > rank:
-                drivers.append(Driver(joint.name, 0.0))
-                rank = more
-    return replace(linkage, drivers=tuple(drivers))
-
-
-def _rank(linkage: Linkage, drivers: list[Driver]) -> int:
-    """Rank of the joints' and drivers' Jacobian at the drawn pose, in lengths
-    (:func:`.linkage_kinematics.unit_scales`)."""
-    trial = replace(linkage, drivers=tuple(drivers), free_motion=True)
-    size = 3 * len(linkage.moving_links)
-    _, jac = residual_and_jacobian(trial, np.zeros((1, size)), np.zeros((1, len(drivers))))
-    rows, cols = unit_scales(trial)
-    return int(np.linalg.matrix_rank(jac[0] * rows[:, None] * cols[None, :]))
+    own = {d.joint: d for d in linkage.drivers}
+    return replace(linkage, drivers=tuple(
+        Driver(j, own[j].value, own[j].velocity) if j in own else Driver(j, 0.0, rates.get(j, 0.0))
+        for j in independent_joints(linkage, tuple(rates))))
 
 
 def initial_state(case: Case, rig: LinkageRig) -> tuple[Array, Array]:

@@ -55,9 +55,9 @@ from scipy.linalg import null_space
 
 from mechcheck.analytic.case import Case, Simulation
 from mechcheck.analytic.linkage import Driver, Linkage
+from mechcheck.analytic.linkage_dynamics import independent_joints
 from mechcheck.analytic.linkage_kinematics import (
     Array,
-    constraint_system,
     joint_system_at,
     solve_pose,
     unit_scales,
@@ -194,58 +194,22 @@ def largest_step(simulation: Simulation, dt: float) -> float:
 
 # -- the start ----------------------------------------------------------------------------
 
-#: A joint given a rate becomes an independent coordinate where the scaled constraint
-#: Jacobian with its row added keeps its smallest singular value above this (rows and
-#: columns in lengths of the linkage's size): the analytic reference's rule.
-INDEPENDENT = 1e-6
-
-
-def independent_joints(linkage: Linkage, rates: Sequence[str]) -> list[str]:
-    """The joints whose coordinates make the linkage's state, as the analytic reference
-    chooses them: every driver's; then, while the linkage has freedoms left, the joints
-    given a rate, each where the constraint Jacobian with its row added stays regular
-    (:data:`INDEPENDENT`); then each joint whose row leaves that Jacobian best
-    conditioned, at the drawn pose."""
-    chosen = [d.joint for d in linkage.drivers]
-    size = linkage.dof
-    candidates = [j.name for j in linkage.joints if j.kind.drivable and j.name not in chosen]
-    for name in [n for n in rates if n in candidates]:
-        if len(chosen) < size and _smallest_singular_value(linkage, [*chosen, name]) > INDEPENDENT:
-            chosen.append(name)
-            candidates.remove(name)
-    while len(chosen) < size:
-        best = max(candidates, key=lambda name: _smallest_singular_value(linkage, [*chosen, name]))
-        chosen.append(best)
-        candidates.remove(best)
-    return chosen
-
-
 def _scaled_joints(linkage: Linkage, q: Array) -> Array:
     """The joints' Jacobian at q in lengths (:func:`.linkage_kinematics.unit_scales`)."""
     rows, cols = unit_scales(linkage, drivers=False)
     return np.asarray(joint_system_at(linkage, q).at(0).toarray() * rows[:, None] * cols[None, :])
 
 
-def _smallest_singular_value(linkage: Linkage, joints: list[str]) -> float:
-    """σ_min of the Jacobian of the joints' rows and a driver row on each of ``joints`` at
-    the drawn pose, in lengths."""
-    held = replace(linkage, drivers=tuple(Driver(j, 0.0) for j in joints))
-    rows, cols = unit_scales(held)
-    _, jac = constraint_system(held, np.zeros((1, 3 * len(linkage.moving_links))),
-                               np.zeros((1, len(joints))))
-    scaled = jac.at(0).toarray() * rows[:, None] * cols[None, :]
-    return float(np.linalg.svd(scaled, compute_uv=False)[-1])
-
-
 def start_state(case: Case) -> Start | str:
     """The state at t = 0: the drivers at their values with their velocities, the joints
     of ``simulation.rates`` at their rates, every other free coordinate as drawn and at
-    rest (:func:`independent_joints`), positions and rates from the analytic kinematics; or
+    rest (:func:`~mechcheck.analytic.linkage_dynamics.independent_joints`, the
+    analytic reference's choice), positions and rates from the analytic kinematics; or
     why there is none."""
     linkage = case.linkage
     assert case.simulation is not None
     rates = case.simulation.rates
-    joints = independent_joints(linkage, list(rates))
+    joints = independent_joints(linkage, tuple(rates))
     own = {d.joint: d for d in linkage.drivers}
     held = replace(linkage, drivers=tuple(Driver(j, own[j].value if j in own else 0.0)
                                           for j in joints))
