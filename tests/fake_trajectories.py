@@ -18,62 +18,18 @@ import numpy as np
 
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.trajectory import EnergyBalance, Trajectory
+from tests.exam_block import exam_block
 
 #: The block: 2 kg between springs of 300 and 200 N/m, released 40 mm from rest.
 MASS, K1, K2, X0 = 2.0, 300.0, 200.0, 0.040
 OMEGA = math.sqrt((K1 + K2) / MASS)   # 15.811 rad/s
 
-BLOCK = """
-[[case]]
-name = "{name}"
-description = "A 2 kg block between springs of 300 and 200 N/m, released 40 mm from rest"
-mechanism = "linkage"
-length_unit = "mm"
-
-[case.points]
-W1 = [-300.0, 0.0]
-W2 = [300.0, 0.0]
-A = [40.0, 0.0]
-
-[[case.links]]
-name = "ground"
-points = ["W1", "W2"]
-[[case.links]]
-name = "block"
-points = ["A"]
-
-[[case.joints]]
-name = "slide"
-kind = "prismatic"
-links = ["ground", "block"]
-at = "A"
-axis = [1.0, 0.0]
-
-[[case.masses]]
-link = "block"
-mass = 2.0
-com = "A"
-
-[[case.springs]]
-name = "k1"
-ends = [["ground", "W1"], ["block", "A"]]
-stiffness = 300.0
-free_length = 300.0
-[[case.springs]]
-name = "k2"
-ends = [["block", "A"], ["ground", "W2"]]
-stiffness = 200.0
-free_length = 300.0
-{extra}
-[case.simulate]
-end = 0.5
-outputs = 26
-"""
-
 
 def block_case(name: str = "block-springs", extra: str = "") -> str:
     """The block's case file; ``extra``: TOML inserted before its ``[case.simulate]``."""
-    return BLOCK.format(name=name, extra=extra)
+    return exam_block(name, drivers=extra, end=0.5, outputs=26, gravity=False,
+                      description="A 2 kg block between springs of 300 and 200 N/m, released "
+                                  "40 mm from rest")
 
 
 def closed_form(case: Case, backend: str, offset: float = 0.0, **fields: object) -> Trajectory:

@@ -34,6 +34,7 @@ from mechcheck.sim_models.mujoco.trajectory import (
     simulate_case,
     step_budget,
 )
+from tests.exam_block import MASS, STIFFNESS, X0, exam_block
 
 G = 9.81
 #: The accuracy a trajectory is judged by (positions over the size, angles in rad).
@@ -256,56 +257,13 @@ def test_dampers_on_every_joint_of_the_loop_damp_it_as_the_linear_oscillator() -
     coordinates = fine(case)
     assert np.abs(coordinates[:, 3 * k + 2] - (theta - theta0)).max() < 3e-6
 
-
-BLOCK = """
-[[case]]
-name = "exam-q2-block"
-mechanism = "linkage"
-length_unit = "mm"
-gravity = [0.0, -9.81]
-[case.points]
-W1 = [-300.0, 0.0]
-W2 = [300.0, 0.0]
-A = [40.0, 0.0]
-[[case.links]]
-name = "ground"
-points = ["W1", "W2"]
-[[case.links]]
-name = "block"
-points = ["A"]
-[[case.joints]]
-name = "slide"
-kind = "prismatic"
-links = ["ground", "block"]
-at = "A"
-axis = [1.0, 0.0]
-[[case.masses]]
-link = "block"
-mass = 2.0
-com = "A"
-[[case.springs]]
-name = "k1"
-ends = [["ground", "W1"], ["block", "A"]]
-stiffness = 300.0
-free_length = 300.0
-[[case.springs]]
-name = "k2"
-ends = [["block", "A"], ["ground", "W2"]]
-stiffness = 200.0
-free_length = 300.0
-{driver}
-[case.simulate]
-end = 1.0
-outputs = 21
-"""
 #: Exam Q2 (seed 002): m = 2 kg between k1 = 300 N/m and k2 = 200 N/m, both unstretched at
 #: x = 0; the block drawn at x0 = 40 mm and released from rest: m·ẍ + (k1 + k2)·x = F.
-MASS, STIFFNESS, X0 = 2.0, 500.0, 0.040
 OMEGA = math.sqrt(STIFFNESS / MASS)
 
 
 def block_case(driver: str = "") -> Case:
-    return case_of(BLOCK.format(driver=driver))
+    return case_of(exam_block("exam-q2-block", drivers=driver))
 
 
 def test_block_between_springs_oscillates_as_x0_cos() -> None:
@@ -382,7 +340,7 @@ def test_outputs_between_steps_are_read_between_them() -> None:
     ((ω·dt)⁴ = 1e-6 of a swing of 0.04 m, over half a radian); the cubic Hermite reading
     between steps adds dt⁴·ω⁴·x0/384 ≈ 1e-10 m (a straight line between the steps would
     add dt²·ω²·x0/8 = 5e-6 m)."""
-    case = case_of(BLOCK.format(driver="").replace("end = 1.0\noutputs = 21",
+    case = case_of(exam_block("exam-q2-block").replace("end = 1.0\noutputs = 21",
                                                    "end = 0.03\noutputs = 31"))
     simulation = case.simulation
     assert simulation is not None
@@ -395,7 +353,7 @@ def test_outputs_between_steps_are_read_between_them() -> None:
 
 
 def test_a_run_past_the_step_budget_is_refused_naming_what_helps() -> None:
-    case = case_of(BLOCK.format(driver="").replace("end = 1.0", "end = 1000.0"))
+    case = case_of(exam_block("exam-q2-block").replace("end = 1.0", "end = 1000.0"))
     runs = simulate(case)
     assert all(r.status == "not_applicable" for r in runs)
     assert "simulate.end" in runs[0].message and str(STEP_BUDGET) in runs[0].message
@@ -424,7 +382,7 @@ def test_coulomb_friction_stops_the_block_as_the_piecewise_solution() -> None:
     five half periods. The friction is applied from the reactions before each step and held
     through it: first order in dt whatever the integrator (measured 5.6e-4 and 2.9e-4 of the
     size at 1 and 0.5 ms with Euler)."""
-    case = case_of(BLOCK.format(driver="[case.friction]\nmu = 0.1")
+    case = case_of(exam_block("exam-q2-block", drivers="[case.friction]\nmu = 0.1")
                    .replace("end = 1.0\noutputs = 21", "end = 1.5\noutputs = 31"))
     t = np.array(case.simulation.outputs)                       # type: ignore[union-attr]
     expected = coulomb_block(t, 0.1) - X0

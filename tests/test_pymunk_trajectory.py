@@ -18,6 +18,7 @@ import mechcheck
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.trajectory import Trajectory
 from mechcheck.sim_models.pymunk import backend as pm, trajectory as pt
+from tests.exam_block import MASS, STIFFNESS, X0, exam_block, pushed
 
 #: A first-order method's error halves with the step: the ratio of the errors of two runs a
 #: halving apart, at steps where the next order is a few percent of the first (ω·dt ≤ 0.03
@@ -31,52 +32,7 @@ ROUNDING = 1e-12
 # m = 2 kg between springs k1 = 300 N/m and k2 = 200 N/m unstretched at x = 0, on a
 # horizontal slide: m ẍ + (k1 + k2) x = F. Released at x0 = 40 mm from rest under a
 # constant force F on the slide's driver.
-BLOCK = """
-[[case]]
-name = "block"
-mechanism = "linkage"
-length_unit = "mm"
-gravity = [0.0, -9.81]
-[case.points]
-W1 = [-300.0, 0.0]
-W2 = [300.0, 0.0]
-A = [0.0, 0.0]
-[[case.links]]
-name = "ground"
-points = ["W1", "W2"]
-[[case.links]]
-name = "block"
-points = ["A"]
-[[case.joints]]
-name = "slide"
-kind = "prismatic"
-links = ["ground", "block"]
-at = "A"
-axis = [1.0, 0.0]
-[[case.drivers]]
-joint = "slide"
-displacement = 40.0
-force = {force}
-[[case.masses]]
-link = "block"
-mass = 2.0
-com = "A"
-[[case.springs]]
-name = "k1"
-ends = [["ground", "W1"], ["block", "A"]]
-stiffness = 300.0
-free_length = 300.0
-[[case.springs]]
-name = "k2"
-ends = [["block", "A"], ["ground", "W2"]]
-stiffness = 200.0
-free_length = 300.0
-[case.simulate]
-end = {end}
-outputs = 51
-{friction}
-"""
-MASS, STIFFNESS, X0 = 2.0, 500.0, 0.040
+
 
 # A uniform bar (m = 2 kg, L = 0.5 m) pinned at one end, drawn horizontal and released from
 # rest under g = 9.81: a compound pendulum 90° from its hanging pose.
@@ -119,7 +75,8 @@ def case_of(text: str, tmp_path: Path, name: str = "case.toml") -> Case:
 
 def block(tmp_path: Path, force: str = "0.0", end: float = 0.5, mu: float | None = None) -> Case:
     friction = "" if mu is None else f"[case.friction]\nmu = {mu}"
-    return case_of(BLOCK.format(force=force, end=end, friction=friction), tmp_path)
+    return case_of(exam_block("block", drawn_at=0.0, drivers=pushed(force), end=end, outputs=51,
+                              extra=friction), tmp_path)
 
 
 def run_at(case: Case, dt: float, iterations: int = 10) -> Trajectory:

@@ -23,6 +23,7 @@ from mechcheck.analytic.linkage import Driver, Effort, Joint, Link, Linkage, Lin
 from mechcheck.analytic.trajectory import Trajectory, simulate
 from mechcheck.analytic.values import CaseError
 from mechcheck.casefile import parse_cases
+from tests.exam_block import MASS, STIFFNESS, X0, exam_block, pushed
 from tests.strategies import linkage_tables
 
 G = 9.81
@@ -46,52 +47,8 @@ def _trajectory(case: Case) -> Trajectory:
 
 
 # -- exam Q2: a block between two springs on a slide (seed 002) -----------------------------
+EXAM = exam_block("exam-q2", drawn_at=0.0, drivers=pushed("0.0"), end=1.5, outputs=301)
 
-EXAM = """
-[[case]]
-name = "exam-q2"
-mechanism = "linkage"
-length_unit = "mm"
-gravity = [0.0, -9.81]
-[case.points]
-W1 = [-300.0, 0.0]
-W2 = [300.0, 0.0]
-A = [0.0, 0.0]
-[[case.links]]
-name = "ground"
-points = ["W1", "W2"]
-[[case.links]]
-name = "block"
-points = ["A"]
-[[case.joints]]
-name = "slide"
-kind = "prismatic"
-links = ["ground", "block"]
-at = "A"
-axis = [1.0, 0.0]
-[[case.drivers]]
-joint = "slide"
-displacement = 40.0
-force = 0.0
-[[case.masses]]
-link = "block"
-mass = 2.0
-com = "A"
-[[case.springs]]
-name = "k1"
-ends = [["ground", "W1"], ["block", "A"]]
-stiffness = 300.0
-free_length = 300.0
-[[case.springs]]
-name = "k2"
-ends = [["block", "A"], ["ground", "W2"]]
-stiffness = 200.0
-free_length = 300.0
-[case.simulate]
-end = 1.5
-outputs = 301
-"""
-MASS, STIFFNESS, X0 = 2.0, 300.0 + 200.0, 0.040
 
 
 def exam_case(mu: float) -> Case:
