@@ -14,7 +14,9 @@ are ``--mechcheck-backend NAME`` (repeatable), else the ini option
 ``mechcheck_backends``, else every available one. Each item compares its
 backend with ``analytic`` under the tolerance policy, exactly as
 ``mechcheck run`` does; the ``[analytic]`` item checks that the reference
-itself has an answer. Verdicts: ``not_settled`` and ``error`` fail;
+itself has an answer. A trajectory case (``[case.simulate]``) is run as ``mechcheck
+simulate`` runs it: each item its backend's runs against the reference's over time.
+Verdicts: ``not_settled`` and ``error`` fail;
 ``singular``, ``indeterminate``, ``not_applicable`` and ``no_solution`` skip
 with their reason. A file that cannot be used is a collection error carrying
 the CLI's one-line message.
@@ -147,6 +149,9 @@ class CaseItem(pytest.Item):
         from mechcheck.testing import assert_solution_close
 
         assert isinstance(self.parent, CaseFile)
+        if self.case.is_trajectory:
+            self._run_trajectory()
+            return
         reference = self.parent.reference(self.case)
         self._judge(reference, REFERENCE)
         if self.backend == REFERENCE:
@@ -161,6 +166,21 @@ class CaseItem(pytest.Item):
             assert_solution_close(self.case, solution, reference)
         except AssertionError as error:
             raise CaseCheckFailed(str(error)) from None
+
+    def _run_trajectory(self) -> None:
+        """A trajectory case: this backend's runs against the reference's, as
+        ``mechcheck simulate`` compares them (its finest run within the policy)."""
+        import mechcheck
+        from mechcheck.backends import REFERENCE
+
+        result = mechcheck.simulate([self.case], list(dict.fromkeys([REFERENCE, self.backend])))
+        for solution in result.solutions:
+            self._judge(solution, solution.backend)
+        failed = result.failed_comparisons
+        if len(failed):
+            rows = failed.head(5).to_dict("records")
+            raise CaseCheckFailed(f"{self.case.name} [{self.backend}]: {len(failed)} quantities "
+                                  f"outside tolerance over time, e.g. {rows}")
 
     def _judge(self, solution: Solution, backend: str) -> None:
         """Fail on a failing verdict, skip on one that leaves nothing to compare."""

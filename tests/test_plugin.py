@@ -8,8 +8,10 @@ from typer.testing import CliRunner
 # pytester's in-process runs forget the modules they imported, and numpy cannot be
 # loaded twice in one process: import here everything the plugin's items will use.
 import mechcheck.analytic.linkage_backends
+import mechcheck.analytic.linkage_dynamics
 import mechcheck.analytic.presets
 import mechcheck.run
+import mechcheck.simulate_run
 import mechcheck.testing  # noqa: F401
 from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
@@ -18,6 +20,7 @@ from mechcheck.analytic.solution import Solution
 from mechcheck.cli import app
 
 from .builtin import rocker_load_case
+from .fake_trajectories import block_case
 
 GOOD = rocker_load_case("e1-rocker")
 #: No method meets a relative tolerance of 1e-30 unless bit-identical (as in test_cli).
@@ -129,3 +132,13 @@ def test_an_unknown_backend_is_a_usage_error(pytester: pytest.Pytester) -> None:
     result = pytester.runpytest("--mechcheck-backend", "nope")
     assert result.ret != 0
     assert "unknown backend 'nope'" in result.stderr.str() + result.stdout.str()
+
+
+def test_a_trajectory_file_is_checked_over_time(pytester: pytest.Pytester) -> None:
+    """A trajectory case's items run as ``mechcheck simulate`` runs it: the reference
+    (its energy balance) passes, a backend that does not simulate skips with why."""
+    pytester.makefile(".mechcheck.toml", block=block_case())
+    result = pytester.runpytest("-v", "-rs", "--mechcheck-backend", "virtual_work")
+    result.assert_outcomes(passed=1, skipped=1)
+    result.stdout.fnmatch_lines(["*block-springs*analytic*PASSED*",
+                                 "*virtual_work*not_applicable*no run over time*"])
