@@ -230,7 +230,8 @@ def simulate_command(
 ) -> None:
     from mechcheck.casefile import builtin_trajectory_files
     from mechcheck.figures import figure_file
-    from mechcheck.simulate_report import figures, render_simulate
+    from mechcheck.report import drawings
+    from mechcheck.simulate_report import drawn_file, figures, render_simulate
     from mechcheck.simulate_run import RUNS_FILE, simulate
 
     verdicts = parse_fail_on(fail_on)
@@ -247,13 +248,15 @@ def simulate_command(
         result = simulate([case for case, _ in specs], names, progress=progress,
                           fail_on=verdicts)
         pictures = figures(result)
+        drawn = drawings(result)
         markdown, page = render_simulate(result, {c.name: s for c, s in specs},
-                                         pictures=pictures)
+                                         pictures=pictures, drawn=drawn)
         tables: dict[str, str | bytes] = {RUNS_FILE: result.rungs.to_csv(index=False)}
         if trajectories:
             tables[TRAJECTORIES] = result.table().to_parquet(index=False)
         return (result, tables | report_files(result, markdown, page),
-                ("figures", {figure_file(name): png for name, png in pictures.items()}))
+                ("figures", {figure_file(name): png for name, png in pictures.items()}
+                 | {drawn_file(name): png for name, png in drawn.items()}))
 
     write_checked(out, junit, work)
 

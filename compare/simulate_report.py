@@ -26,6 +26,7 @@ from mechcheck.analytic.trajectory import Trajectory
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
 from mechcheck.figures import figure_file
+from mechcheck.output import file_stem
 from mechcheck.report import fmt, render_pair, sci, view_model
 from mechcheck.simulate_run import ENERGY_RESIDUAL, SimulateResult
 from mechcheck.tolerance import TRAJECTORY, rule
@@ -205,7 +206,7 @@ def unreached(case: Case, rungs: pd.DataFrame, runs: Mapping[str, tuple[Trajecto
 
 
 def trajectory_view(case: Case, result: SimulateResult, base: dict[str, Any],
-                    figure: bytes | None) -> dict[str, Any]:
+                    figure: bytes | None, drawing: bytes | None = None) -> dict[str, Any]:
     """A case's section: ``run``'s (inputs, drawing, verdicts, diagnostics) with the
     figure, the table of runs, the unreached tolerances, the energy check and the events."""
     runs = result.trajectories.get(case.name, {})
@@ -217,6 +218,8 @@ def trajectory_view(case: Case, result: SimulateResult, base: dict[str, Any],
     return base | {
         "figure": base64.b64encode(figure).decode() if figure else None,
         "figure_file": figure_file(case.name),
+        "drawing": base64.b64encode(drawing).decode() if drawing else None,
+        "drawing_file": drawn_file(case.name),
         "rungs": rungs.to_dict("records"),
         "unreached": unreached(case, rungs, runs, tolerance),
         "energy": energy.to_dict("records")[0] if len(energy) else None,
@@ -224,6 +227,11 @@ def trajectory_view(case: Case, result: SimulateResult, base: dict[str, Any],
         "end": case.simulation.end if case.simulation else math.nan,
         "outputs": len(case.simulation.outputs) if case.simulation else 0,
     }
+
+
+def drawn_file(case_name: str) -> str:
+    """A case's drawing as its file draws it, in the report's ``figures/`` folder beside its figure."""
+    return f"{file_stem(case_name)}-drawn.png"
 
 
 def figures(result: SimulateResult) -> dict[str, bytes]:
@@ -239,15 +247,19 @@ def figures(result: SimulateResult) -> dict[str, bytes]:
 
 def render_simulate(result: SimulateResult, specs: Mapping[str, AnySpec],
                     title: str = "mechcheck trajectory report",
-                    pictures: Mapping[str, bytes] | None = None) -> tuple[str, str]:
+                    pictures: Mapping[str, bytes] | None = None,
+                    drawn: Mapping[str, bytes] | None = None) -> tuple[str, str]:
     """(Markdown, HTML) of a simulate run. ``pictures``: each case's figure by case name
-    (default: :func:`figures`); the Markdown links to them in ``figures/``, the HTML holds
-    them."""
+    (default: :func:`figures`); ``drawn``: each case's mechanism as its file draws it
+    (:func:`mechcheck.report.drawings`); the Markdown links to them in ``figures/``, the
+    HTML holds them."""
     shown = figures(result) if pictures is None else pictures
+    drawn = {} if drawn is None else drawn
     # A seed's printed answers are values at one pose: a trajectory has none to set beside.
     unseeded = {name: spec.model_copy(update={"seed": None}) for name, spec in specs.items()}
     model = view_model(result, unseeded, title, {})
-    model["cases"] = [trajectory_view(case, result, view, shown.get(case.name))
+    model["cases"] = [trajectory_view(case, result, view, shown.get(case.name),
+                                      drawn.get(case.name))
                       for case, view in zip(result.cases, model["cases"], strict=True)]
     return render_pair("simulate", model)
 
