@@ -23,7 +23,7 @@ from mechcheck.analytic.solution import Solution
 from mechcheck.backends import REFERENCE
 from mechcheck.casefile import AnySpec
 from mechcheck.figures import figure_file
-from mechcheck.linkage_file import LinkageCaseSpec
+from mechcheck.linkage_file import DriverSpec, LinkageCaseSpec
 from mechcheck.output import file_stem
 from mechcheck.run import RunResult
 from mechcheck.seeds import SeedRow, seed_row
@@ -252,25 +252,8 @@ def linkage_inputs(spec: LinkageCaseSpec) -> list[str]:
              "joints: " + "; ".join(f"{j.name} {j.kind} {j.links[0]}–{j.links[1]} at {j.at}"
                                     + (f" along {_pair(j.axis)}" if j.axis else "")
                                     for j in spec.joints)]
-    for d in spec.drivers:
-        move = (f"rotation {fmt(d.rotation)}°" if d.rotation is not None
-                else f"displacement {fmt(d.displacement or 0.0)}")
-        effort = next(((k, v) for k, v in (("torque", d.torque), ("force", d.force))
-                       if v is not None), None)
-        lines.append(f"driver {d.joint}: {move}, velocity {fmt(d.velocity)}, "
-                     + (f"{effort[0]} {effort[1]}" if effort else
-                        f"acceleration {fmt(d.acceleration)}")
-                     + (f", sense {d.sense}" if d.sense else ""))
-    for ld in spec.loads:
-        force = ", ".join(f"{k} = {fmt(v)}" for k, v in (ld.force or {}).items())
-        lines.append(f"load on {ld.link} at {ld.at if isinstance(ld.at, str) else _pair(ld.at)}: "
-                     f"force {{{force}}}, torque {fmt(ld.torque)} N·m")
-    for m in spec.masses:
-        lines.append(f"mass on {m.link}: {fmt(m.mass)} kg at "
-                     f"{m.com if isinstance(m.com, str) else _pair(m.com)}, inertia "
-                     f"{fmt(m.inertia)} kg·m²")
-    for s in spec.springs:
-        lines.append("spring " + ", ".join(f"{k} = {v}" for k, v in s.items()))
+    lines += [_driver_line(d) for d in spec.drivers]
+    lines += _load_lines(spec)
     if any(spec.gravity):
         lines.append(f"gravity {_pair(spec.gravity)} m/s²")
     if spec.friction is not None:
@@ -280,6 +263,32 @@ def linkage_inputs(spec: LinkageCaseSpec) -> list[str]:
         count = outputs if isinstance(outputs, int) else len(outputs)
         lines.append(f"simulate: end {fmt(spec.simulate.end)} s, {count} output times"
                      + "".join(f", rate {j} = {fmt(v)}" for j, v in spec.simulate.rates.items()))
+    return lines
+
+
+def _driver_line(d: DriverSpec) -> str:
+    """A driver's line: its value, velocity, and its acceleration or effort."""
+    move = (f"rotation {fmt(d.rotation)}°" if d.rotation is not None
+            else f"displacement {fmt(d.displacement or 0.0)}")
+    effort = next(((k, v) for k, v in (("torque", d.torque), ("force", d.force))
+                   if v is not None), None)
+    return (f"driver {d.joint}: {move}, velocity {fmt(d.velocity)}, "
+            + (f"{effort[0]} {effort[1]}" if effort else f"acceleration {fmt(d.acceleration)}")
+            + (f", sense {d.sense}" if d.sense else ""))
+
+
+def _load_lines(spec: LinkageCaseSpec) -> list[str]:
+    """The lines of the loads, masses and springs."""
+    lines = []
+    for ld in spec.loads:
+        force = ", ".join(f"{k} = {fmt(v)}" for k, v in (ld.force or {}).items())
+        lines.append(f"load on {ld.link} at {ld.at if isinstance(ld.at, str) else _pair(ld.at)}: "
+                     f"force {{{force}}}, torque {fmt(ld.torque)} N·m")
+    for m in spec.masses:
+        lines.append(f"mass on {m.link}: {fmt(m.mass)} kg at "
+                     f"{m.com if isinstance(m.com, str) else _pair(m.com)}, inertia "
+                     f"{fmt(m.inertia)} kg·m²")
+    lines += ["spring " + ", ".join(f"{k} = {v}" for k, v in s.items()) for s in spec.springs]
     return lines
 
 
