@@ -157,3 +157,22 @@ def test_the_scissor_lift_64_mm_down_needs_more_iterations_than_its_ladder_allow
     assert last == 102400
     assert per_iteration ** last > dyn.STABLE_STEP_CONTRACTION
     assert "ladder ends at 102400" in dyn.instability(last, per_iteration, len(case.linkage.joints))
+
+
+def test_the_contraction_is_the_slowest_modes_not_the_first_to_hold_still() -> None:
+    """280 mm up the stroke (condition number 284) a faster mode's step ratio holds still for
+    a while before the slowest mode surfaces. The per-iteration contraction measured at 100
+    iterations a step must still be the one measured at 400, to the 400th power (the
+    identity above); and a step of 6400 iterations must leave more than half of it, as the
+    run at 6400, which leaves its assembly within 100 steps, shows."""
+    case = raising_scissor_lift(0.28)
+    q = analytic_results(case, np.array([0.28])).pose.q[0]
+    per_iteration = dyn.iteration_contraction(case, q)
+    twins = dyn.build_twins(case, driven_motion(case, dyn.QUASI_STATIC_OMEGA), dyn.DRIVEN.dt, 400)
+    drivers = np.array([d.value for d in case.linkage.drivers])
+    at_400 = max(dyn.slowest_ratio(m, q, drivers) for m in twins.models)
+    assert at_400 == pytest.approx(per_iteration ** 400, rel=1e-2)
+    end = dyn.read_drive(case, driven_motion(case, dyn.QUASI_STATIC_OMEGA), 100,
+                         dyn.DRIVEN.dt, 6400)
+    assert end.drift > DRIVEN_DRIFT * case.linkage.scale
+    assert per_iteration ** 6400 > 0.5
