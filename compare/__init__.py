@@ -59,9 +59,12 @@ def load_cases(*paths: str | Path) -> list[Case]:
 def solve(case: Case, backend: str = "analytic") -> Solution:
     """``case`` through one backend (see :func:`available_backends`); SI values, angles in
     radians. Behind the pose gate, as in ``mechcheck run``: where the analytic pose analysis
-    finds no unique forces, the backend is not called and reports that verdict."""
+    finds no unique forces, the backend is not called and reports that verdict. A
+    trajectory case (``[case.simulate]``) raises :class:`CaseError`: :func:`simulate` runs it."""
+    from mechcheck.casefile import check_case_kind
     from mechcheck.run import solve_gated
 
+    check_case_kind(case, trajectory=False)
     return solve_gated(backend, case)
 
 
@@ -83,8 +86,10 @@ def solve_poses(case: Case, driver_values: ArrayLike, backend: str = "analytic",
     import pandas as pd
 
     from mechcheck import backends as registry
+    from mechcheck.casefile import check_case_kind
     from mechcheck.sweep import check_driver_grid, check_theta12_grid, vector_poses
 
+    check_case_kind(case, trajectory=False)   # a trajectory has no poses to solve
     grid = np.asarray(driver_values, dtype=float).ravel()
     if not registry.get(backend).vectorised:
         vectorised = [n for n, b in registry.REGISTRY.items() if b.vectorised]

@@ -8,10 +8,8 @@ from typer.testing import CliRunner
 # pytester's in-process runs forget the modules they imported, and numpy cannot be
 # loaded twice in one process: import here everything the plugin's items will use.
 import mechcheck.analytic.linkage_backends
-import mechcheck.analytic.linkage_dynamics
 import mechcheck.analytic.presets
 import mechcheck.run
-import mechcheck.simulate_run
 import mechcheck.testing  # noqa: F401
 from mechcheck import backends as registry
 from mechcheck.analytic.case import Case
@@ -138,7 +136,10 @@ def test_a_trajectory_file_is_checked_over_time(pytester: pytest.Pytester) -> No
     """A trajectory case's items run as ``mechcheck simulate`` runs it: the reference
     (its energy balance) passes, a backend that does not simulate skips with why."""
     pytester.makefile(".mechcheck.toml", block=block_case())
-    result = pytester.runpytest("-v", "-rs", "--mechcheck-backend", "virtual_work")
+    # In a subprocess: the run imports modules (scipy's integrators) that an in-process run
+    # would forget, and numpy cannot be loaded twice in one process.
+    result = pytester.runpytest_subprocess("-v", "-rs", "-p", "no:xdist",
+                                           "--mechcheck-backend", "virtual_work")
     result.assert_outcomes(passed=1, skipped=1)
     result.stdout.fnmatch_lines(["*block-springs*analytic*PASSED*",
                                  "*virtual_work*not_applicable*no run over time*"])

@@ -22,6 +22,7 @@ import mechcheck.analytic.trajectory as trajectory_module
 import mechcheck.casefile as casefile
 import mechcheck.sim_models as simulators
 from mechcheck import backends as registry
+from mechcheck.analytic.values import CaseError
 from mechcheck.cli import TRAJECTORIES as TRAJECTORIES_FILE
 from mechcheck.simulate_report import ladder_lines
 from mechcheck.simulate_run import RUNS_FILE
@@ -362,3 +363,13 @@ def test_without_files_it_runs_the_built_in_trajectory_cases(
     assert code == 0, err
     assert out.startswith("1 case, ")
     assert mechcheck.simulate(backends=[]).cases[0].name == "block-springs"
+
+
+def test_the_pose_api_refuses_a_trajectory_case(tmp_path: Path) -> None:
+    """``mechcheck.solve`` and ``solve_poses`` refuse a trajectory case as ``run`` does,
+    naming the key and the command that runs it."""
+    (tmp_path / "block.toml").write_text(fake.block_case())
+    (case,) = mechcheck.load_cases(tmp_path / "block.toml")
+    for call in (lambda: mechcheck.solve(case), lambda: mechcheck.solve_poses(case, [0.0])):
+        with pytest.raises(CaseError, match="simulate"):
+            call()
