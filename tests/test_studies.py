@@ -9,15 +9,19 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from mechcheck.studies import STUDIES, run_study
+from mechcheck.studies import STUDIES, quasi_static_motion as motion, run_study
 from mechcheck.studies.common import crossing
-from mechcheck.tolerance import rule
+from mechcheck.tolerance import ENERGY, TRAJECTORY, rule
 
 #: Simulator curves are compared point by point with the analytic curve; each point is
 #: one driven or settled run, so the policy's tolerance for that kind of run applies.
 DRIVEN = max(rule(sim, "torque", kind).rtol for sim in ("mujoco", "pymunk")
              for kind in ("dynamic", "friction"))
 SETTLED = max(rule(sim, "torque", "static").rtol for sim in ("mujoco", "pymunk"))
+#: The analytic reference against a hand-written equation of motion: two adaptive
+#: integrators at tight tolerances, so the policy's bound on the reference's own integration
+#: (its energy balance) applies.
+REFERENCE = rule("analytic", ENERGY, TRAJECTORY).rtol
 
 
 def curves(data: pd.DataFrame) -> dict[str, pd.DataFrame]:
@@ -35,6 +39,55 @@ def test_quasi_static_miss_grows_like_omega_squared() -> None:
     for sim in ("mujoco", "pymunk"):
         assert np.allclose(c[sim]["T_dynamic"], a["T_dynamic"], rtol=DRIVEN), sim
     one = crossing(a["omega"], a["relative_miss"], 0.01)
+    assert one is not None and f"{one:.3g} rad/s" in r.conclusion
+
+
+def slider_on_turning_arm(omega: float) -> tuple[np.ndarray, np.ndarray]:
+    """The slider's travel u along the arm and its static travel at the study's arm angles,
+    written by hand. In the arm's frame (θ = α·t²/2, θ̇ = α·t, α = ω²/(2·stroke)) the slider
+    of mass m, drawn at r0 where the spring k is at its free length, obeys
+    m·(ü − (r0 + u)·θ̇²) = −k·u − c·u̇ − m·g·sin θ (the slot takes the Coriolis force across
+    it); at rest u = −m·g·sin θ / k."""
+    from scipy.integrate import solve_ivp
+
+    m, k, c, g = motion.SLIDER_MASS, motion.STIFFNESS, motion.DAMPING, motion.GRAVITY
+    r0, alpha = motion.SLIDER_AT, omega**2 / (2.0 * motion.STROKE)
+    angles = motion.arm_angles()
+    times = np.sqrt(2.0 * angles / alpha)
+
+    def rates(t: float, y: np.ndarray) -> list[float]:
+        theta, theta_dot = alpha * t**2 / 2.0, alpha * t
+        return [y[1], (r0 + y[0]) * theta_dot**2 - (k * y[0] + c * y[1]) / m - g * np.sin(theta)]
+
+    run = solve_ivp(rates, (0.0, times[-1]), [0.0, 0.0], t_eval=times, method="DOP853",
+                    rtol=1e-12, atol=1e-15)
+    return run.y[0], -m * g * np.sin(angles) / k
+
+
+def test_quasi_static_motion_miss_matches_the_slider_written_by_hand() -> None:
+    """The slider on the turning arm: the study's static pose and its miss at every speed are
+    those of the slider's equation of motion written by hand; the simulators' misses follow
+    the reference's within their trajectory tolerance; the miss grows faster than ω (the
+    damper's lag ∝ ω, the turning's pull ∝ ω²) and the conclusion quotes its 1 % crossing."""
+    r = run_study("quasi_static_motion", quick=True)
+    c = curves(r.data)
+    a = c["analytic"]
+    for omega, miss in zip(a["omega"], a["miss"], strict=True):
+        travel, static = slider_on_turning_arm(omega)
+        hand = np.max(np.abs(travel - static)) / np.max(np.abs(static))
+        assert miss == pytest.approx(hand, rel=REFERENCE), omega
+    # The damper's lag, c·u̇_static/k = (c/k)·θ̇·cos θ of the travel m·g/k, with θ̇ = ω·√(θ/stroke)
+    # peaking at θ = 0.6533 (tan θ = 1/(2θ)) at 0.512·ω·c/k: the turning adds to it (both
+    # push the slider outward of its static pose as the arm rises).
+    lag = 0.512 * a["omega"] * motion.DAMPING / motion.STIFFNESS
+    assert (a["miss"] > lag).all()
+    scale = motion.governor_arm().scale / (motion.SLIDER_MASS * motion.GRAVITY / motion.STIFFNESS)
+    for sim in ("mujoco", "pymunk"):
+        allowed = rule(sim, "pose", TRAJECTORY).rtol * scale
+        assert (c[sim]["own_error"] <= allowed).all(), sim
+        assert np.allclose(c[sim]["miss"], a["miss"], rtol=0, atol=allowed), sim
+    assert (np.diff(np.log(a["miss"])) / np.diff(np.log(a["omega"])) > 1.0).all()
+    one = crossing(a["omega"], a["miss"], 0.01)
     assert one is not None and f"{one:.3g} rad/s" in r.conclusion
 
 
@@ -87,8 +140,8 @@ def test_near_toggle_forces_grow_like_one_over_delta() -> None:
 def test_every_study_is_registered_with_a_figure() -> None:
     """Every registered study runs quickly and returns a PNG figure and a conclusion."""
     for name in STUDIES:
-        if name in ("quasi_static", "massless", "friction_angle", "superposition_friction",
-                    "near_toggle"):
+        if name in ("quasi_static", "quasi_static_motion", "massless", "friction_angle",
+                    "superposition_friction", "near_toggle"):
             continue  # run above
         r = run_study(name, quick=True)
         assert r.figure.startswith(b"\x89PNG") and r.conclusion

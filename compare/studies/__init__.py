@@ -14,6 +14,7 @@ from mechcheck.studies.common import Study, StudyResult
 
 STUDIES: dict[str, str] = {
     "quasi_static": "mechcheck.studies.quasi_static:run",
+    "quasi_static_motion": "mechcheck.studies.quasi_static_motion:run",
     "superposition_friction": "mechcheck.studies.superposition_friction:run",
     "friction_angle": "mechcheck.studies.friction_angle:run",
     "massless": "mechcheck.studies.massless:run",
