@@ -383,8 +383,9 @@ def draw_command(
 @app.command("study")
 def study_command(
     names: Annotated[list[str] | None, typer.Argument(
-        help="Studies to run (default: all): quasi_static, superposition_friction, "
-             "friction_angle, massless, rigid_joints, near_toggle.")] = None,
+        help="Studies to run (default: all): quasi_static, quasi_static_motion, "
+             "superposition_friction, friction_angle, massless, rigid_joints, "
+             "near_toggle.")] = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] =
         Path("mechcheck-studies"),
     quick: Annotated[bool, typer.Option(help="Fewer points per sweep (a smoke run).")] = False,

@@ -116,6 +116,17 @@ def reached(values: dict[str, float | None], unit: str, *, at: str, tried: str) 
     return f"from {at} = " + by_source(values, unit, beyond=f"beyond {tried}")
 
 
+def levels_reached(data: pd.DataFrame, x: str, y: str, *, unit: str, at: str,
+                   levels: tuple[float, float] = (0.01, 0.10)) -> str:
+    """"by 1 % from ω = X (…) and by 10 % from ω = Y (…)": where each source's ``y`` first
+    rises through each level along ``x`` (from the sweep's last ``x`` on if never)."""
+    found = {src: [crossing(g[x], g[y], level) for level in levels] for src, g in groups(data)}
+    tried = f"{data[x].max():g}{' ' + unit if unit else ''}"
+    first, second = ({src: v[i] for src, v in found.items()} for i in range(2))
+    return (f"by {levels[0] * 100:g} % " + reached(first, unit, at=at, tried=tried)
+            + f" and by {levels[1] * 100:g} % " + reached(second, unit, at=at, tried=tried))
+
+
 def loglog_by_source(data: pd.DataFrame, x: str, y: str, *, levels: tuple[float, ...],
                      xlabel: str, ylabel: str, title: str) -> bytes:
     """The usual study figure: one log-log curve per source (analytic solid, simulators

@@ -33,7 +33,7 @@ from mechcheck.analytic.linkage import (
 )
 from mechcheck.analytic.trajectory import Trajectory
 from mechcheck.simulate_run import run_backend, settings_text
-from mechcheck.studies.common import StudyResult, crossing, groups, loglog_by_source, reached
+from mechcheck.studies.common import StudyResult, groups, levels_reached, loglog_by_source
 
 LEVELS = (0.01, 0.10)
 
@@ -177,15 +177,10 @@ def run(quick: bool = False) -> StudyResult:
     static = static_travel()
     names = trajectory_simulators()
     data = pd.DataFrame([row for w in omegas for row in rows_at(float(w), static, names)])
-    found = {src: [crossing(g["omega"], g["miss"], lv) for lv in LEVELS]
-             for src, g in groups(data)}
     reference = data[(data["source"] == backends.REFERENCE) & (data["miss"] > 0)]
-    tried = f"{omegas[-1]:g} rad/s"
     conclusion = (
-        "The slider misses its static pose by 1 % of its travel "
-        + reached({k: v[0] for k, v in found.items()}, "rad/s", at="ω", tried=tried)
-        + " and by 10 % "
-        + reached({k: v[1] for k, v in found.items()}, "rad/s", at="ω", tried=tried)
+        "The slider misses its static pose (a share of its static travel) "
+        + levels_reached(data, "omega", "miss", unit="rad/s", at="ω", levels=LEVELS)
         + f"; {growth(reference)}"
         + (f"; {note}" if (note := floor_note(data)) else "") + ".")
     figure = loglog_by_source(data, "omega", "miss", levels=LEVELS,
