@@ -57,6 +57,24 @@ FREE_JOINT = "slot"
 #: solved once).
 POSES = 61
 
+TITLE = "Quasi-static motion"
+QUESTION = ("How slowly must a linkage be driven for its motion to follow the static "
+            "equilibrium pose within 1 % and 10 %?")
+#: The method paragraph of the study's report.
+METHOD = (
+    f"A {ARM_LENGTH * 1000:g} mm arm turned about a ground pivot carries a "
+    f"{SLIDER_MASS:g} kg slider on a {STIFFNESS:g} N/m spring along it (drawn at its free "
+    f"length, {SLIDER_AT * 1000:g} mm out) with {DAMPING:g} N·s/m of viscous friction in "
+    "its slot, under gravity: two degrees of freedom, the arm's prescribed. Static: the "
+    "engine's equilibrium of the slider at each arm angle (mechcheck.solve_poses on the "
+    "linkage at rest). Motion: the arm driven from rest, horizontal, at a constant "
+    "acceleration that brings it upright at ω, a trajectory run by the analytic reference "
+    "and each simulator's finest rung (mechcheck simulate's runs), read at "
+    f"{POSES} arm angles over the quarter turn. The miss is the worst difference of the "
+    "slider's travel from the static one over the stroke, over the static travel "
+    "(m·g/k); a simulator's own error is its run's worst difference from the reference "
+    "on the same scale.")
+
 
 def governor_arm(omega: float | None = None) -> Case:
     """The arm and its spring-loaded slider, drawn horizontal; ``omega`` (rad/s) given, a
@@ -169,6 +187,16 @@ def floor_note(data: pd.DataFrame) -> str:
     return "; ".join(notes)
 
 
+def conclusion(data: pd.DataFrame) -> str:
+    """The study's one line, from its data: the speeds of the 1 % and 10 % miss, how the
+    miss grows, and each simulator's own error floor."""
+    reference = data[(data["source"] == backends.REFERENCE) & (data["miss"] > 0)]
+    note = floor_note(data)
+    return ("The slider misses its static pose (a share of its static travel) "
+            + levels_reached(data, "omega", "miss", unit="rad/s", at="ω", levels=LEVELS)
+            + f"; {growth(reference)}" + (f"; {note}" if note else "") + ".")
+
+
 def run(quick: bool = False) -> StudyResult:
     """The arm driven to ω at the upright pose, for ω over two decades; each source's
     worst miss of the static slider travel over the stroke."""
@@ -177,29 +205,9 @@ def run(quick: bool = False) -> StudyResult:
     static = static_travel()
     names = trajectory_simulators()
     data = pd.DataFrame([row for w in omegas for row in rows_at(float(w), static, names)])
-    reference = data[(data["source"] == backends.REFERENCE) & (data["miss"] > 0)]
-    conclusion = (
-        "The slider misses its static pose (a share of its static travel) "
-        + levels_reached(data, "omega", "miss", unit="rad/s", at="ω", levels=LEVELS)
-        + f"; {growth(reference)}"
-        + (f"; {note}" if (note := floor_note(data)) else "") + ".")
     figure = loglog_by_source(data, "omega", "miss", levels=LEVELS,
                               xlabel="arm speed at the upright pose ω [rad/s]",
                               ylabel="worst miss of the static pose / static travel",
                               title="Quasi-static motion (spring-loaded slider on a turning arm)")
-    return StudyResult(
-        "quasi_static_motion", "Quasi-static motion",
-        "How slowly must a linkage be driven for its motion to follow the static equilibrium "
-        "pose within 1 % and 10 %?", data, figure, conclusion,
-        f"A {ARM_LENGTH * 1000:g} mm arm turned about a ground pivot carries a "
-        f"{SLIDER_MASS:g} kg slider on a {STIFFNESS:g} N/m spring along it (drawn at its free "
-        f"length, {SLIDER_AT * 1000:g} mm out) with {DAMPING:g} N·s/m of viscous friction in "
-        "its slot, under gravity: two degrees of freedom, the arm's prescribed. Static: the "
-        "engine's equilibrium of the slider at each arm angle (mechcheck.solve_poses on the "
-        "linkage at rest). Motion: the arm driven from rest, horizontal, at a constant "
-        "acceleration that brings it upright at ω, a trajectory run by the analytic reference "
-        "and each simulator's finest rung (mechcheck simulate's runs), read at "
-        f"{POSES} arm angles over the quarter turn. The miss is the worst difference of the "
-        "slider's travel from the static one over the stroke, over the static travel "
-        "(m·g/k); a simulator's own error is its run's worst difference from the reference "
-        "on the same scale.")
+    return StudyResult("quasi_static_motion", TITLE, QUESTION, data, figure, conclusion(data),
+                       METHOD)
