@@ -154,7 +154,7 @@ def rows_at(omega: float, static: np.ndarray, names: list[str]) -> list[dict[str
             own = float(np.max(np.abs(travel - travel_of(reference, case)))) / scale
         rows.append(row | {"miss": float(np.max(np.abs(travel - static))) / scale,
                            "own_error": own, "status": "ok",
-                           "settings": settings_text(run.settings), "wall_time": run.wall_time})
+                           "settings": settings_text(run.settings)})
     return rows
 
 
