@@ -87,14 +87,14 @@ class Batched:
         # Most entries are already a value per pose: broadcasting costs more than the entry.
         self._v.append(v if v.shape == (self.poses,) else np.broadcast_to(v, (self.poses,)))
 
-    def add_rows(self, row: int, col: int, values: Array) -> None:
-        """Add the rows of ``values`` (k, N) at (row, col), (row + 1, col), …: a few entries
-        of one column computed together."""
+    def add_entries(self, rows: list[int], cols: list[int], values: Array) -> None:
+        """Add the rows of ``values`` (k, N) at (rows[i], cols[i]): many entries computed
+        together."""
         if not isinstance(self._v, list):
             self._v = list(self._v)
         self._kept.clear()
-        self._r.extend(range(row, row + values.shape[0]))
-        self._c.extend([col] * values.shape[0])
+        self._r.extend(rows)
+        self._c.extend(cols)
         self._v.extend(values)
 
     def _constant(self, value: float) -> Array:
@@ -213,6 +213,17 @@ class Batched:
         out._r, out._c = self._r + other._r, self._c + other._c
         out._v = list(self._v) + list(other._v)
         return out
+
+
+class Dropped(Batched):
+    """A matrix whose entries are dropped as they are written: where only the values that
+    come with them are wanted (a constraint system's residual without its Jacobian)."""
+
+    def add(self, row: int, col: int, values: Array | float) -> None:
+        return None
+
+    def add_entries(self, rows: list[int], cols: list[int], values: Array) -> None:
+        return None
 
 
 def solve(a: Batched | Array, b: Array) -> Array:

@@ -38,7 +38,7 @@ from mechcheck.analytic.linkage_kinematics import (
     solve_pose,
 )
 from mechcheck.analytic.linkage_loads import known_vector, spring_force, undirected_springs
-from mechcheck.analytic.rigid import force_layout
+from mechcheck.analytic.rigid import force_layout, joints_by_kind
 
 #: Above this condition number of the scaled equilibrium matrix the pose is singular and
 #: its forces withheld (the same line as the closed-form presets, for the same reason).
@@ -68,8 +68,8 @@ def coefficient_entries(pose: LinkagePose) -> Batched:
     layout = force_layout(linkage)
     k = Batched(layout.rows, layout.columns, pose.q.shape[0])
     frames = {j.name: pose.frame(j) for j in linkage.joints}
-    for joint in linkage.joints:
-        joint.kind.react(k, layout, joint, frames[joint.name])
+    for kind, joints in joints_by_kind(linkage):
+        kind.react_all(k, layout, joints, [frames[j.name] for j in joints])
     for index, driver in enumerate(linkage.drivers):
         joint = linkage.joint(driver.joint)
         joint.kind.exert(k, layout, layout.driver_column(index), joint, frames[joint.name])
@@ -204,12 +204,39 @@ def _unit_rows(norms: Array) -> Array:
 
 def _condition_small(entries: Batched, rows: Array, cols: Array) -> Array:
     """:func:`condition` of a small K with at most one entry per place, scaled as a dense
-    matrix: each entry goes through the same products as :meth:`.Batched.scaled` (so the
-    same number), in a few calls rather than a few per entry (one pose pays for calls)."""
+    matrix."""
+    return linalg.condition_of_dense(_scaled_small(entries, rows, cols))
+
+
+def _scaled_small(entries: Batched, rows: Array, cols: Array) -> Array:
+    """The scaled K of :func:`condition` (N, rows, columns), for a small K with at most one
+    entry per place: each entry goes through the same products as :meth:`.Batched.scaled`
+    (so the same number), in a few calls rather than a few per entry (one pose pays for
+    calls)."""
     first = entries.dense() * rows[:, None] * cols
     unit = _unit_rows(np.asarray(np.linalg.norm(first, axis=2), dtype=np.float64))
-    second = np.where(entries.pattern, first * unit[:, :, None], 0.0)   # × 1: the columns
-    return linalg.condition_of_dense(second)
+    return np.asarray(np.where(entries.pattern, first * unit[:, :, None], 0.0),  # × 1: the columns
+                      dtype=np.float64)
+
+
+def condition_bound(pose: LinkagePose, k: Batched) -> Array:
+    """An upper bound of :func:`condition` per pose, ‖S‖_F·‖S⁻¹‖_F of the scaled matrix S
+    (σ_max ≤ ‖S‖_F and 1/σ_min ≤ ‖S⁻¹‖_F), an inverse instead of an SVD; inf where it
+    is not computed (a K that is not small and square) or S is singular."""
+    if not (k.small and k.distinct and k.rows == k.cols) or k.rows == 0:
+        return np.full(k.poses, np.inf)
+    layout = force_layout(pose.linkage)
+    scaled = _scaled_small(k, layout.row_scales, layout.unknown_lengths)
+    bound = np.full(k.poses, np.inf)
+    finite = np.isfinite(scaled).all(axis=(1, 2))
+    with np.errstate(all="ignore"):
+        try:
+            inverse = np.linalg.inv(scaled[finite])
+        except np.linalg.LinAlgError:   # a singular pose: its exact condition number decides
+            return bound
+        bound[finite] = np.linalg.norm(scaled[finite], axis=(1, 2)) \
+            * np.linalg.norm(inverse, axis=(1, 2))
+    return np.where(np.isnan(bound), np.inf, bound)
 
 
 @dataclass(frozen=True)
@@ -287,7 +314,13 @@ def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
     linkage = pose.linkage
     out: dict[str, Array] = {}
     carriers = linkage.carriers
-    for name, drawn in linkage.points.items():
+    drawn_at = pose.drawn_positions()
+    if drawn_at is not None:    # a few poses at rest: every point moved in one operation
+        moved = drawn_at + linkage.offset
+        for i, name in enumerate(linkage.points):
+            out[f"x_{name}"] = moved[:, i, 0]
+            out[f"y_{name}"] = moved[:, i, 1]
+    for name, drawn in () if drawn_at is not None else linkage.points.items():
         position = pose.position(carriers[name], drawn)
         out[f"x_{name}"] = position[:, 0] + linkage.offset[0]
         out[f"y_{name}"] = position[:, 1] + linkage.offset[1]
@@ -338,7 +371,10 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
         pose = solve_pose(linkage, values, velocities, accelerations)
     entries = coefficient_entries(pose)
     b = known_vector(pose)
-    cond = condition(pose, entries)
+    # The verdicts from a cheap bound of the condition number where it decides, as for an
+    # Assur linkage; the exact numbers computed when read.
+    exact = _ExactCondition(pose, entries)
+    singular = _singular_by_bound(pose, condition_bound(pose, entries), exact) | ~pose.assembled
     with np.errstate(all="ignore"):
         x = linalg.solve(entries, -b)
     terms = coulomb_terms(pose)
@@ -365,7 +401,7 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
             x, undecided = compatible_forces(pose, k, b)
     if linkage.elastic_links:
         extra = axial_forces(pose, entries.dense(), x)
-    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "") | (undirected != "") \
+    withheld = singular | ~converged | (reversing != "") | (undirected != "") \
         | linkage.drawn_at_change_point   # reactions not unique, or no branch
     if undecided is not None:
         withheld |= undecided
@@ -375,8 +411,8 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     if stable is not None:  # an equilibrium not found is no pose to report forces at
         converged = converged & np.isfinite(stable)
     return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms) | extra,
-                          lambda: cond, ~(cond <= SINGULAR_CONDITION), converged, reversing, stable,
-                          undirected, gain, undecided)
+                          exact.all, singular, converged, reversing, stable, undirected, gain,
+                          undecided)
 
 
 def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:
@@ -421,14 +457,15 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
 class _ExactCondition:
     """:func:`condition` of some or all poses of a static pose set, each computed once."""
 
-    def __init__(self, pose: LinkagePose) -> None:
+    def __init__(self, pose: LinkagePose, entries: Batched | None = None) -> None:
         self.pose = pose
+        self.entries = entries
         self.known = np.full(pose.q.shape[0], np.nan)
 
     def of(self, which: NDArray[np.bool_]) -> Array:
         todo = which & np.isnan(self.known)
         if todo.all():  # every pose (a case solved on its own): K from the pose as it is
-            self.known = condition(self.pose, coefficient_entries(self.pose))
+            self.known = condition(self.pose, self.entries or coefficient_entries(self.pose))
         elif todo.any():
             rest = np.zeros_like(self.pose.q[todo])
             near = LinkagePose(self.pose.linkage, self.pose.drivers[todo], self.pose.q[todo], rest,

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
@@ -165,6 +165,13 @@ class JointKind(ABC):
     @abstractmethod
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
         """Its reaction unknowns' columns of K (by links[0] on links[1], reversed on links[0])."""
+
+    def react_all(self, k: Batched, layout: ForceLayout, joints: Sequence[Joint],
+                  frames: Sequence[JointFrame]) -> None:
+        """:meth:`react` of each of the linkage's joints of this kind, in order (a kind may
+        compute them together: one pose pays each array operation's fixed cost)."""
+        for joint, frame in zip(joints, frames, strict=True):
+            self.react(k, layout, joint, frame)
 
     @abstractmethod
     def reaction_lengths(self, size: float) -> tuple[float, ...]:

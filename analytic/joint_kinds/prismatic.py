@@ -96,7 +96,7 @@ class Prismatic(JointKind):
     # -- statics --------------------------------------------------------------------------
     def frame(self, pose: LinkagePose, joint: Joint) -> JointFrame:
         point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
-        u = rotate(pose.angle(joint.links[0])[0], slot_axis(joint))
+        u = pose.turned(joint.links[0], slot_axis(joint))
         return JointFrame(point, u, perp(u))
 
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
