@@ -234,8 +234,8 @@ def condition_bound(pose: LinkagePose, k: Batched) -> Array:
             inverse = np.linalg.inv(scaled[finite])
         except np.linalg.LinAlgError:   # a singular pose: its exact condition number decides
             return bound
-        bound[finite] = np.linalg.norm(scaled[finite], axis=(1, 2)) \
-            * np.linalg.norm(inverse, axis=(1, 2))
+        bound[finite] = np.sqrt(np.square(scaled[finite]).sum(axis=(1, 2))
+                                * np.square(inverse).sum(axis=(1, 2)))
     return np.where(np.isnan(bound), np.inf, bound)
 
 
@@ -338,13 +338,16 @@ def force_quantities(pose: LinkagePose, x: Array, terms: list[CoulombTerm]) -> d
     layout = force_layout(linkage)
     coulomb = {t.joint.name: t for t in terms}
     out: dict[str, Array] = {}
+    still = np.zeros(x.shape[0])    # no friction along a joint: read, never written
+    still.flags.writeable = False
     for joint in linkage.joints:
-        columns = list(layout.joint_columns(joint))
-        along = np.zeros(x.shape[0])
+        first = layout.joint_columns(joint)[0]
+        own = x[:, first:first + joint.kind.rows]   # its columns, one after another
+        along = still
         if joint.name in coulomb:   # the friction force along its axis (0 at a pin)
             t = coulomb[joint.name]
-            along = joint.kind.sliding_friction(t.coefficient, t.sense, x[:, columns])
-        out |= joint.kind.reported(pose, joint, x[:, columns], along)
+            along = joint.kind.sliding_friction(t.coefficient, t.sense, own)
+        out |= joint.kind.reported(pose, joint, own, along)
     for index, driver in enumerate(linkage.drivers):
         out[f"Q_{driver.joint}"] = x[:, layout.driver_column(index)]
     for spring in linkage.springs:

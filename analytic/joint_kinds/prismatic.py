@@ -90,7 +90,7 @@ class Prismatic(JointKind):
     def value(self, pose: LinkagePose, joint: Joint) -> Array:
         i, j = joint.links
         a0 = pose.linkage.points[joint.at]
-        u = rotate(pose.link_state(i, pose.q)[1], slot_axis(joint))
+        u = pose.turned(i, slot_axis(joint))
         return dot(u, pose.position(j, a0) - pose.position(i, a0))
 
     # -- statics --------------------------------------------------------------------------
