@@ -37,6 +37,8 @@ from mechcheck.analytic.rigid import (
     carried_points,
     carried_rotations,
     carried_translations,
+    joint_rows,
+    joints_by_kind,
     kept,
     link_column,
     perp,
@@ -303,10 +305,10 @@ def constraint_system(linkage: Linkage, q: Array, targets: Array, *,
     rows = layout.rows if drivers else layout.joint_rows
     entries = Batched(rows, layout.size, n) if jacobian else Dropped(rows, layout.size, n)
     c = Constraints(layout, q, np.zeros((n, rows)), entries)
-    row = 0
-    for joint in linkage.joints:
-        joint.kind.constrain(c, joint, row)
-        row += joint.kind.rows
+    starts = joint_rows(linkage)
+    for kind, joints in joints_by_kind(linkage):
+        kind.constrain_all(c, joints, [starts[j.name] for j in joints])
+    row = layout.joint_rows
     for k, driver in enumerate(linkage.drivers if drivers else ()):
         joint = linkage.joint(driver.joint)
         joint.kind.drive(c, joint, row)

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic.linalg import FEW_POSES, Batched
+from mechcheck.analytic.linalg import FEW_POSES, Batched, Dropped
 from mechcheck.analytic.values import GROUND
 
 if TYPE_CHECKING:
@@ -266,6 +266,39 @@ class Constraints:
                 self.jac.add(row + c, kj + c, -1.0)
                 self.jac.add(row + c, kj + 2, -dpj[:, c])
 
+    def coincide_all(self, rows: Sequence[int], joints: Sequence[Joint]) -> None:
+        """:meth:`coincide` of several joints, joint j's rows from ``rows[j]``: at a few poses
+        every point from the carried ones, its two rows and its entries written at once (the
+        same numbers, the entries in the same order)."""
+        n = self.q.shape[0]
+        if n > FEW_POSES:
+            for row, joint in zip(rows, joints, strict=True):
+                self.coincide(row, joint)
+            return
+        plan = _pins_plan(self.linkage, tuple(rows), tuple(joints))
+        positions, across, _ = self._carried
+        sides = []
+        for side, (places, grounded, drawn) in enumerate(plan.sides):   # links[0], links[1]
+            p = np.empty((n, len(joints), 2))
+            p[:, places] = positions[:, plan.carried[side, places]]
+            p[:, grounded] = drawn  # the ground's point, as drawn
+            sides.append(p)
+        gap = sides[0] - sides[1]
+        self.phi[:, plan.x_rows] = gap[..., 0]
+        self.phi[:, plan.x_rows + 1] = gap[..., 1]
+        if isinstance(self.jac, Dropped):     # Φ alone is asked for
+            return
+        # Every entry's values picked from: 1, −1, then ∂p/∂φ of every carried point (x, y)
+        # and its negative.
+        turned_by = across.reshape(n, -1).T
+        sources = np.concatenate([self.jac_constant(1.0), self.jac_constant(-1.0), turned_by,
+                                  -turned_by])
+        self.jac.add_entries(plan.entry_rows, plan.entry_cols, sources[plan.entry_sources])
+
+    def jac_constant(self, value: float) -> Array:
+        """A row (1, N) of ``value``."""
+        return np.full((1, self.q.shape[0]), value)
+
     def angle_lock(self, row: int, joint: Joint) -> None:
         """Row φ_j − φ_i."""
         i, j = joint.links
@@ -287,6 +320,62 @@ class Constraints:
         self.phi[:, row] += dot(w, d)
         self.put(row, j, w, dot(w, dpj))
         self.put(row, i, -w, dot(perp(w), d) - dot(w, dpi))
+
+
+@dataclass(frozen=True)
+class _PinsPlan:
+    """Where :meth:`Constraints.coincide_all` reads and writes, for one set of joints."""
+
+    #: Per side (links[0], links[1]): the joints whose link moves, the others (the ground),
+    #: and the ground's drawn points (k, 2).
+    sides: tuple[tuple[NDArray[np.intp], NDArray[np.intp], Array], ...]
+    #: (2, joints): each joint's point's place among the carried points, on each side
+    #: (0 on the ground).
+    carried: NDArray[np.intp]
+    x_rows: NDArray[np.intp]
+    entry_rows: list[int]
+    entry_cols: list[int]
+    entry_sources: NDArray[np.intp]
+
+
+def _pins_plan(linkage: Linkage, rows: tuple[int, ...], joints: tuple[Joint, ...]) -> _PinsPlan:
+    """The :class:`_PinsPlan` of these joints and rows, kept with the linkage."""
+    return kept(linkage, f"pins plan {rows}", lambda: _make_pins_plan(linkage, rows, joints))
+
+
+def _make_pins_plan(linkage: Linkage, rows: tuple[int, ...],
+                    joints: tuple[Joint, ...]) -> _PinsPlan:
+    index = carried_points(linkage).index
+    count = len(index)
+    sides = []
+    carried = np.zeros((2, len(joints)), dtype=np.intp)
+    for side in (0, 1):
+        places, grounded, drawn = [], [], []
+        for j, joint in enumerate(joints):
+            link, p0 = joint.links[side], linkage.points[joint.at]
+            if link == GROUND:
+                grounded.append(j)
+                drawn.append(p0)
+            else:
+                places.append(j)
+                carried[side, j] = index[link, p0]
+        sides.append((np.array(places, dtype=np.intp), np.array(grounded, dtype=np.intp),
+                      np.array(drawn, dtype=float).reshape(-1, 2)))
+    entry_rows: list[int] = []
+    entry_cols: list[int] = []
+    sources: list[int] = []
+    for j, (row, joint) in enumerate(zip(rows, joints, strict=True)):
+        ki, kj = (link_column(linkage, link) for link in joint.links)
+        for c in range(2):
+            # As coincide(): +1 and ∂p_i/∂φ_i, then −1 and −∂p_j/∂φ_j (the sources' rows:
+            # 0 is 1, 1 is −1, 2 + 2·place + c is ∂p/∂φ, and the negatives follow).
+            for k, side, sign in ((ki, 0, 0), (kj, 1, 1)):
+                if k >= 0:
+                    entry_rows += [row + c, row + c]
+                    entry_cols += [k + c, k + 2]
+                    sources += [sign, 2 + 2 * count * sign + 2 * int(carried[side, j]) + c]
+    return _PinsPlan((sides[0], sides[1]), carried, np.array(rows, dtype=np.intp),
+                     entry_rows, entry_cols, np.array(sources, dtype=np.intp))
 
 
 @dataclass
@@ -511,6 +600,18 @@ def joints_by_kind(linkage: Linkage) -> tuple[tuple[JointKind, tuple[Joint, ...]
             groups.setdefault(joint.kind.name, (joint.kind, []))[1].append(joint)
         return tuple((kind, tuple(joints)) for kind, joints in groups.values())
     return kept(linkage, "joints by kind", group)
+
+
+def joint_rows(linkage: Linkage) -> dict[str, int]:
+    """Each joint's first constraint row (each kind brings its :attr:`~.JointKind.rows`);
+    kept (:func:`kept`)."""
+    def starts() -> dict[str, int]:
+        out, row = {}, 0
+        for joint in linkage.joints:
+            out[joint.name] = row
+            row += joint.kind.rows
+        return out
+    return kept(linkage, "joint rows", starts)
 
 
 def force_layout(linkage: Linkage) -> ForceLayout:
