@@ -130,20 +130,19 @@ def carried_points(linkage: Linkage) -> CarriedPoints:
 
 
 def _carried_points(linkage: Linkage) -> CarriedPoints:
-    from mechcheck.analytic.linkage import LinearSpring  # which imports this module
-
     index: dict[tuple[str, tuple[float, ...]], int] = {}
     for link in linkage.links:
         if link.name != GROUND:
             for name in link.points:
                 index.setdefault((link.name, linkage.points[name]), len(index))
-    # The points the known forces act at: loads, centres of mass, springs' ends.
+    # The points the known forces act at: loads, centres of mass, linear springs' ends (a
+    # torsion spring has none). The linkage may not have checked them yet: only those on
+    # its moving links.
     acting = [(load.link, load.at) for load in linkage.loads]
     acting += [(mass.link, mass.com) for mass in linkage.masses]
-    acting += [end for spring in linkage.springs if isinstance(spring, LinearSpring)
-               for end in spring.ends]
+    acting += [end for spring in linkage.springs for end in getattr(spring, "ends", ())]
     for link_name, p0 in acting:
-        if link_name != GROUND:
+        if link_name in linkage.link_number:
             index.setdefault((link_name, tuple(p0)), len(index))
     drawn = np.array([p for _, p in index], dtype=float).reshape(-1, 2)
     columns = np.array([link_column(linkage, link) for link, _ in index], dtype=np.intp)
