@@ -18,8 +18,9 @@ factorisations' fill, which for the chains and trees of a linkage stays close to
 
 from __future__ import annotations
 
+import itertools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -58,7 +59,8 @@ class Batched:
     poses: int
     _r: list[int] = field(default_factory=list)
     _c: list[int] = field(default_factory=list)
-    #: Each entry's values (N,), or all of them stacked (entries, N) once derived.
+    #: The entries' values in blocks (k, N) of entries added together, or all of them
+    #: stacked (entries, N) once derived.
     _v: list[Array] | Array = field(default_factory=list)
     #: A number's row of N values, made once per matrix (entries are never written to).
     _constants: dict[float, Array] = field(default_factory=dict, repr=False)
@@ -75,32 +77,32 @@ class Batched:
 
     def add(self, row: int, col: int, values: Array | float) -> None:
         """Add ``values`` (N,) (or one number for every pose) at (row, col)."""
-        if not isinstance(self._v, list):
-            self._v = list(self._v)
-        self._kept.clear()
-        self._r.append(row)
-        self._c.append(col)
         if isinstance(values, (float, int)):
-            self._v.append(self._constant(float(values)))
+            self._add_block([row], [col], self._constant(float(values)))
             return
         v = np.asarray(values, dtype=float)
         # Most entries are already a value per pose: broadcasting costs more than the entry.
-        self._v.append(v if v.shape == (self.poses,) else np.broadcast_to(v, (self.poses,)))
+        self._add_block([row], [col], (v if v.shape == (self.poses,)
+                                       else np.broadcast_to(v, (self.poses,)))[None])
 
-    def add_rows(self, row: int, col: int, values: Array) -> None:
-        """Add the rows of ``values`` (k, N) at (row, col), (row + 1, col), …: a few entries
-        of one column computed together."""
+    def add_entries(self, rows: list[int], cols: list[int], values: Array) -> None:
+        """Add the rows of ``values`` (k, N) at (rows[i], cols[i]): many entries computed
+        together, kept as one block."""
+        self._add_block(rows, cols, values)
+
+    def _add_block(self, rows: list[int], cols: list[int], values: Array) -> None:
         if not isinstance(self._v, list):
-            self._v = list(self._v)
+            self._v = [self._v]
         self._kept.clear()
-        self._r.extend(range(row, row + values.shape[0]))
-        self._c.extend([col] * values.shape[0])
-        self._v.extend(values)
+        self._r.extend(rows)
+        self._c.extend(cols)
+        self._v.append(values)
 
     def _constant(self, value: float) -> Array:
+        """A block (1, N) of ``value``."""
         row = self._constants.get(value)
         if row is None:
-            row = np.full(self.poses, value)
+            row = np.full((1, self.poses), value)
             row.flags.writeable = False
             self._constants[value] = row
         return row
@@ -141,9 +143,13 @@ class Batched:
         if not self._v:
             return np.zeros((0, self.poses))
         if self.poses > FEW_POSES:   # a second copy of many poses' entries is not kept
-            return np.array(self._v)
-        found: Array = self._derived("values", lambda: np.array(self._v))
+            return np.concatenate(self._v)
+        found: Array = self._derived("values", lambda: np.concatenate(self._v))
         return found
+
+    def _entries(self) -> Iterable[Array]:
+        """Each entry's values (N,), in the order they were added."""
+        return self._v if not isinstance(self._v, list) else itertools.chain.from_iterable(self._v)
 
     def index(self) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         found: tuple[NDArray[np.intp], NDArray[np.intp]] = self._derived("index", lambda: (
@@ -155,7 +161,7 @@ class Batched:
         if self.poses <= FEW_POSES:   # kept: a solve and its condition number both ask
             return np.array(self._derived("dense", self._dense_few))   # its layout kept
         out = np.zeros((self.rows, self.cols, self.poses))
-        for r, c, v in zip(self._r, self._c, self._v, strict=True):
+        for r, c, v in zip(self._r, self._c, self._entries(), strict=True):
             out[r, c] += v   # a row of N contiguous values per entry
         return np.moveaxis(out, 2, 0)
 
@@ -208,11 +214,25 @@ class Batched:
             np.add.at(out, r, self.values() * x.T[c])
         return out.T
 
+    def _blocks(self) -> list[Array]:
+        return self._v if isinstance(self._v, list) else [self._v]
+
     def plus(self, other: Batched) -> Batched:
         out = Batched(self.rows, self.cols, self.poses)
         out._r, out._c = self._r + other._r, self._c + other._c
-        out._v = list(self._v) + list(other._v)
+        out._v = [*self._blocks(), *other._blocks()]
         return out
+
+
+class Dropped(Batched):
+    """A matrix whose entries are dropped as they are written: where only the values that
+    come with them are wanted (a constraint system's residual without its Jacobian)."""
+
+    def add(self, row: int, col: int, values: Array | float) -> None:
+        return None
+
+    def add_entries(self, rows: list[int], cols: list[int], values: Array) -> None:
+        return None
 
 
 def solve(a: Batched | Array, b: Array) -> Array:

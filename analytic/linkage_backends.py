@@ -194,13 +194,14 @@ def solution_from(case: Case, backend: str, results: LinkageResults, *, method: 
         "method": method, "condition_number": lambda: float(results.condition[index]),
         "dof": linkage.dof, "gruebler": linkage.gruebler, "wall_time_s": elapsed,
     }
-    axial = {q: v[index:index + 1] for q, v in results.values.items() if q.startswith("N_")}
-    if linkage.elastic_links and axial:   # how small the displacements statics neglects are
+    axial = {q: v[index:index + 1] for q, v in results.values.items() if q.startswith("N_")} \
+        if linkage.elastic_links else {}
+    if axial:   # how small the displacements statics neglects are
         one = slice(index, index + 1)
         diagnostics["max_strain"] = float(largest_strain(results.pose.take(one), axial)[0])
     # Every value is kept: one that is not finite at a pose without a verdict is a failure
     # of the method, which the harness reports as such rather than as a missing row.
-    values = {q: float(v[index]) for q, v in results.values.items()}
+    values = {q: v.item(index) for q, v in results.values.items()}
     pose_only = {q: v for q, v in values.items()
                  if q.startswith(("x_", "y_", "phi_", "q_")) and math.isfinite(v)}
     if only is not None:

@@ -38,7 +38,7 @@ from mechcheck.analytic.linkage_kinematics import (
     solve_pose,
 )
 from mechcheck.analytic.linkage_loads import known_vector, spring_force, undirected_springs
-from mechcheck.analytic.rigid import force_layout
+from mechcheck.analytic.rigid import force_layout, joints_by_kind
 
 #: Above this condition number of the scaled equilibrium matrix the pose is singular and
 #: its forces withheld (the same line as the closed-form presets, for the same reason).
@@ -54,6 +54,10 @@ FRICTION_ROUNDING = 1e-11
 #: A joint whose relative speed is below this fraction of the pose's speed scale counts
 #: as not moving: its Coulomb friction may take any value there (``indeterminate``).
 REVERSAL_RTOL = 1e-12
+#: The margin for the rounding of :func:`condition_bound` where it decides a verdict: its
+#: inverse is accurate to about (columns × condition number × ε), 2.3e-7 of itself for 21
+#: columns at 10⁸; a pose within this of the threshold gets its exact condition number.
+INVERSE_ROUNDING = 1e-6
 
 
 def coefficient_matrix(pose: LinkagePose) -> Array:
@@ -68,8 +72,8 @@ def coefficient_entries(pose: LinkagePose) -> Batched:
     layout = force_layout(linkage)
     k = Batched(layout.rows, layout.columns, pose.q.shape[0])
     frames = {j.name: pose.frame(j) for j in linkage.joints}
-    for joint in linkage.joints:
-        joint.kind.react(k, layout, joint, frames[joint.name])
+    for kind, joints in joints_by_kind(linkage):
+        kind.react_all(k, layout, joints, [frames[j.name] for j in joints])
     for index, driver in enumerate(linkage.drivers):
         joint = linkage.joint(driver.joint)
         joint.kind.exert(k, layout, layout.driver_column(index), joint, frames[joint.name])
@@ -204,12 +208,40 @@ def _unit_rows(norms: Array) -> Array:
 
 def _condition_small(entries: Batched, rows: Array, cols: Array) -> Array:
     """:func:`condition` of a small K with at most one entry per place, scaled as a dense
-    matrix: each entry goes through the same products as :meth:`.Batched.scaled` (so the
-    same number), in a few calls rather than a few per entry (one pose pays for calls)."""
+    matrix."""
+    return linalg.condition_of_dense(_scaled_small(entries, rows, cols))
+
+
+def _scaled_small(entries: Batched, rows: Array, cols: Array) -> Array:
+    """The scaled K of :func:`condition` (N, rows, columns), for a small K with at most one
+    entry per place: each entry goes through the same products as :meth:`.Batched.scaled`
+    (so the same number), in a few calls rather than a few per entry (one pose pays for
+    calls)."""
     first = entries.dense() * rows[:, None] * cols
     unit = _unit_rows(np.asarray(np.linalg.norm(first, axis=2), dtype=np.float64))
-    second = np.where(entries.pattern, first * unit[:, :, None], 0.0)   # × 1: the columns
-    return linalg.condition_of_dense(second)
+    return np.asarray(np.where(entries.pattern, first * unit[:, :, None], 0.0),  # × 1: the columns
+                      dtype=np.float64)
+
+
+def condition_bound(pose: LinkagePose, k: Batched) -> Array:
+    """An upper bound of :func:`condition` per pose, ‖S‖_F·‖S⁻¹‖_F of the scaled matrix S
+    (σ_max ≤ ‖S‖_F and 1/σ_min ≤ ‖S⁻¹‖_F), an inverse instead of an SVD; inf where it
+    is not computed (a K that is not small and square) or S is singular."""
+    if not (k.small and k.distinct and k.rows == k.cols) or k.rows == 0:
+        return np.full(k.poses, np.inf)
+    layout = force_layout(pose.linkage)
+    scaled = _scaled_small(k, layout.row_scales, layout.unknown_lengths)
+    bound = np.full(k.poses, np.inf)
+    finite = np.isfinite(scaled).all(axis=(1, 2))
+    some = scaled if finite.all() else scaled[finite]
+    with np.errstate(all="ignore"):
+        try:
+            inverse = np.linalg.inv(some)
+        except np.linalg.LinAlgError:   # a singular pose: its exact condition number decides
+            return bound
+        bound[finite] = np.sqrt(np.square(some).sum(axis=(1, 2))
+                                * np.square(inverse).sum(axis=(1, 2)))
+    return np.where(np.isnan(bound), np.inf, bound)
 
 
 @dataclass(frozen=True)
@@ -287,7 +319,13 @@ def pose_quantities(pose: LinkagePose) -> dict[str, Array]:
     linkage = pose.linkage
     out: dict[str, Array] = {}
     carriers = linkage.carriers
-    for name, drawn in linkage.points.items():
+    drawn_at = pose.drawn_positions()
+    if drawn_at is not None:    # a few poses at rest: every point moved in one operation
+        moved = drawn_at + linkage.offset
+        for i, name in enumerate(linkage.points):
+            out[f"x_{name}"] = moved[:, i, 0]
+            out[f"y_{name}"] = moved[:, i, 1]
+    for name, drawn in () if drawn_at is not None else linkage.points.items():
         position = pose.position(carriers[name], drawn)
         out[f"x_{name}"] = position[:, 0] + linkage.offset[0]
         out[f"y_{name}"] = position[:, 1] + linkage.offset[1]
@@ -305,13 +343,16 @@ def force_quantities(pose: LinkagePose, x: Array, terms: list[CoulombTerm]) -> d
     layout = force_layout(linkage)
     coulomb = {t.joint.name: t for t in terms}
     out: dict[str, Array] = {}
+    still = np.zeros(x.shape[0])    # no friction along a joint: read, never written
+    still.flags.writeable = False
     for joint in linkage.joints:
-        columns = list(layout.joint_columns(joint))
-        along = np.zeros(x.shape[0])
+        first = layout.joint_columns(joint)[0]
+        own = x[:, first:first + joint.kind.rows]   # its columns, one after another
+        along = still
         if joint.name in coulomb:   # the friction force along its axis (0 at a pin)
             t = coulomb[joint.name]
-            along = joint.kind.sliding_friction(t.coefficient, t.sense, x[:, columns])
-        out |= joint.kind.reported(pose, joint, x[:, columns], along)
+            along = joint.kind.sliding_friction(t.coefficient, t.sense, own)
+        out |= joint.kind.reported(pose, joint, own, along)
     for index, driver in enumerate(linkage.drivers):
         out[f"Q_{driver.joint}"] = x[:, layout.driver_column(index)]
     for spring in linkage.springs:
@@ -338,12 +379,16 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
         pose = solve_pose(linkage, values, velocities, accelerations)
     entries = coefficient_entries(pose)
     b = known_vector(pose)
-    cond = condition(pose, entries)
+    # The verdicts from a cheap bound of the condition number where it decides, as for an
+    # Assur linkage; the exact numbers computed when read.
+    exact = _ExactCondition(pose, entries)
+    singular = _singular_by_bound(pose, condition_bound(pose, entries), exact,
+                                  INVERSE_ROUNDING) | ~pose.assembled
     with np.errstate(all="ignore"):
         x = linalg.solve(entries, -b)
     terms = coulomb_terms(pose)
     converged = np.ones(x.shape[0], dtype=bool)
-    reversing = np.full(x.shape[0], "", dtype=object)
+    reversing = np.full(x.shape[0], "", dtype=object if terms else "<U1")
     gain: Callable[[], Array] | None = None
     if terms:
         x, converged = solve_with_friction(pose, entries, b, x, terms)
@@ -365,7 +410,7 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
             x, undecided = compatible_forces(pose, k, b)
     if linkage.elastic_links:
         extra = axial_forces(pose, entries.dense(), x)
-    withheld = ~(cond <= SINGULAR_CONDITION) | ~converged | (reversing != "") | (undirected != "") \
+    withheld = singular | ~converged | (reversing != "") | (undirected != "") \
         | linkage.drawn_at_change_point   # reactions not unique, or no branch
     if undecided is not None:
         withheld |= undecided
@@ -375,8 +420,8 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     if stable is not None:  # an equilibrium not found is no pose to report forces at
         converged = converged & np.isfinite(stable)
     return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms) | extra,
-                          lambda: cond, ~(cond <= SINGULAR_CONDITION), converged, reversing, stable,
-                          undirected, gain, undecided)
+                          exact.all, singular, converged, reversing, stable, undirected, gain,
+                          undecided)
 
 
 def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:
@@ -421,14 +466,15 @@ def _static_by_groups(linkage: Linkage, values: Array | None) -> LinkageResults:
 class _ExactCondition:
     """:func:`condition` of some or all poses of a static pose set, each computed once."""
 
-    def __init__(self, pose: LinkagePose) -> None:
+    def __init__(self, pose: LinkagePose, entries: Batched | None = None) -> None:
         self.pose = pose
+        self.entries = entries
         self.known = np.full(pose.q.shape[0], np.nan)
 
     def of(self, which: NDArray[np.bool_]) -> Array:
         todo = which & np.isnan(self.known)
         if todo.all():  # every pose (a case solved on its own): K from the pose as it is
-            self.known = condition(self.pose, coefficient_entries(self.pose))
+            self.known = condition(self.pose, self.entries or coefficient_entries(self.pose))
         elif todo.any():
             rest = np.zeros_like(self.pose.q[todo])
             near = LinkagePose(self.pose.linkage, self.pose.drivers[todo], self.pose.q[todo], rest,
@@ -440,12 +486,13 @@ class _ExactCondition:
         return self.of(np.ones(self.known.shape, dtype=bool))
 
 
-def _singular_by_bound(pose: LinkagePose, bound: Array, exact: _ExactCondition) -> NDArray[np.bool_]:
+def _singular_by_bound(pose: LinkagePose, bound: Array, exact: _ExactCondition,
+                       rounding: float = 1e-9) -> NDArray[np.bool_]:
     """Condition number > :data:`SINGULAR_CONDITION` at each assembled pose: not where an upper
     bound of it is below (with a margin for the bound's rounding), else by :func:`condition`."""
     assembled = pose.assembled
     singular = np.zeros(assembled.shape, dtype=bool)
-    undecided = assembled & ~(bound * (1.0 + 1e-9) < SINGULAR_CONDITION)
+    undecided = assembled & ~(bound * (1.0 + rounding) < SINGULAR_CONDITION)
     if undecided.any():
         singular[undecided] = ~(exact.of(undecided) <= SINGULAR_CONDITION)
     return singular

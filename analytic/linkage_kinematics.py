@@ -27,13 +27,18 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from mechcheck.analytic import linalg
-from mechcheck.analytic.linalg import Batched
+from mechcheck.analytic.linalg import Batched, Dropped
 from mechcheck.analytic.rigid import (
     Array,
     Constraints,
     Layout,
     Motion,
     Turn,
+    carried_points,
+    carried_rotations,
+    carried_translations,
+    joint_rows,
+    joints_by_kind,
     kept,
     link_column,
     perp,
@@ -101,13 +106,47 @@ class LinkagePose:
         key = (link, drawn)
         found = self.points_asked.get(key)
         if found is None:
-            found = self.points_asked[key] = _read_only(self._point(link, drawn))
+            found = self.points_asked[key] = self._carried(key) or _read_only(
+                self._point(link, drawn))
         return found
 
     @cached_property
     def points_asked(self) -> dict[tuple[str, tuple[float, ...]], tuple[Array, Array, Array]]:
         """The points :meth:`point` keeps, by link and drawn point."""
         return {}
+
+    def _carried(self, key: tuple[str, tuple[float, ...]]) -> tuple[Array, Array, Array] | None:
+        """A point its link carries, at a few poses at rest: every carried point is placed
+        at once on the first one asked for (:func:`.rigid.carried_rotations`); None if
+        ``key`` is not one, or the pose moves."""
+        if not self.at_rest:
+            return None
+        positions, rest, index = self._all_carried
+        i = index.get(key)
+        return None if i is None else (positions[:, i], rest, rest)
+
+    def drawn_positions(self) -> Array | None:
+        """Every point of the drawing (``linkage.points``, in order) on the link that reports
+        it (``linkage.carriers``), (N, points, 2), at a few poses at rest: :meth:`position`
+        of each, gathered from the carried points at once; else None."""
+        if self.q.shape[0] > linalg.FEW_POSES or not self.at_rest:
+            return None
+        positions = self._all_carried[0]
+        moving, carried, ground, drawn = _drawn_places(self.linkage)
+        out = np.empty((self.q.shape[0], len(self.linkage.points), 2))
+        out[:, moving] = positions[:, carried]
+        out[:, ground] = drawn + 0.0    # as position() gives the ground's: P0 with its zeros +0
+        return out
+
+    @cached_property
+    def _all_carried(self) -> tuple[Array, Array, dict[tuple[str, tuple[float, ...]], int]]:
+        """Every carried point's position (N, points, 2), the rates' zeros (N, 2), and the
+        points' places; read-only."""
+        points = carried_points(self.linkage)
+        positions = carried_translations(points, self.q) + carried_rotations(points, self.q)
+        rest = np.zeros((self.q.shape[0], 2))
+        positions.flags.writeable = rest.flags.writeable = False
+        return positions, rest, points.index
 
     def _point(self, link: str, drawn: ArrayLike) -> tuple[Array, Array, Array]:
         if self.at_rest:    # what the sums below give: +0 at every pose
@@ -129,7 +168,8 @@ class LinkagePose:
         """:meth:`point`'s position alone (N, 2): the same numbers, without the rates."""
         k = link_column(self.linkage, link)
         if isinstance(drawn, tuple) and k >= 0:     # as :func:`.rigid.turned`, in fewer calls
-            found = self.points_asked.get((link, drawn))
+            found = self.points_asked.get((link, drawn)) or (
+                self._carried((link, drawn)) if self.q.shape[0] <= linalg.FEW_POSES else None)
             if found is not None:
                 return found[0]
             ex, ey = self.turn(k)
@@ -149,6 +189,12 @@ class LinkagePose:
         if found is None:
             found = self.turns[k] = turn_of(self.q[:, k + 2])
         return found
+
+    def turned(self, link: str, v: Array) -> Array:
+        """A vector ``v`` (2,) fixed in ``link``, turned as the link is (N, 2): :func:`.rigid.
+        rotate` by its angle, through its rotation computed once (:meth:`turn`)."""
+        k = link_column(self.linkage, link)
+        return turned(self.turn(k), v) if k >= 0 else rotate(self.link_state(link, self.q)[1], v)
 
     @cached_property
     def at_rest(self) -> bool:
@@ -193,6 +239,30 @@ class LinkagePose:
         return np.all(np.isfinite(self.q), axis=1)
 
 
+def _drawn_places(linkage: Linkage) -> tuple[NDArray[np.intp], NDArray[np.intp],
+                                               NDArray[np.intp], Array]:
+    """Where :meth:`LinkagePose.drawn_positions` finds each point: the places of the points a
+    moving link reports and their places among the carried points, the places of the
+    ground's and their drawn coordinates; kept (:func:`.rigid.kept`)."""
+    def places() -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], Array]:
+        index = carried_points(linkage).index
+        moving: list[int] = []
+        carried: list[int] = []
+        ground: list[int] = []
+        drawn: list[tuple[float, float]] = []
+        for i, (name, p0) in enumerate(linkage.points.items()):
+            link = linkage.carriers[name]
+            if (link, p0) in index:
+                moving.append(i)
+                carried.append(index[link, p0])
+            else:
+                ground.append(i)
+                drawn.append(p0)
+        return (np.array(moving, dtype=np.intp), np.array(carried, dtype=np.intp),
+                np.array(ground, dtype=np.intp), np.array(drawn, dtype=float).reshape(-1, 2))
+    return kept(linkage, "drawn places", places)
+
+
 def known_at_rest(pose: LinkagePose) -> LinkagePose:
     """``pose``, whose rates its solver made +0 wherever it assembles (NaN elsewhere), with
     :attr:`LinkagePose.at_rest` known without a pass over them."""
@@ -225,18 +295,20 @@ def residual_and_jacobian(linkage: Linkage, q: Array, targets: Array, *,
 
 
 def constraint_system(linkage: Linkage, q: Array, targets: Array, *,
-                      drivers: bool = True) -> tuple[Array, Batched]:
+                      drivers: bool = True, jacobian: bool = True) -> tuple[Array, Batched]:
     """Φ (N, m) and J = ∂Φ/∂q as entries (:class:`~.linalg.Batched`), as
     :func:`residual_and_jacobian`: each joint's rows as its kind writes them, then each
-    driver's row on its joint."""
+    driver's row on its joint. Without ``jacobian``, J's entries are dropped as written
+    (:class:`~.linalg.Dropped`): Φ alone, at a third of the cost."""
     layout = Layout(linkage)
     n = q.shape[0]
     rows = layout.rows if drivers else layout.joint_rows
-    c = Constraints(layout, q, np.zeros((n, rows)), Batched(rows, layout.size, n))
-    row = 0
-    for joint in linkage.joints:
-        joint.kind.constrain(c, joint, row)
-        row += joint.kind.rows
+    entries = Batched(rows, layout.size, n) if jacobian else Dropped(rows, layout.size, n)
+    c = Constraints(layout, q, np.zeros((n, rows)), entries)
+    starts = joint_rows(linkage)
+    for kind, joints in joints_by_kind(linkage):
+        kind.constrain_all(c, joints, [starts[j.name] for j in joints])
+    row = layout.joint_rows
     for k, driver in enumerate(linkage.drivers if drivers else ()):
         joint = linkage.joint(driver.joint)
         joint.kind.drive(c, joint, row)
@@ -309,21 +381,25 @@ def solve_in_lengths(linkage: Linkage, jac: Batched, rhs: Array, *,
 
 def _newton(linkage: Linkage, q: Array, targets: Array) -> tuple[Array, NDArray[np.bool_]]:
     """Close the loops from q at the driver targets; returns (q, converged)."""
-    tol = CLOSURE_RTOL * linkage.scale
-    rows, _ = unit_scales(linkage)
     q = q.copy()
     converged = np.zeros(q.shape[0], dtype=bool)
     with np.errstate(all="ignore"):
         for _ in range(NEWTON_ITERATIONS):
             phi, jac = constraint_system(linkage, q, targets)
-            err = np.abs(phi * rows).max(axis=1) if phi.shape[1] else np.zeros(q.shape[0])
-            converged = np.isfinite(err) & (err <= tol)
+            converged = _closed(linkage, phi)
             if converged.all():
                 break
             step = solve_in_lengths(linkage, jac, phi)
             step[converged] = 0.0
             q = q - step
     return q, converged & np.all(np.isfinite(q), axis=1)
+
+
+def _closed(linkage: Linkage, phi: Array) -> NDArray[np.bool_]:
+    """Which poses' residuals Φ (N, m) meet Newton's closure (:data:`CLOSURE_RTOL`)."""
+    rows, _ = unit_scales(linkage)
+    err = np.abs(phi * rows).max(axis=1) if phi.shape[1] else np.zeros(phi.shape[0])
+    return np.isfinite(err) & (err <= CLOSURE_RTOL * linkage.scale)
 
 
 def _step_size(linkage: Linkage, driver: int) -> float:
@@ -387,7 +463,12 @@ def _closed_drawing(linkage: Linkage) -> tuple[Array, NDArray[np.bool_]]:
     """The drawing closed by Newton's method (q (1, 3n), and whether it closed): the start
     of every path, kept with the linkage (:func:`.rigid.kept`), read-only."""
     def close() -> tuple[Array, NDArray[np.bool_]]:
-        q, ok = _newton(linkage, np.zeros((1, Layout(linkage).size)), np.zeros((1, 1)))
+        q, targets = np.zeros((1, Layout(linkage).size)), np.zeros((1, 1))
+        # The drawing closes as drawn (each joint's points coincide there): Newton's first
+        # test, without the Jacobian its first step would need.
+        with np.errstate(all="ignore"):
+            drawn = _closed(linkage, constraint_system(linkage, q, targets, jacobian=False)[0])
+        q, ok = (q, drawn) if drawn.all() else _newton(linkage, q, targets)
         q.flags.writeable = False
         ok.flags.writeable = False
         return q, ok

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -19,10 +19,11 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic.linalg import FEW_POSES, Batched
+from mechcheck.analytic.linalg import FEW_POSES, Batched, Dropped
 from mechcheck.analytic.values import GROUND
 
 if TYPE_CHECKING:
+    from mechcheck.analytic.joint_kinds.base import JointKind
     from mechcheck.analytic.linkage import Joint, Linkage
 
 Array = NDArray[np.float64]
@@ -110,6 +111,61 @@ def link_column(linkage: Linkage, link: str) -> int:
 
 
 @dataclass(frozen=True)
+class CarriedPoints:
+    """Every drawn point each moving link carries, numbered: where a few poses compute all
+    of them at once (:func:`carried_rotations`), a few operations in all rather than a few
+    per point (one pose pays each operation's fixed cost)."""
+
+    #: Each (link, drawn point)'s place.
+    index: dict[tuple[str, tuple[float, ...]], int]
+    #: The column of each one's link's t_x in q (t_y and φ follow).
+    columns: NDArray[np.intp]
+    x: Array
+    y: Array
+
+
+def carried_points(linkage: Linkage) -> CarriedPoints:
+    """The linkage's :class:`CarriedPoints`, kept (:func:`kept`)."""
+    return kept(linkage, "carried points", lambda: _carried_points(linkage))
+
+
+def _carried_points(linkage: Linkage) -> CarriedPoints:
+    index: dict[tuple[str, tuple[float, ...]], int] = {}
+    for link in linkage.links:
+        if link.name != GROUND:
+            for name in link.points:
+                index.setdefault((link.name, linkage.points[name]), len(index))
+    # The points the known forces act at: loads, centres of mass, linear springs' ends (a
+    # torsion spring has none). The linkage may not have checked them yet: only those on
+    # its moving links.
+    acting = [(load.link, load.at) for load in linkage.loads]
+    acting += [(mass.link, mass.com) for mass in linkage.masses]
+    acting += [end for spring in linkage.springs for end in getattr(spring, "ends", ())]
+    for link_name, p0 in acting:
+        if link_name in linkage.link_number:
+            index.setdefault((link_name, tuple(p0)), len(index))
+    drawn = np.array([p for _, p in index], dtype=float).reshape(-1, 2)
+    columns = np.array([link_column(linkage, link) for link, _ in index], dtype=np.intp)
+    return CarriedPoints(index, columns, drawn[:, 0].copy(), drawn[:, 1].copy())
+
+
+def carried_rotations(points: CarriedPoints, q: Array) -> Array:
+    """R(φ)·P0 of every carried point at coordinates q (N, 3n): (N, points, 2), each the
+    same products and sum as :func:`turned` of its link's :func:`turn_of`."""
+    phi = q[:, points.columns + 2]
+    c, s = np.cos(phi), np.sin(phi)
+    return _pair(c * points.x + (-s) * points.y, s * points.x + c * points.y)
+
+
+def carried_translations(points: CarriedPoints, q: Array) -> Array:
+    """t of every carried point's link (N, points, 2)."""
+    return q[:, points.columns[:, None] + _XY]
+
+
+_XY = np.array([0, 1], dtype=np.intp)
+
+
+@dataclass(frozen=True)
 class Layout:
     """Where each moving link's three coordinates sit in q, and where each joint's and each
     driver's constraint rows start."""
@@ -161,14 +217,28 @@ class Constraints:
         k = self.layout.index(link)
         return self.q[:, k + 2] if k >= 0 else np.zeros(self.q.shape[0])
 
-    def point(self, link: str, p0: Array) -> tuple[Array, Array]:
-        """(position (N, 2), ∂position/∂φ (N, 2)) of a drawn point on ``link``."""
+    def point(self, link: str, p0: Array | tuple[float, float]) -> tuple[Array, Array]:
+        """(position (N, 2), ∂position/∂φ (N, 2)) of a drawn point on ``link`` (read-only);
+        a point the link carries (``p0`` a tuple) taken from all of them, computed at once
+        for a few poses."""
         k = self.layout.index(link)
         n = self.q.shape[0]
         if k < 0:
             return np.broadcast_to(p0, (n, 2)).copy(), np.zeros((n, 2))
-        r = turned(self.turn(k), p0)
+        if n <= FEW_POSES and isinstance(p0, tuple):
+            positions, across, index = self._carried
+            i = index.get((link, p0))
+            if i is not None:
+                return positions[:, i], across[:, i]
+        r = turned(self.turn(k), np.asarray(p0, dtype=float))
         return self.q[:, k:k + 2] + r, perp(r)
+
+    @cached_property
+    def _carried(self) -> tuple[Array, Array, dict[tuple[str, tuple[float, ...]], int]]:
+        """Every carried point's position and ∂/∂φ (N, points, 2), and their places."""
+        points = carried_points(self.linkage)
+        r = carried_rotations(points, self.q)
+        return carried_translations(points, self.q) + r, perp(r), points.index
 
     def put(self, row: int, link: str, d_t: Array | None, d_phi: Array | float) -> None:
         """Add ∂(row)/∂(t_x, t_y, φ) of ``link`` (nothing for the ground); ``d_t`` None: 0."""
@@ -182,7 +252,7 @@ class Constraints:
     def coincide(self, row: int, joint: Joint) -> None:
         """Two rows p_i(P0) − p_j(P0) = 0: the joint's links hold its point together."""
         i, j = joint.links
-        p0 = np.array(self.linkage.points[joint.at])
+        p0 = self.linkage.points[joint.at]
         pi, dpi = self.point(i, p0)
         pj, dpj = self.point(j, p0)
         self.phi[:, row:row + 2] = pi - pj
@@ -194,6 +264,39 @@ class Constraints:
             if kj >= 0:
                 self.jac.add(row + c, kj + c, -1.0)
                 self.jac.add(row + c, kj + 2, -dpj[:, c])
+
+    def coincide_all(self, rows: Sequence[int], joints: Sequence[Joint]) -> None:
+        """:meth:`coincide` of several joints, joint j's rows from ``rows[j]``: at a few poses
+        every point from the carried ones, its two rows and its entries written at once (the
+        same numbers, the entries in the same order)."""
+        n = self.q.shape[0]
+        if n > FEW_POSES:
+            for row, joint in zip(rows, joints, strict=True):
+                self.coincide(row, joint)
+            return
+        plan = _pins_plan(self.linkage, tuple(rows), tuple(joints))
+        positions, across, _ = self._carried
+        sides = []
+        for side, (places, grounded, drawn) in enumerate(plan.sides):   # links[0], links[1]
+            p = np.empty((n, len(joints), 2))
+            p[:, places] = positions[:, plan.carried[side, places]]
+            p[:, grounded] = drawn  # the ground's point, as drawn
+            sides.append(p)
+        gap = sides[0] - sides[1]
+        self.phi[:, plan.x_rows] = gap[..., 0]
+        self.phi[:, plan.x_rows + 1] = gap[..., 1]
+        if isinstance(self.jac, Dropped):     # Φ alone is asked for
+            return
+        # Every entry's values picked from: 1, −1, then ∂p/∂φ of every carried point (x, y)
+        # and its negative.
+        turned_by = across.reshape(n, -1).T
+        sources = np.concatenate([self.jac_constant(1.0), self.jac_constant(-1.0), turned_by,
+                                  -turned_by])
+        self.jac.add_entries(plan.entry_rows, plan.entry_cols, sources[plan.entry_sources])
+
+    def jac_constant(self, value: float) -> Array:
+        """A row (1, N) of ``value``."""
+        return np.full((1, self.q.shape[0]), value)
 
     def angle_lock(self, row: int, joint: Joint) -> None:
         """Row φ_j − φ_i."""
@@ -207,7 +310,7 @@ class Constraints:
     def along(self, row: int, joint: Joint, w0: Array) -> None:
         """Row w_i·(p_j(A0) − p_i(A0)), with w (drawn w0) fixed in the joint's links[0]."""
         i, j = joint.links
-        a0 = np.array(self.linkage.points[joint.at])
+        a0 = self.linkage.points[joint.at]
         ki = self.layout.index(i)
         w = turned(self.turn(ki), w0) if ki >= 0 else rotate(self.angle(i), w0)
         pj, dpj = self.point(j, a0)
@@ -216,6 +319,62 @@ class Constraints:
         self.phi[:, row] += dot(w, d)
         self.put(row, j, w, dot(w, dpj))
         self.put(row, i, -w, dot(perp(w), d) - dot(w, dpi))
+
+
+@dataclass(frozen=True)
+class _PinsPlan:
+    """Where :meth:`Constraints.coincide_all` reads and writes, for one set of joints."""
+
+    #: Per side (links[0], links[1]): the joints whose link moves, the others (the ground),
+    #: and the ground's drawn points (k, 2).
+    sides: tuple[tuple[NDArray[np.intp], NDArray[np.intp], Array], ...]
+    #: (2, joints): each joint's point's place among the carried points, on each side
+    #: (0 on the ground).
+    carried: NDArray[np.intp]
+    x_rows: NDArray[np.intp]
+    entry_rows: list[int]
+    entry_cols: list[int]
+    entry_sources: NDArray[np.intp]
+
+
+def _pins_plan(linkage: Linkage, rows: tuple[int, ...], joints: tuple[Joint, ...]) -> _PinsPlan:
+    """The :class:`_PinsPlan` of these joints and rows, kept with the linkage."""
+    return kept(linkage, f"pins plan {rows}", lambda: _make_pins_plan(linkage, rows, joints))
+
+
+def _make_pins_plan(linkage: Linkage, rows: tuple[int, ...],
+                    joints: tuple[Joint, ...]) -> _PinsPlan:
+    index = carried_points(linkage).index
+    count = len(index)
+    sides = []
+    carried = np.zeros((2, len(joints)), dtype=np.intp)
+    for side in (0, 1):
+        places, grounded, drawn = [], [], []
+        for j, joint in enumerate(joints):
+            link, p0 = joint.links[side], linkage.points[joint.at]
+            if link == GROUND:
+                grounded.append(j)
+                drawn.append(p0)
+            else:
+                places.append(j)
+                carried[side, j] = index[link, p0]
+        sides.append((np.array(places, dtype=np.intp), np.array(grounded, dtype=np.intp),
+                      np.array(drawn, dtype=float).reshape(-1, 2)))
+    entry_rows: list[int] = []
+    entry_cols: list[int] = []
+    sources: list[int] = []
+    for j, (row, joint) in enumerate(zip(rows, joints, strict=True)):
+        ki, kj = (link_column(linkage, link) for link in joint.links)
+        for c in range(2):
+            # As coincide(): +1 and ∂p_i/∂φ_i, then −1 and −∂p_j/∂φ_j (the sources' rows:
+            # 0 is 1, 1 is −1, 2 + 2·place + c is ∂p/∂φ, and the negatives follow).
+            for k, side, sign in ((ki, 0, 0), (kj, 1, 1)):
+                if k >= 0:
+                    entry_rows += [row + c, row + c]
+                    entry_cols += [k + c, k + 2]
+                    sources += [sign, 2 + 2 * count * sign + 2 * int(carried[side, j]) + c]
+    return _PinsPlan((sides[0], sides[1]), carried, np.array(rows, dtype=np.intp),
+                     entry_rows, entry_cols, np.array(sources, dtype=np.intp))
 
 
 @dataclass
@@ -343,16 +502,49 @@ class ForceLayout:
                    directions: Array, point: Array) -> None:
         """Each column of ``cols`` times its direction (``directions`` (len(cols), N, 2))
         acting on links[1] at ``point``, and reversed on links[0] (a joint's reaction): three
-        entries per column and link, the force and its moment about the origin, computed
-        once for every column and both links (negation is exact)."""
-        entries = np.empty((len(cols), 3, point.shape[0]))
-        entries[:, :2] = directions.transpose(0, 2, 1)
-        entries[:, 2] = cross(point, directions)
-        for link, values in ((links[1], entries), (links[0], -entries)):
-            r = self.row(link)
-            if r >= 0:
-                for col, column in zip(cols, values, strict=True):
-                    k.add_rows(r, col, column)
+        entries per column and link, the force and its moment about the origin."""
+        self.force_pairs(k, (links,), (cols,), directions, point[None])
+
+    def force_pairs(self, k: Batched, links: Sequence[tuple[str, str]],
+                    cols: Sequence[tuple[int, ...]], directions: Array, points: Array) -> None:
+        """:meth:`force_pair` of several joints whose columns share their directions, at
+        their ``points`` (joints, N, 2): every column's entries for both links computed at
+        once (negation is exact), then added joint by joint."""
+        n = points.shape[1]
+        entries = np.empty((points.shape[0], 2, directions.shape[0], 3, n))
+        entries[:, 0, :, :2] = directions.transpose(0, 2, 1)
+        entries[:, 0, :, 2] = cross(points[:, None], directions)
+        np.negative(entries[:, 0], out=entries[:, 1])
+        rows, columns, kept_entries = self._pair_places(tuple(links), tuple(cols))
+        k.add_entries(rows, columns, entries.reshape(-1, n)[kept_entries])
+
+    def _pair_places(self, links: tuple[tuple[str, str], ...], cols: tuple[tuple[int, ...], ...]
+                     ) -> tuple[list[int], list[int], NDArray[np.intp]]:
+        """Where :meth:`force_pairs` puts its entries, joint by joint, links[1] then links[0],
+        column by column (a link's three rows each): rows, columns, and which of the
+        computed entries go there (none for the ground). Kept for the joints."""
+        key = (links, cols)
+        found = self._places.get(key)
+        if found is None:
+            rows: list[int] = []
+            columns: list[int] = []
+            chosen: list[int] = []
+            entry = 0
+            for pair, joint_columns in zip(links, cols, strict=True):
+                for link in (pair[1], pair[0]):
+                    r = self.row(link)
+                    for col in joint_columns:
+                        if r >= 0:
+                            rows += [r, r + 1, r + 2]
+                            columns += [col, col, col]
+                            chosen += [entry, entry + 1, entry + 2]
+                        entry += 3
+            found = self._places[key] = (rows, columns, np.array(chosen, dtype=np.intp))
+        return found
+
+    @cached_property
+    def _places(self) -> dict[tuple[object, ...], tuple[list[int], list[int], NDArray[np.intp]]]:
+        return {}
 
     def couple_on(self, k: Batched, link: str, col: int, sign: float) -> None:
         r = self.row(link)
@@ -396,6 +588,29 @@ def kept(linkage: Linkage, what: str, make: Callable[[], T]) -> T:
         while len(_KEPT) > KEPT_VALUES:
             del _KEPT[next(iter(_KEPT))]
     return value
+
+
+def joints_by_kind(linkage: Linkage) -> tuple[tuple[JointKind, tuple[Joint, ...]], ...]:
+    """The linkage's joints grouped by kind, each group in the file's order and the kinds in
+    the order they first appear; kept (:func:`kept`)."""
+    def group() -> tuple[tuple[JointKind, tuple[Joint, ...]], ...]:
+        groups: dict[str, tuple[JointKind, list[Joint]]] = {}
+        for joint in linkage.joints:
+            groups.setdefault(joint.kind.name, (joint.kind, []))[1].append(joint)
+        return tuple((kind, tuple(joints)) for kind, joints in groups.values())
+    return kept(linkage, "joints by kind", group)
+
+
+def joint_rows(linkage: Linkage) -> dict[str, int]:
+    """Each joint's first constraint row (each kind brings its :attr:`~.JointKind.rows`);
+    kept (:func:`kept`)."""
+    def starts() -> dict[str, int]:
+        out, row = {}, 0
+        for joint in linkage.joints:
+            out[joint.name] = row
+            row += joint.kind.rows
+        return out
+    return kept(linkage, "joint rows", starts)
 
 
 def force_layout(linkage: Linkage) -> ForceLayout:

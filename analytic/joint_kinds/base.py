@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
@@ -133,6 +133,13 @@ class JointKind(ABC):
     def constrain(self, c: Constraints, joint: Joint, row: int) -> None:
         """Write its :attr:`rows` rows of Φ and J, starting at ``row``."""
 
+    def constrain_all(self, c: Constraints, joints: Sequence[Joint], rows: Sequence[int]) -> None:
+        """:meth:`constrain` of each of the linkage's joints of this kind, joint j's rows from
+        ``rows[j]`` (a kind may write them together: one pose pays each array operation's
+        fixed cost)."""
+        for joint, row in zip(joints, rows, strict=True):
+            self.constrain(c, joint, row)
+
     @abstractmethod
     def accelerate(self, m: Motion, joint: Joint, out: Array, row: int) -> None:
         """Write the J̇·q̇ terms of its rows into ``out`` (N, m), starting at ``row``."""
@@ -165,6 +172,13 @@ class JointKind(ABC):
     @abstractmethod
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
         """Its reaction unknowns' columns of K (by links[0] on links[1], reversed on links[0])."""
+
+    def react_all(self, k: Batched, layout: ForceLayout, joints: Sequence[Joint],
+                  frames: Sequence[JointFrame]) -> None:
+        """:meth:`react` of each of the linkage's joints of this kind, in order (a kind may
+        compute them together: one pose pays each array operation's fixed cost)."""
+        for joint, frame in zip(joints, frames, strict=True):
+            self.react(k, layout, joint, frame)
 
     @abstractmethod
     def reaction_lengths(self, size: float) -> tuple[float, ...]:

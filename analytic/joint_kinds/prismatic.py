@@ -90,13 +90,13 @@ class Prismatic(JointKind):
     def value(self, pose: LinkagePose, joint: Joint) -> Array:
         i, j = joint.links
         a0 = pose.linkage.points[joint.at]
-        u = rotate(pose.link_state(i, pose.q)[1], slot_axis(joint))
+        u = pose.turned(i, slot_axis(joint))
         return dot(u, pose.position(j, a0) - pose.position(i, a0))
 
     # -- statics --------------------------------------------------------------------------
     def frame(self, pose: LinkagePose, joint: Joint) -> JointFrame:
         point = pose.point(joint.links[1], pose.linkage.points[joint.at])[0]
-        u = rotate(pose.angle(joint.links[0])[0], slot_axis(joint))
+        u = pose.turned(joint.links[0], slot_axis(joint))
         return JointFrame(point, u, perp(u))
 
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:

@@ -9,7 +9,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -45,6 +45,9 @@ class Revolute(JointKind):
     def constrain(self, c: Constraints, joint: Joint, row: int) -> None:
         c.coincide(row, joint)
 
+    def constrain_all(self, c: Constraints, joints: Sequence[Joint], rows: Sequence[int]) -> None:
+        c.coincide_all(rows, joints)
+
     def accelerate(self, m: Motion, joint: Joint, out: Array, row: int) -> None:
         i, j = joint.links
         p0 = np.array(m.linkage.points[joint.at])
@@ -76,6 +79,12 @@ class Revolute(JointKind):
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:
         layout.force_pair(k, joint.links, layout.joint_columns(joint),
                           unit_axes(frame.point.shape[0]), frame.point)
+
+    def react_all(self, k: Batched, layout: ForceLayout, joints: Sequence[Joint],
+                  frames: Sequence[JointFrame]) -> None:
+        points = np.stack([frame.point for frame in frames])
+        layout.force_pairs(k, [j.links for j in joints], [layout.joint_columns(j) for j in joints],
+                           unit_axes(points.shape[1]), points)
 
     def reaction_lengths(self, size: float) -> tuple[float, ...]:
         return (1.0, 1.0)
