@@ -433,8 +433,11 @@ def driver_rates(model: LinkageModel) -> Array:
 #: forces when its last step was solved again at 1600 (the rule: 1e-4); at 6400, 1.4e-8.
 #: The raising scissor lift (``cases/users/scissor_lift.toml``) 60 mm down its stroke
 #: (condition number 248) is stable from 25 600 on (:data:`STABLE_STEP_CONTRACTION`) and
-#: meets the iteration rule at 102 400.
-ITERATIONS = (100, 400, 1600, 6400, 25600, 102400)
+#: meets the iteration rule at 102 400; 280 and 285 mm up it (condition numbers 284 and 406)
+#: a stable step needs about 126 000 and 329 000, and both read at 409 600; 64 mm down it
+#: (544) is stable at 409 600, where its last step solved again moved the reading by 2.3e-4
+#: of the forces (the rule: 1e-4), and meets the rule at 1 638 400 (2.3e-7).
+ITERATIONS = (100, 400, 1600, 6400, 25600, 102400, 409600, 1638400)
 #: Past this many iterations a step, a further rung runs only where more iterations are what
 #: the run lacks (:func:`next_rung`): a rung costs about as much as all the rungs before it.
 PLAIN_ITERATIONS = 1600
@@ -462,16 +465,22 @@ CONTRACTION_STEPS = 400
 ROUNDING = 1.0e-12
 
 
-#: Past :data:`PLAIN_ITERATIONS`, a rung runs only where its iterations × the linkage's joints
-#: stay within this (a step's Gauss–Seidel work grows with both): the scissor lift's 10
-#: joints reach 102 400; a chain of 64 four-bar loops (193 joints) stays at 1600.
-MAX_JOINT_ITERATIONS = 1.1e6
+#: Past :data:`PLAIN_ITERATIONS`, a rung runs only where its iterations × the square of the
+#: linkage's joints stay within this. A step's Gauss–Seidel work grows with iterations ×
+#: joints (measured: 13 ns per iteration and joint on the scissor lift's 10 joints, 25 on a
+#: chain of 64 four-bar loops); the second factor of joints keeps a large linkage, each of
+#: whose steps already costs joints-fold, off the rungs whose steps take a tenth of a
+#: second. The scissor lift's 10 joints and the Whitworth's 7 reach 1 638 400 (0.2 s a
+#: step); 100 joints reach 6400, and a chain of 64 four-bar loops (193 joints) stays at 1600
+#: (8 ms a step), as does any linkage of more than 160 joints.
+ITERATION_BUDGET = 1.65e8
 
 
 def rungs(joints: int) -> list[int]:
     """The rungs of :data:`ITERATIONS` a linkage of ``joints`` joints may run
-    (:data:`MAX_JOINT_ITERATIONS`)."""
-    return [n for n in ITERATIONS if n <= PLAIN_ITERATIONS or n * joints <= MAX_JOINT_ITERATIONS]
+    (:data:`ITERATION_BUDGET`)."""
+    return [n for n in ITERATIONS
+            if n <= PLAIN_ITERATIONS or n * joints ** 2 <= ITERATION_BUDGET]
 
 
 def next_rung(out: Convergence | None, iterations: int, contraction: Callable[[], float],
@@ -482,7 +491,7 @@ def next_rung(out: Convergence | None, iterations: int, contraction: Callable[[]
     failed, and else the first whose step leaves at most :data:`STABLE_STEP_CONTRACTION` of
     the slowest mode where this one left more (``contraction()``: per iteration, measured
     when asked): the run was unstable, and more iterations are what it lacks. Past
-    :data:`PLAIN_ITERATIONS` only rungs within :data:`MAX_JOINT_ITERATIONS` for a linkage of
+    :data:`PLAIN_ITERATIONS` only rungs within :data:`ITERATION_BUDGET` for a linkage of
     ``joints`` joints."""
     higher = [n for n in rungs(joints) if n > iterations]
     if not higher:
@@ -773,7 +782,7 @@ def instability(iterations: int, per_iteration: float, joints: int) -> str:
             f"at {iterations} iterations (stable: ≤ {STABLE_STEP_CONTRACTION}, "
             f"STABLE_STEP_CONTRACTION): a stable run needs about {needed:.3g} iterations a "
             f"step; this linkage's ladder ends at {rungs(joints)[-1]} (ITERATIONS within "
-            "MAX_JOINT_ITERATIONS)")
+            "ITERATION_BUDGET)")
 
 
 def unconverged(out: Convergence, end: DriveEnd, scale: float) -> str:
