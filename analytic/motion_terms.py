@@ -65,6 +65,8 @@ class Terms:
     spring_length: Array
     spring_damping: Array
     spring_index: Array
+    spring_ends: Array
+    spring_drawn: Array
     meeting: float
     coordinates: Rows | None
     coordinate_stiffness: Array
@@ -129,27 +131,29 @@ class Terms:
     def _springs(self, q: Array, qdot: Array, cos: Array, sin: Array) -> tuple[Array, Array]:
         """Linear springs: tension k(L − L0) and c·L̇ along the line between their ends, a
         toward b (the elastic and the damping parts)."""
-        ends = []
-        for links, drawn in ((self.spring_a, self.spring_xa), (self.spring_b, self.spring_xb)):
-            c, s = cos[links], sin[links]
-            rx = c * drawn[:, 0] - s * drawn[:, 1]
-            ry = s * drawn[:, 0] + c * drawn[:, 1]
-            t, rate = _coordinates_of(q, links, self.links), _coordinates_of(qdot, links, self.links)
-            ends.append((rx, ry, t[0] + rx, t[1] + ry, rate[0] - rate[2] * ry, rate[1] + rate[2] * rx))
-        (rax, ray, pax, pay, vax, vay), (rbx, rby, pbx, pby, vbx, vby) = ends
-        dx, dy = pbx - pax, pby - pay
+        links, drawn = self.spring_ends, self.spring_drawn      # every a end, then every b end
+        c, s = cos[links], sin[links]
+        rx = c * drawn[:, 0] - s * drawn[:, 1]
+        ry = s * drawn[:, 0] + c * drawn[:, 1]
+        k = self.spring_a.size
+        at = 3 * links
+        qe, qde = np.append(q, _GROUND), np.append(qdot, _GROUND)
+        omega = qde[at + 2]
+        dx = np.diff((qe[at] + rx).reshape(2, k), axis=0)[0]
+        dy = np.diff((qe[at + 1] + ry).reshape(2, k), axis=0)[0]
+        vx = np.diff((qde[at] - omega * ry).reshape(2, k), axis=0)[0]
+        vy = np.diff((qde[at + 1] + omega * rx).reshape(2, k), axis=0)[0]
         length = np.hypot(dx, dy)
         meets = length <= self.meeting
         safe = np.where(meets, 1.0, length)
         ux, uy = np.where(meets, 0.0, dx / safe), np.where(meets, 0.0, dy / safe)
-        rate = ux * (vbx - vax) + uy * (vby - vay)
-        out = []
-        for tension in (self.spring_stiffness * (length - self.spring_length),
-                        self.spring_damping * rate):
-            fx, fy = tension * ux, tension * uy
-            values = np.concatenate([fx, fy, rax * fy - ray * fx, -fx, -fy, rbx * (-fy) + rby * fx])
-            out.append(self._summed(self.spring_index, values))
-        return out[0], out[1]
+        both = np.array([self.spring_stiffness * (length - self.spring_length),
+                         self.spring_damping * (ux * vx + uy * vy)])
+        fx, fy = both * ux, both * uy                 # (2, k): on end a; the reverse on b
+        sign = np.repeat([1.0, -1.0], k)
+        fx2, fy2 = np.tile(fx, 2) * sign, np.tile(fy, 2) * sign
+        values = np.concatenate([fx2, fy2, rx * fy2 - ry * fx2], axis=1)
+        return self._summed(self.spring_index, values[0]), self._summed(self.spring_index, values[1])
 
     def _add_coordinates(self, flat: list[Array], q: Array, qdot: Array) -> None:
         """Torsion springs, their dampers and viscous joints: −(k(q − q0) + c·q̇)·Dᵀ."""
@@ -211,7 +215,9 @@ def _terms(linkage: Linkage) -> Terms:
         np.array([s.ends[1][1] for s in linear], dtype=float).reshape(-1, 2),
         np.array([s.stiffness for s in linear]), np.array([s.free_length for s in linear]),
         np.array([s.damping for s in linear]),
-        _flat_index([link(s.ends[0][0]) for s in linear], [link(s.ends[1][0]) for s in linear]),
+        _flat_index([link(s.ends[0][0]) for s in linear] + [link(s.ends[1][0]) for s in linear]),
+        np.array([link(s.ends[e][0]) for e in (0, 1) for s in linear], dtype=np.intp),
+        np.array([s.ends[e][1] for e in (0, 1) for s in linear], dtype=float).reshape(-1, 2),
         MEETING * linkage.scale,
         coordinate_rows(linkage, named) if named else None,
         table[:, 0].copy(), table[:, 1].copy(), table[:, 2].copy())
@@ -224,7 +230,4 @@ def _flat_index(*links: list[int]) -> Array:
     return np.concatenate(parts) if parts else np.zeros(0, dtype=np.intp)
 
 
-def _coordinates_of(v: Array, links: Array, moving: int) -> tuple[Array, Array, Array]:
-    """(x, y, φ components) of v (3n,) for each of ``links`` (the ground's zero)."""
-    ve = np.concatenate([v, np.zeros(3)])
-    return ve[3 * links], ve[3 * links + 1], ve[3 * links + 2]
+_GROUND = np.zeros(3)
