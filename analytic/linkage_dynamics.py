@@ -90,8 +90,6 @@ HALVINGS = 30
 #: factorised: the predictor's error is of order Δx², and each step multiplies it by the
 #: Jacobian's change over Δx, so two or three close it.
 CHORD_ITERATIONS = 6
-#: The states a new one may start from: the last few solved (a Runge–Kutta step's stages).
-RECENT = 12
 #: A joint named in ``rates`` becomes an independent coordinate where the scaled constraint
 #: Jacobian with its row added keeps its smallest singular value above this (dimensionless:
 #: rows and columns in lengths of the linkage's size).
@@ -195,35 +193,17 @@ class Tracker:
     def __post_init__(self) -> None:
         self.rows: Rows = joint_rows(self.linkage)
         self.row_scales, self.col_scales = unit_scales(self.linkage)
-        size = self.linkage.scale
-        self._lengths = np.array([self.linkage.joint(d.joint).kind.length(size)
-                                  for d in self.linkage.drivers])
-        self._recent: list[Kinematics | None] = [None] * RECENT
-        self._recent_x = np.full((RECENT, self._lengths.size), np.inf)
 
     def solve(self, x: Array, xdot: Array, start: Kinematics | None = None, *,
               keep: bool = True) -> Kinematics:
         """The state at coordinates x and rates ẋ, closed from ``start`` (default: the last
         state); ``keep`` False: an output's, which the motion does not continue from."""
-        near = self._closest_recent(x) if start is None else start
+        near = self.last if start is None else start
         found = self._reach(near, x, xdot, HALVINGS)
         if keep:
             self.last = found
             self.visited.append(found)
-            slot = len(self.visited) % RECENT
-            self._recent[slot] = found
-            self._recent_x[slot] = found.x * self._lengths
         return found
-
-    def _closest_recent(self, x: Array) -> Kinematics:
-        """Of the last :data:`RECENT` states solved, the one closest to x (in lengths): the
-        integrator's stages come back near earlier ones, and the closer the start, the fewer
-        Newton steps (the last state if none is kept yet)."""
-        if not self.visited:
-            return self.last
-        k = int(np.argmin(np.abs(self._recent_x - x * self._lengths).max(axis=1)))
-        found = self._recent[k]
-        return self.last if found is None else found
 
     def _reach(self, near: Kinematics, x: Array, xdot: Array, depth: int) -> Kinematics:
         """x closed from ``near``; where Newton does not close it, or closes it on another
