@@ -4,31 +4,39 @@ case (:func:`.trajectory.simulate`).
 The equations of motion are the linkage engine's own, written in **independent
 coordinates** x: every driver's joint (an effort, or a prescribed motion) and as many free
 joints as the linkage has degrees of freedom beyond its drivers (:func:`independent_joints`).
-With each of them written as a driver row, the engine's kinematics gives
+With each of them written as a driver row, the joints' rows (evaluated over all joints at
+once, :mod:`.motion_rows`) give
 
 - positions q(x): Newton's method on the constraints from the last pose, through a
-  first-order predictor, so the motion stays on the branch it started on and passes a
-  change point (a parallelogram lying flat) on its smooth branch; the positions are on
-  the constraints at every evaluation (the "re-projection");
+  second-order predictor q + S·Δx + ½·q̈₀·τ², first with the last pose's factorisation (a
+  chord iteration), so the motion stays on the branch it started on and passes a change
+  point (a parallelogram lying flat) on its smooth branch; the positions are on the
+  constraints at every evaluation (the "re-projection");
 - velocities q̇ = S ẋ with J S = [0, I], and the accelerations' bias q̈₀ with
-  J q̈₀ = −J̇ q̇, so that q̈ = S ẍ + q̈₀.
+  J q̈₀ = −J̇ q̇, so that q̈ = S ẍ + q̈₀. Both are solved as corrections of the last state's:
+  where the Jacobian is nearly singular (a change point, condition number above
+  1/:data:`RCOND`) the part the constraints no longer decide stays the last state's
+  (:class:`Solver`: the inverse or sparse LU factors, else the SVD).
 
-The efforts the independent coordinates need for given accelerations follow from the power
-equation, as the ``virtual_work`` backend reads them: Q = −(power of every known force,
-D'Alembert inertia included, on the motion S). Without Coulomb friction they are affine in
-ẍ, Q = M ẍ + h, so one evaluation at 1 + m accelerations (ẍ = 0, and each moving coordinate
-at 1) gives the reduced mass matrix M and h, and M ẍ = Q_applied − h. The power equation
-needs no reactions, so it holds where the reactions are indeterminate (the redundant poses
-of a parallelogram chain). Coulomb friction depends on the reactions, hence on ẍ: on a
-linkage of one degree of freedom the member-equilibrium solve with friction
-(:func:`.linkage_forces.solve_with_friction`) gives Q(ẍ), and the secant method solves
-Q(ẍ) = Q_applied; the coordinate's rate reaching zero and a frictional joint's relative
-rate reversing are events, at which the motion sticks or slips (:func:`integrate`).
+With 𝕄 the links' block-diagonal mass matrix and F the forces on them in the links' own
+coordinates (:mod:`.motion_terms`), the efforts the coordinates need are
+Q = Sᵀ(𝕄 q̈ − F): the constraints' reactions do no work on S, redundant ones included, so
+the equations hold where the reactions are indeterminate (the redundant poses of a
+parallelogram chain). So M = Sᵀ𝕄S, h = Sᵀ(𝕄 q̈₀ − F) and M ẍ = Q_applied − h.
+
+Coulomb friction depends on the reactions, hence on ẍ: on a linkage of one degree of
+freedom the member-equilibrium solve with friction
+(:func:`.linkage_forces.solve_with_friction`) gives Q(ẍ), the friction forces being one
+more term of the same equations, and the secant method solves Q(ẍ) = Q_applied from the
+frictionless ẍ; the coordinate's rate reaching zero and a frictional joint's relative rate
+reversing are events, at which the motion sticks or slips (:func:`integrate`). This term
+goes through the engine's general per-joint code (one coordinate, a few unknowns).
 
 scipy's ``solve_ivp`` integrates x, ẋ and the energy's work and dissipated terms at tight
 tolerances (:data:`RTOL`); the kinetic and potential energies at the output times come from
-the links' own motion, so T + V − W + D − E₀ = 0 is an identity the run must satisfy to the
-integrator's tolerance (its ``energy_residual``).
+the links' own motion through the engine's general code (:func:`kinetic_energy`,
+:func:`potential_energy`, not :mod:`.motion_terms`), so T + V − W + D − E₀ = 0 is an
+identity the run must satisfy to the integrator's tolerance (its ``energy_residual``).
 """
 
 from __future__ import annotations
@@ -43,6 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linalg import DENSE_COLUMNS
 from mechcheck.analytic.linkage import Driver, LinearSpring, Linkage, TorsionSpring
 from mechcheck.analytic.linkage_forces import (
     CoulombTerm,
@@ -56,10 +65,11 @@ from mechcheck.analytic.linkage_kinematics import (
     LinkagePose,
     constraint_system,
     positions,
-    quadratic_terms,
     unit_scales,
 )
 from mechcheck.analytic.linkage_loads import known_vector, spring_axis
+from mechcheck.analytic.motion_rows import Rows, RowState, joint_rows
+from mechcheck.analytic.motion_terms import terms
 from mechcheck.analytic.rigid import Array, force_layout
 
 #: The integrator and its relative tolerance. DOP853 (an explicit Runge–Kutta method of
@@ -76,6 +86,10 @@ RCOND = 1e-10
 #: through half-way states, at most :data:`HALVINGS` deep.
 JUMP = 0.5
 HALVINGS = 30
+#: Newton steps with the last state's factorisation before a state's own Jacobian is
+#: factorised: the predictor's error is of order Δx², and each step multiplies it by the
+#: Jacobian's change over Δx, so two or three close it.
+CHORD_ITERATIONS = 6
 #: A joint named in ``rates`` becomes an independent coordinate where the scaled constraint
 #: Jacobian with its row added keeps its smallest singular value above this (dimensionless:
 #: rows and columns in lengths of the linkage's size).
@@ -147,7 +161,9 @@ def _scaled_jacobian(linkage: Linkage, q: Array, x: Array) -> tuple[Array, Array
 class Kinematics:
     """The linkage at one state: positions q (3n,), the rates S (3n, d) of every link per
     unit rate of each independent coordinate, the velocities q̇ = S ẋ and the bias q̈₀ of
-    the accelerations (q̈ = S ẍ + q̈₀)."""
+    the accelerations (q̈ = S ẍ + q̈₀); ``solver``: its scaled Jacobian's, with which the
+    next state's positions are closed (a chord Newton), ``turns``: cos and sin of each
+    link's φ (the ground's last)."""
 
     x: Array
     xdot: Array
@@ -155,6 +171,8 @@ class Kinematics:
     rates: Array
     qdot: Array
     bias: Array
+    solver: Solver | None = field(default=None, compare=False, repr=False)
+    turns: tuple[Array, Array] | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass
@@ -168,6 +186,13 @@ class Tracker:
     linkage: Linkage
     last: Kinematics
     visited: list[Kinematics] = field(default_factory=list)
+    #: The visited states' coordinates, by the list's identity and length (outputs ask
+    #: for the nearest many times between two visits).
+    _visited_x: tuple[tuple[int, int], Array] | None = None
+
+    def __post_init__(self) -> None:
+        self.rows: Rows = joint_rows(self.linkage)
+        self.row_scales, self.col_scales = unit_scales(self.linkage)
 
     def solve(self, x: Array, xdot: Array, start: Kinematics | None = None, *,
               keep: bool = True) -> Kinematics:
@@ -185,7 +210,7 @@ class Tracker:
         branch (the rates jump: near a change point the predictor's error can exceed the
         branches' distance), through the half-way state first."""
         found = self.close(near, x, xdot)
-        if found is not None and not _jumps(near.rates, found.rates, unit_scales(self.linkage)[1]):
+        if found is not None and not _jumps(near.rates, found.rates, self.col_scales):
             return found
         if depth == 0:
             raise DynamicsError("the joints' constraints no longer close on the branch the "
@@ -195,49 +220,94 @@ class Tracker:
         return self._reach(half, x, xdot, depth - 1)
 
     def close(self, near: Kinematics, x: Array, xdot: Array) -> Kinematics | None:
-        """Newton's method from the predictor near.q + S·Δx (None: it did not close)."""
-        q = near.q + near.rates @ (x - near.x)
-        cols = unit_scales(self.linkage)[1]
+        """Newton's method from the predictor near.q + S·Δx (None: it did not close): first
+        with ``near``'s factorisation (a chord iteration, no Jacobian to factorise), then,
+        if that does not close, with the Jacobian at each iterate."""
+        predicted = _predicted(near, x)
+        rows, cols = self.row_scales, self.col_scales
         tol = CLOSURE_RTOL * self.linkage.scale
+        q = self._chord(near, predicted, x, tol) if near.solver is not None else None
         for _ in range(NEWTON_ITERATIONS + 1):
-            phi, jac = _scaled_jacobian(self.linkage, q, x)
+            q = predicted if q is None else q
+            state = self.rows.at(q)
+            phi = self._residual(state, x)
+            solver = Solver(self.rows.dense(state) * rows[:, None] * cols[None, :])
             if np.abs(phi).max(initial=0.0) <= tol:
                 break
-            q = q - cols * np.linalg.lstsq(jac, phi, rcond=RCOND)[0]
+            q = q - cols * solver.solve(phi)
         else:
             return None
         # One more step, through the factorisation the rates need anyway: near a change
         # point a residual within the closure leaves the position uncertain by
         # closure / σ_min along the direction the constraints hardly hold, which would be
         # noise in the right-hand side; after it, by rounding / σ_min.
-        inverse = _PseudoInverse(jac)
-        q = q - cols * inverse.corrected(np.zeros(q.size), phi)
-        return self._rates(q, x, xdot, inverse, near, cols)
+        q = q - cols * solver.solve(phi)
+        return self._rates(q, x, xdot, solver, state, near, cols)
 
-    def _rates(self, q: Array, x: Array, xdot: Array, inverse: _PseudoInverse,
+    def _chord(self, near: Kinematics, q: Array, x: Array, tol: float) -> Array | None:
+        """Newton's iteration with ``near``'s Jacobian: the closed q, or None where it does
+        not close within :data:`CHORD_ITERATIONS` (or stops contracting)."""
+        assert near.solver is not None
+        cols = self.col_scales
+        size = math.inf
+        for _ in range(CHORD_ITERATIONS):
+            phi = self._residual(self.rows.at(q, jacobian=False), x)
+            worst = float(np.abs(phi).max(initial=0.0))
+            if worst <= tol:
+                return q
+            if worst >= size:
+                return None
+            size = worst
+            q = q - cols * near.solver.solve(phi)
+        return None
+
+    def _residual(self, state: RowState, x: Array) -> Array:
+        """Φ in lengths at ``state``, the drivers' rows at coordinates x."""
+        phi = state.phi.copy()
+        phi[phi.size - x.size:] -= x
+        return phi * self.row_scales
+
+    def _rates(self, q: Array, x: Array, xdot: Array, solver: Solver, state: RowState,
                near: Kinematics, cols: Array) -> Kinematics:
-        """S and q̈₀ at the closed pose q (``inverse``: its scaled Jacobian's), each the
+        """S and q̈₀ at the closed pose q (``solver``: its scaled Jacobian's), each the
         correction of ``near``'s that J demands."""
-        rows = unit_scales(self.linkage)[0]
+        rows = self.row_scales
         d = x.size
-        m = inverse.jac.shape[0]
+        m = rows.size
         unit = np.zeros((m, d))
         unit[m - d:] = np.eye(d)
-        rates = cols[:, None] * inverse.corrected(near.rates / cols[:, None], unit * rows[:, None])
+        rates = cols[:, None] * solver.corrected(near.rates / cols[:, None], unit * rows[:, None])
         qdot = rates @ xdot
-        bias_rhs = -quadratic_terms(self.linkage, q[None, :], qdot[None, :])[0] * rows
-        bias = cols * inverse.corrected(near.bias / cols, bias_rhs)
-        return Kinematics(x.copy(), xdot.copy(), q, rates, qdot, bias)
+        bias_rhs = -self.rows.quadratic(state, qdot) * rows
+        bias = cols * solver.corrected(near.bias / cols, bias_rhs)
+        return Kinematics(x.copy(), xdot.copy(), q, rates, qdot, bias, solver,
+                          (state.cos, state.sin))
 
     def nearest(self, x: Array) -> Kinematics:
         """The visited state whose coordinates are closest to x (in lengths)."""
         size = self.linkage.scale
         lengths = np.array([self.linkage.joint(d.joint).kind.length(size)
                             for d in self.linkage.drivers])
-        found = np.array([k.x for k in self.visited] or [self.last.x])
         if not self.visited:
             return self.last
+        key = (id(self.visited), len(self.visited))
+        if self._visited_x is None or self._visited_x[0] != key:
+            self._visited_x = (key, np.array([k.x for k in self.visited]))
+        found = self._visited_x[1]
         return self.visited[int(np.argmin(np.abs((found - x) * lengths).max(axis=1)))]
+
+
+def _predicted(near: Kinematics, x: Array) -> Array:
+    """q at coordinates x from ``near`` to second order along its motion: q + S·Δx +
+    ½·q̈₀·τ², τ the time at ``near``'s rates that comes closest to Δx (q̈₀ = Ṡ·ẋ, the
+    path's curvature at those rates); first order where it is at rest."""
+    step = x - near.x
+    q = near.q + near.rates @ step
+    speed = float(near.xdot @ near.xdot)
+    if speed > 0.0:
+        tau = float(near.xdot @ step) / speed
+        q = q + (0.5 * tau * tau) * near.bias
+    return q
 
 
 def _jumps(before: Array, after: Array, cols: Array) -> bool:
@@ -246,6 +316,63 @@ def _jumps(before: Array, after: Array, cols: Array) -> bool:
     a, b = before / cols[:, None], after / cols[:, None]
     size = max(np.abs(a).max(initial=0.0), np.abs(b).max(initial=0.0))
     return bool(size > 0.0 and np.abs(b - a).max() > JUMP * size)
+
+
+class Solver:
+    """Solutions of J·y = rhs for one scaled Jacobian: through its inverse (small) or its
+    sparse LU factors (large, :data:`.linalg.DENSE_COLUMNS`) where it is square and its
+    condition number below 1/:data:`RCOND`; else through its SVD, singular values below
+    :data:`RCOND` of the largest dropped (a change point, or redundant rows)."""
+
+    def __init__(self, jac: Array) -> None:
+        self.jac = jac
+        self.apply: Callable[[Array], Array] | None = None
+        if jac.shape[0] == jac.shape[1] and jac.size:
+            self.apply = _dense_inverse(jac) if jac.shape[0] <= DENSE_COLUMNS else _sparse_lu(jac)
+        self.pseudo = _PseudoInverse(jac) if self.apply is None else None
+
+    def solve(self, rhs: Array) -> Array:
+        """The solution nearest zero."""
+        if self.apply is not None:
+            return self.apply(rhs)
+        return self.corrected(np.zeros(self.jac.shape[1:] + rhs.shape[1:]), rhs)
+
+    def corrected(self, guess: Array, rhs: Array) -> Array:
+        """guess + J⁺(rhs − J·guess): the solution of J·y = rhs nearest ``guess`` (J
+        regular: the solution)."""
+        if self.apply is not None:
+            return self.apply(rhs)
+        assert self.pseudo is not None
+        return self.pseudo.corrected(guess, rhs)
+
+
+def _dense_inverse(jac: Array) -> Callable[[Array], Array] | None:
+    """y = J⁻¹·rhs by J's inverse, where its 1-norm condition number (exact, from the
+    inverse) is below 1/RCOND; else None."""
+    try:
+        inverse = np.linalg.inv(jac)
+    except np.linalg.LinAlgError:
+        return None
+    condition = np.abs(jac).sum(axis=0).max() * np.abs(inverse).sum(axis=0).max()
+    if not condition * RCOND < 1.0:
+        return None
+    return lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64)
+
+
+def _sparse_lu(jac: Array) -> Callable[[Array], Array] | None:
+    """y = J⁻¹·rhs by SuperLU, where the factor U's pivots span less than 1/RCOND (a
+    cheap bound on the condition number's order); else None."""
+    from scipy import sparse
+    from scipy.sparse.linalg import splu
+
+    try:
+        lu = splu(sparse.csc_matrix(jac))
+    except RuntimeError:     # exactly singular
+        return None
+    pivots = np.abs(lu.U.diagonal())
+    if not pivots.min() > RCOND * pivots.max():
+        return None
+    return lambda rhs: np.asarray(lu.solve(rhs), dtype=np.float64)
 
 
 class _PseudoInverse:
@@ -423,16 +550,19 @@ class Equations:
         return out
 
     def evaluate(self, t: float, kin: Kinematics, known: Array) -> Evaluation:
+        """The equations of motion at one state: M = Sᵀ𝕄S, and the efforts the
+        coordinates need, Q = Sᵀ(𝕄·q̈ − F) with q̈ = S·ẍ + q̈₀ (the constraints' reactions
+        do no work on S, redundant ones included)."""
         model = self.model
         moving = model.moving
         base = kin.bias + kin.rates @ known
-        trials = np.vstack([base, base + kin.rates[:, moving].T])
-        pose = _pose(model.linkage, kin, trials)
-        motion = origin_velocities(kin.q, kin.rates)
-        needed = -known_vector(pose) @ motion     # (1 + m, d): Q = −(power of known forces)
-        h = needed[0]
-        per_unit = needed[1:] - h                 # row k: Q's change per unit ẍ of moving[k]
-        mass = per_unit[:, moving].T
+        cos, sin = kin.turns if kin.turns is not None else _turns(kin.q)
+        own = terms(model.linkage)
+        forces = own.forces(kin.q, kin.qdot, cos, sin)
+        weighted = own.mass_times(cos, sin, np.column_stack([kin.rates, base]))
+        mass_all = kin.rates.T @ weighted[:, :-1]
+        h = kin.rates.T @ (weighted[:, -1] - forces.total)
+        mass = mass_all[moving][:, moving]
         applied = model.applied(t)
         acceleration = known.copy()
         acceleration[moving] = _accelerations(mass, applied - h[moving])
@@ -440,11 +570,12 @@ class Equations:
         if self.senses:
             acceleration[0], friction = self._with_friction(
                 kin, known, float(mass[0, 0]), float(acceleration[0]), float(applied[0]))
-        efforts = h + acceleration[moving] @ per_unit
+        efforts = h + acceleration[moving] @ mass_all[moving]
         efforts[moving] = applied
-        first = pose.take(slice(0, 1))
-        work = float(efforts @ kin.xdot) + load_power(first)
-        dissipated = damping_power(first) - float(friction @ (motion @ kin.xdot))
+        work = float(efforts @ kin.xdot) + float(forces.loads @ kin.qdot)
+        dissipated = -float(forces.dissipative @ kin.qdot)
+        if self.senses:
+            dissipated -= float(friction @ (origin_velocities(kin.q, kin.rates) @ kin.xdot))
         return Evaluation(kin, acceleration, efforts, work, dissipated)
 
     def _with_friction(self, kin: Kinematics, known: Array, mass: float, first: float,
@@ -499,6 +630,12 @@ def effort_with_friction(pose: LinkagePose, frictional: tuple[tuple[str, float],
                             "motion (the linkage self-locks)")
     column = force_layout(linkage).driver_column(0)
     return float(x[0, column]), friction_residual(pose, friction, x)[0][0]
+
+
+def _turns(q: Array) -> tuple[Array, Array]:
+    """cos and sin of each link's φ, the ground's (0) last."""
+    angles = np.append(q[2::3], 0.0)
+    return np.cos(angles), np.sin(angles)
 
 
 def _accelerations(mass: Array, net: Array) -> Array:

@@ -310,28 +310,42 @@ def test_n_four_bar_pendulum_closed_form_solves_its_equation() -> None:
     np.testing.assert_allclose(solution.y[0], exact, rtol=0, atol=REFERENCE_RTOL)
 
 
-@pytest.mark.skip(reason="the reference does not yet pass the horizontal poses at a bounded "
-                  "cost: docs/limitations.md, The N four-bar's horizontal passes")
-def test_n_four_bar_reference_passes_every_horizontal_pose() -> None:
-    """The reference's crank follows the exact pendulum for 10 s, through all ten horizontal
-    (redundant) passes on the parallelogram branch, and conserves energy to 1e-8."""
-    case = trajectory_case("n-four-bar")
+def assert_follows_the_pendulum(case: Case, passes: int) -> None:
+    """The reference's crank follows the exact pendulum through ``passes`` horizontal
+    (redundant) poses on the parallelogram branch, every vertical bar turning with it and
+    every coupler translating, and the energy drifts less than 1e-8."""
     run = reference_run(case)
     _, inertia, weight = n_four_bar_numbers(case.linkage)
     exact = pendulum_crank_angle(run.times, inertia, weight, -1.0)
     angles = link_angles(case.linkage, run)
     crank = math.pi / 2 + angles["bar0"]
     np.testing.assert_allclose(crank, exact, rtol=0, atol=REFERENCE_RTOL * abs(exact[-1]))
-    passes = np.floor(crank[0] / math.pi) - np.floor(crank[-1] / math.pi)
-    assert passes == np.floor(exact[0] / math.pi) - np.floor(exact[-1] / math.pi) == 10
-    for link, phi in angles.items():    # every vertical bar turns with the crank; couplers do not
-        if link.startswith("bar"):
-            np.testing.assert_allclose(phi, angles["bar0"], rtol=0, atol=REFERENCE_RTOL)
-        else:
-            np.testing.assert_allclose(phi, 0.0, rtol=0, atol=REFERENCE_RTOL)
+    found = np.floor(crank[0] / math.pi) - np.floor(crank[-1] / math.pi)
+    assert found == np.floor(exact[0] / math.pi) - np.floor(exact[-1] / math.pi) == passes
+    for link, phi in angles.items():
+        expected = angles["bar0"] if link.startswith("bar") else 0.0
+        np.testing.assert_allclose(phi, expected, rtol=0, atol=REFERENCE_RTOL)
     assert run.energy is not None
     total = run.energy.kinetic + run.energy.potential
     assert np.max(np.abs(total - total[0])) <= DRIFT_RTOL * run.energy.scale
+
+
+@pytest.mark.slow
+def test_n_four_bar_reference_passes_its_first_six_horizontal_poses() -> None:
+    """The first 6 s, through the first six horizontal passes (the seventh comes at
+    6.62 s): what the reference reaches of the whole run's target (docs/limitations.md,
+    The N four-bar's horizontal passes)."""
+    case = trajectory_case("n-four-bar")
+    assert case.simulation is not None
+    short = dataclasses.replace(case.simulation, end=6.0, outputs=tuple(np.linspace(0.0, 6.0, 241)))
+    assert_follows_the_pendulum(dataclasses.replace(case, simulation=short), 6)
+
+
+@pytest.mark.skip(reason="the reference does not yet pass the horizontal poses at a bounded "
+                  "cost: docs/limitations.md, The N four-bar's horizontal passes")
+def test_n_four_bar_reference_passes_every_horizontal_pose() -> None:
+    """The whole run, 10 s, through all ten horizontal passes."""
+    assert_follows_the_pendulum(trajectory_case("n-four-bar"), 10)
 
 
 # -- Exam Q2 released -----------------------------------------------------------------------

@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     from mechcheck.analytic.linalg import Batched
     from mechcheck.analytic.linkage import Joint, JointFriction, Link
     from mechcheck.analytic.linkage_kinematics import LinkagePose
+    from mechcheck.analytic.motion_rows import RowPlan
 
 
 @dataclass(frozen=True)
@@ -155,6 +156,17 @@ class JointKind(ABC):
     @abstractmethod
     def drive_acceleration(self, m: Motion, joint: Joint) -> Array | None:
         """J̇·q̇ of a driver's row on it (None: zero)."""
+
+    def plan(self, rows: RowPlan, joint: Joint, row: int) -> None:
+        """Declare the rows :meth:`constrain` writes as the primitives it writes them with
+        (``rows.coincide``, ``rows.angle_lock``, ``rows.along``), so that they are evaluated
+        over all the joints at once (:mod:`..motion_rows`); by default the kind's own
+        :meth:`constrain` and :meth:`accelerate` write them, one joint at a time."""
+        rows.by_the_joint(joint, row)
+
+    def plan_drive(self, rows: RowPlan, joint: Joint, row: int) -> None:
+        """:meth:`plan` for the row of a driver on it (:meth:`drive`)."""
+        rows.by_the_joint(joint, row, drive=True)
 
     @abstractmethod
     def coordinate(self, pose: LinkagePose, joint: Joint) -> tuple[Array, Array, Array]:

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from mechcheck.analytic.linalg import Batched
     from mechcheck.analytic.linkage import Joint
     from mechcheck.analytic.linkage_kinematics import LinkagePose
+    from mechcheck.analytic.motion_rows import RowPlan
 
 
 class PinInSlot(Prismatic):
@@ -45,6 +46,9 @@ class PinInSlot(Prismatic):
 
     def row_lengths(self, size: float) -> tuple[float, ...]:
         return (1.0,)
+
+    def plan(self, rows: RowPlan, joint: Joint, row: int) -> None:
+        rows.along(row, joint, perp(slot_axis(joint)))
 
     # -- statics --------------------------------------------------------------------------
     def react(self, k: Batched, layout: ForceLayout, joint: Joint, frame: JointFrame) -> None:

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from mechcheck.analytic.linalg import Batched
     from mechcheck.analytic.linkage import Joint, JointFriction, Link
     from mechcheck.analytic.linkage_kinematics import LinkagePose
+    from mechcheck.analytic.motion_rows import RowPlan
 
 
 def slot_axis(joint: Joint) -> Array:
@@ -67,6 +68,13 @@ class Prismatic(JointKind):
 
     def row_lengths(self, size: float) -> tuple[float, ...]:
         return (size, 1.0)
+
+    def plan(self, rows: RowPlan, joint: Joint, row: int) -> None:
+        rows.angle_lock(row, joint)
+        rows.along(row + 1, joint, perp(slot_axis(joint)))
+
+    def plan_drive(self, rows: RowPlan, joint: Joint, row: int) -> None:
+        rows.along(row, joint, slot_axis(joint))
 
     def drive(self, c: Constraints, joint: Joint, row: int) -> None:
         c.along(row, joint, slot_axis(joint))

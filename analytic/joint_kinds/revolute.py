@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from mechcheck.analytic.linalg import Batched
     from mechcheck.analytic.linkage import Joint, JointFriction, Link
     from mechcheck.analytic.linkage_kinematics import LinkagePose
+    from mechcheck.analytic.motion_rows import RowPlan
 
 
 class Revolute(JointKind):
@@ -56,6 +57,12 @@ class Revolute(JointKind):
 
     def row_lengths(self, size: float) -> tuple[float, ...]:
         return (1.0, 1.0)
+
+    def plan(self, rows: RowPlan, joint: Joint, row: int) -> None:
+        rows.coincide(row, joint)
+
+    def plan_drive(self, rows: RowPlan, joint: Joint, row: int) -> None:
+        rows.angle_lock(row, joint)
 
     def drive(self, c: Constraints, joint: Joint, row: int) -> None:
         c.angle_lock(row, joint)
