@@ -270,7 +270,7 @@ class Constraints:
         every point from the carried ones, its two rows and its entries written at once (the
         same numbers, the entries in the same order)."""
         n = self.q.shape[0]
-        if n > FEW_POSES:
+        if not 0 < n <= FEW_POSES:   # no pose (an empty sweep part) or many: joint by joint
             for row, joint in zip(rows, joints, strict=True):
                 self.coincide(row, joint)
             return

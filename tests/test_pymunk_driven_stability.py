@@ -5,6 +5,7 @@ lift, whose driven runs left their assembly at 1600 iterations a step."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -86,7 +87,10 @@ def test_a_driven_run_leaves_its_assembly_where_a_step_leaves_more_than_half(
 @pytest.mark.parametrize(("extension", "stable_from"), [
     (-0.035, 6400),      # 0.63 of the slowest mode left a step at 1600, 0.15 at 6400
     (0.28, 409600),      # a stable step needs about 126 000 (condition number 284)
-    (-0.064, 409600),    # about 116 000 (condition number 544)
+    # About 116 000 (condition number 544); 2.5 min of one core, more than the suite's
+    # budget allows: run with MECHCHECK_LONG=1.
+    pytest.param(-0.064, 409600, marks=pytest.mark.skipif(
+        not os.environ.get("MECHCHECK_LONG"), reason="2.5 min of CPU: set MECHCHECK_LONG=1")),
 ])
 def test_the_raising_scissor_lift_gets_a_driven_number_where_its_runs_were_unstable(
         extension: float, stable_from: int) -> None:
