@@ -18,14 +18,18 @@ factorisations' fill, which for the chains and trees of a linkage stays close to
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
+import threading
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from mechcheck.analytic import _fast
 
 if TYPE_CHECKING:
     from scipy import sparse
@@ -99,12 +103,12 @@ class Batched:
         self._v.append(values)
 
     def _constant(self, value: float) -> Array:
-        """A block (1, N) of ``value``."""
+        """A block (1, N) of ``value`` (read-only: shared by every matrix of a few poses)."""
+        if self.poses <= FEW_POSES:
+            return _few_constant(value, self.poses)
         row = self._constants.get(value)
         if row is None:
-            row = np.full((1, self.poses), value)
-            row.flags.writeable = False
-            self._constants[value] = row
+            row = self._constants[value] = _few_constant.__wrapped__(value, self.poses)
         return row
 
     @property
@@ -119,22 +123,23 @@ class Batched:
             found = self._kept[what] = make()
         return found
 
+    def _structure(self) -> _Structure:
+        """Where the entries sit (:func:`_structure_of`), found again for the next matrix of
+        the same entries' places (the next solve of a case)."""
+        found: _Structure = self._derived("structure", lambda: _structure_of(
+            self.rows, self.cols, self.poses, self._r, self._c))
+        return found
+
     @property
     def distinct(self) -> bool:
         """No two entries at one place (so scaling the entries or the dense matrix is the
         same arithmetic)."""
-        return bool(self._derived("distinct", lambda: len(set(zip(self._r, self._c, strict=True)))
-                                  == len(self._r)))
+        return self._structure().distinct
 
     @property
     def pattern(self) -> NDArray[np.bool_]:
         """(rows, cols): where the matrix has entries (read-only)."""
-        def make() -> NDArray[np.bool_]:
-            out = np.zeros((self.rows, self.cols), dtype=bool)
-            out[self.index()] = True
-            out.flags.writeable = False
-            return out
-        return np.asarray(self._derived("pattern", make))
+        return self._structure().pattern
 
     def values(self) -> Array:
         """(entries, N)."""
@@ -152,9 +157,8 @@ class Batched:
         return self._v if not isinstance(self._v, list) else itertools.chain.from_iterable(self._v)
 
     def index(self) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-        found: tuple[NDArray[np.intp], NDArray[np.intp]] = self._derived("index", lambda: (
-            np.asarray(self._r, dtype=np.intp), np.asarray(self._c, dtype=np.intp)))
-        return found
+        """The entries' rows and columns (read-only)."""
+        return self._structure().index
 
     def dense(self) -> Array:
         """(N, rows, cols), duplicates summed (in the order they were added)."""
@@ -170,9 +174,7 @@ class Batched:
         the order they were added (as ``np.add.at`` sums them, at a fifth of its cost)."""
         if not self._r:
             return np.moveaxis(np.zeros((self.rows, self.cols, self.poses)), 2, 0)
-        r, c = self.index()
-        place = (((r * self.cols + c) * self.poses)[:, None] + np.arange(self.poses)).ravel()
-        summed = np.asarray(np.bincount(place, weights=self.values().ravel(),
+        summed = np.asarray(np.bincount(self._structure().places, weights=self.values().ravel(),
                                         minlength=self.rows * self.cols * self.poses),
                             dtype=np.float64)
         # The poses last in memory, as the many poses' dense() has them: reductions along
@@ -222,6 +224,55 @@ class Batched:
         out._r, out._c = self._r + other._r, self._c + other._c
         out._v = [*self._blocks(), *other._blocks()]
         return out
+
+
+@functools.lru_cache(maxsize=4 * FEW_POSES)
+def _few_constant(value: float, poses: int) -> Array:
+    """A read-only block (1, poses) of ``value``."""
+    row = np.full((1, poses), value)
+    row.flags.writeable = False
+    return row
+
+
+@dataclass(frozen=True)
+class _Structure:
+    """Where a matrix's entries sit: their rows and columns, the pattern, whether no two
+    share a place, and each value's place in the dense (rows, cols, N) array of a few poses
+    (for :meth:`Batched._dense_few`'s sum); every array read-only."""
+
+    index: tuple[NDArray[np.intp], NDArray[np.intp]]
+    pattern: NDArray[np.bool_]
+    distinct: bool
+    places: NDArray[np.intp]
+
+
+#: The structures found so far (:func:`_structure_of`), the most recent last; at most
+#: :data:`KEPT_STRUCTURES`: a linkage's matrices keep their entries' places from one solve
+#: of a pose to the next, and deriving them costs as much as the matrix's values.
+_STRUCTURES: dict[tuple[object, ...], _Structure] = {}
+KEPT_STRUCTURES = 256
+_STRUCTURES_LOCK = threading.Lock()
+
+
+def _structure_of(rows: int, cols: int, poses: int, r: list[int], c: list[int]) -> _Structure:
+    """The :class:`_Structure` of entries at rows ``r`` and columns ``c``, kept."""
+    key = (rows, cols, poses, tuple(r), tuple(c))
+    found = _STRUCTURES.get(key)
+    if found is not None:
+        return found
+    ri, ci = np.asarray(r, dtype=np.intp), np.asarray(c, dtype=np.intp)
+    pattern = np.zeros((rows, cols), dtype=bool)
+    pattern[ri, ci] = True
+    places = (((ri * cols + ci) * poses)[:, None] + np.arange(poses)).ravel() \
+        if poses <= FEW_POSES else np.zeros(0, dtype=np.intp)
+    for a in (ri, ci, pattern, places):
+        a.flags.writeable = False
+    found = _Structure((ri, ci), pattern, len(set(zip(r, c, strict=True))) == len(r), places)
+    with _STRUCTURES_LOCK:  # solves may run in several threads
+        _STRUCTURES[key] = found
+        while len(_STRUCTURES) > KEPT_STRUCTURES:
+            del _STRUCTURES[next(iter(_STRUCTURES))]
+    return found
 
 
 class Dropped(Batched):
@@ -279,6 +330,10 @@ def _gram(m: sparse.csc_matrix) -> Callable[[Array], Any]:
 
 
 def _solve_dense(a: Array, b: Array) -> Array:
+    if a.size and a.shape[1] == a.shape[2]:   # numpy's solve without its wrapper, if it gives one
+        x = _fast.solve_square(a, b)
+        if x is not None:
+            return x
     finite = np.isfinite(a).all(axis=(1, 2)) & np.isfinite(b).all(axis=1)
     if not finite.all():  # a pose that is not there (NaN) has no solution; LAPACK would fail
         x = np.full((a.shape[0], a.shape[2]), np.nan)

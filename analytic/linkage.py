@@ -572,12 +572,25 @@ class Linkage:
         joint leaving its Sᵢ freedoms."""
         return 3 * (len(self.links) - 1) - self.constraint_rows
 
-    @cached_property
+    @property
     def drawn_rank(self) -> int:
         """Rank of the joints' constraint Jacobian at the drawn pose (in length units:
         :func:`.linkage_kinematics.unit_scales`, so that it does not depend on the drawing's
         place, orientation or size)."""
-        return self._rank_at(np.zeros(3 * len(self.moving_links)))
+        return self._drawn[0]
+
+    @property
+    def drawn_residual(self) -> np.ndarray:
+        """Φ of the joints' constraints at the drawn pose (1, rows), read-only: found with
+        :attr:`drawn_rank`, so that a solve's test that the drawing closes costs nothing."""
+        return self._drawn[1]
+
+    @cached_property
+    def _drawn(self) -> tuple[int, np.ndarray]:
+        phi, jac = constraint_system(self, np.zeros((1, 3 * len(self.moving_links))),
+                                     np.zeros((1, 0)), drivers=False)
+        phi.flags.writeable = False
+        return self._rank_of(jac), phi
 
     @cached_property
     def joint_rank(self) -> int:
@@ -597,7 +610,9 @@ class Linkage:
         return self.drawn_rank < self.joint_rank
 
     def _rank_at(self, q: np.ndarray) -> int:
-        jac = joint_system_at(self, q)
+        return self._rank_of(joint_system_at(self, q))
+
+    def _rank_of(self, jac: Batched) -> int:
         rows, cols = unit_scales(self, drivers=False)
         scaled = jac.scaled(np.broadcast_to(rows, (1, rows.size)), cols)
         return linalg.rank(scaled.dense()[0] if scaled.small else scaled.at(0))

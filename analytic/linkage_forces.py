@@ -26,7 +26,7 @@ from functools import cached_property, partial
 import numpy as np
 from numpy.typing import NDArray
 
-from mechcheck.analytic import linalg
+from mechcheck.analytic import _fast, linalg
 from mechcheck.analytic.linalg import Batched
 from mechcheck.analytic.linkage import Joint, LinearSpring, Linkage
 from mechcheck.analytic.linkage_elastic import axial_forces, compatible_forces
@@ -218,7 +218,8 @@ def _scaled_small(entries: Batched, rows: Array, cols: Array) -> Array:
     (so the same number), in a few calls rather than a few per entry (one pose pays for
     calls)."""
     first = entries.dense() * rows[:, None] * cols
-    unit = _unit_rows(np.asarray(np.linalg.norm(first, axis=2), dtype=np.float64))
+    # The rows' 2-norms, as np.linalg.norm(first, axis=2) sums them, without its wrapper.
+    unit = _unit_rows(np.sqrt(np.add.reduce(first * first, axis=2)))
     return np.asarray(np.where(entries.pattern, first * unit[:, :, None], 0.0),  # × 1: the columns
                       dtype=np.float64)
 
@@ -235,10 +236,12 @@ def condition_bound(pose: LinkagePose, k: Batched) -> Array:
     finite = np.isfinite(scaled).all(axis=(1, 2))
     some = scaled if finite.all() else scaled[finite]
     with np.errstate(all="ignore"):
-        try:
-            inverse = np.linalg.inv(some)
-        except np.linalg.LinAlgError:   # a singular pose: its exact condition number decides
-            return bound
+        inverse = _fast.inverse(some)
+        if inverse is None:
+            try:
+                inverse = np.asarray(np.linalg.inv(some), dtype=np.float64)
+            except np.linalg.LinAlgError:   # a singular pose: its exact condition number decides
+                return bound
         bound[finite] = np.sqrt(np.square(some).sum(axis=(1, 2))
                                 * np.square(inverse).sum(axis=(1, 2)))
     return np.where(np.isnan(bound), np.inf, bound)

@@ -465,9 +465,12 @@ def _closed_drawing(linkage: Linkage) -> tuple[Array, NDArray[np.bool_]]:
     def close() -> tuple[Array, NDArray[np.bool_]]:
         q, targets = np.zeros((1, Layout(linkage).size)), np.zeros((1, 1))
         # The drawing closes as drawn (each joint's points coincide there): Newton's first
-        # test, without the Jacobian its first step would need.
+        # test, on the joints' rows the linkage found with its rank at the drawing; a
+        # driver's row is its joint's coordinate, zero at the drawing by definition.
+        phi = np.zeros((1, Layout(linkage).rows))
+        phi[:, :linkage.constraint_rows] = linkage.drawn_residual
         with np.errstate(all="ignore"):
-            drawn = _closed(linkage, constraint_system(linkage, q, targets, jacobian=False)[0])
+            drawn = _closed(linkage, phi)
         q, ok = (q, drawn) if drawn.all() else _newton(linkage, q, targets)
         q.flags.writeable = False
         ok.flags.writeable = False

@@ -28,7 +28,8 @@ def known_vector(pose: LinkagePose) -> Array:
     for m in linkage.masses:
         com, _, acc = pose.point(m.link, m.com)
         layout.add_force(b, m.link, m.mass * (g[None, :] - acc), com)
-        layout.add_couple(b, m.link, -m.inertia * pose.angle(m.link)[2])
+        if not pose.at_rest:    # at rest −I·α is −0, which adds nothing to any number
+            layout.add_couple(b, m.link, -m.inertia * pose.angle(m.link)[2])
     for spring in linkage.springs:
         _add_spring(b, layout, pose, spring)
     _add_viscous(b, layout, pose)

@@ -292,7 +292,8 @@ class Constraints:
         turned_by = across.reshape(n, -1).T
         sources = np.concatenate([self.jac_constant(1.0), self.jac_constant(-1.0), turned_by,
                                   -turned_by])
-        self.jac.add_entries(plan.entry_rows, plan.entry_cols, sources[plan.entry_sources])
+        entry_rows, entry_cols, entry_sources = plan.entries
+        self.jac.add_entries(entry_rows, entry_cols, sources[entry_sources])
 
     def jac_constant(self, value: float) -> Array:
         """A row (1, N) of ``value``."""
@@ -317,6 +318,8 @@ class Constraints:
         pi, dpi = self.point(i, a0)
         d = pj - pi
         self.phi[:, row] += dot(w, d)
+        if isinstance(self.jac, Dropped):     # Φ alone is asked for
+            return
         self.put(row, j, w, dot(w, dpj))
         self.put(row, i, -w, dot(perp(w), d) - dot(w, dpi))
 
@@ -332,9 +335,15 @@ class _PinsPlan:
     #: (0 on the ground).
     carried: NDArray[np.intp]
     x_rows: NDArray[np.intp]
-    entry_rows: list[int]
-    entry_cols: list[int]
-    entry_sources: NDArray[np.intp]
+    linkage: Linkage
+    rows: tuple[int, ...]
+    joints: tuple[Joint, ...]
+
+    @cached_property
+    def entries(self) -> tuple[list[int], list[int], NDArray[np.intp]]:
+        """J's entries: rows, columns, and where each value comes from (derived when a
+        Jacobian is first asked for: the drawing's closure needs only Φ)."""
+        return _pins_entries(self.linkage, self.rows, self.joints, self.carried)
 
 
 def _pins_plan(linkage: Linkage, rows: tuple[int, ...], joints: tuple[Joint, ...]) -> _PinsPlan:
@@ -345,7 +354,6 @@ def _pins_plan(linkage: Linkage, rows: tuple[int, ...], joints: tuple[Joint, ...
 def _make_pins_plan(linkage: Linkage, rows: tuple[int, ...],
                     joints: tuple[Joint, ...]) -> _PinsPlan:
     index = carried_points(linkage).index
-    count = len(index)
     sides = []
     carried = np.zeros((2, len(joints)), dtype=np.intp)
     for side in (0, 1):
@@ -360,6 +368,14 @@ def _make_pins_plan(linkage: Linkage, rows: tuple[int, ...],
                 carried[side, j] = index[link, p0]
         sides.append((np.array(places, dtype=np.intp), np.array(grounded, dtype=np.intp),
                       np.array(drawn, dtype=float).reshape(-1, 2)))
+    return _PinsPlan((sides[0], sides[1]), carried, np.array(rows, dtype=np.intp), linkage, rows,
+                     joints)
+
+
+def _pins_entries(linkage: Linkage, rows: tuple[int, ...], joints: tuple[Joint, ...],
+                  carried: NDArray[np.intp]) -> tuple[list[int], list[int], NDArray[np.intp]]:
+    """:attr:`_PinsPlan.entries`."""
+    count = len(carried_points(linkage).index)
     entry_rows: list[int] = []
     entry_cols: list[int] = []
     sources: list[int] = []
@@ -373,8 +389,7 @@ def _make_pins_plan(linkage: Linkage, rows: tuple[int, ...],
                     entry_rows += [row + c, row + c]
                     entry_cols += [k + c, k + 2]
                     sources += [sign, 2 + 2 * count * sign + 2 * int(carried[side, j]) + c]
-    return _PinsPlan((sides[0], sides[1]), carried, np.array(rows, dtype=np.intp),
-                     entry_rows, entry_cols, np.array(sources, dtype=np.intp))
+    return entry_rows, entry_cols, np.array(sources, dtype=np.intp)
 
 
 @dataclass
@@ -490,11 +505,9 @@ class ForceLayout:
         """(columns,): the length that makes each unknown a force (1 for a force, the
         linkage's size for a couple; the kinds' ``reaction_lengths`` and ``length``)."""
         linkage = self.linkage
-        cols = np.ones(self.columns)
-        for joint in linkage.joints:
-            cols[list(self.joint_columns(joint))] = joint.kind.reaction_lengths(linkage.scale)
-        for index, driver in enumerate(linkage.drivers):
-            cols[self.driver_column(index)] = linkage.joint(driver.joint).kind.length(linkage.scale)
+        lengths = [x for joint in linkage.joints for x in joint.kind.reaction_lengths(linkage.scale)]
+        lengths += [linkage.joint(d.joint).kind.length(linkage.scale) for d in linkage.drivers]
+        cols = np.array(lengths, dtype=float)   # the joints' columns, in order, then the drivers'
         cols.flags.writeable = False
         return cols
 
