@@ -445,6 +445,10 @@ class Path:
         already the continuous one (:data:`NO_WRAP`); found once per path, not per chunk."""
         out: dict[str, tuple[int, int] | None] = {}
         for link, nodes in self.node_angles.items():
+            if nodes.size == 1:     # the drawn pose's node alone: the same test, in floats
+                angle = float(nodes[0])
+                out[link] = (0, 0) if math.isfinite(angle) and not abs(angle) < NO_WRAP else None
+                continue
             reachable = np.flatnonzero(np.isfinite(nodes))
             wraps = not np.all(np.abs(nodes[reachable]) < NO_WRAP)
             out[link] = (int(reachable[0]), int(reachable[-1])) if wraps else None
@@ -473,6 +477,10 @@ def path(plan: AssurPlan, values: Array) -> Path:
 
 def _trace(plan: AssurPlan, first: int, last: int) -> Path:
     """:func:`path` over the nodes ``first`` … ``last`` (× the plan's step)."""
+    if first == last:   # the drawn pose's node alone (a case solved at its drawn pose)
+        drawn = _drawn_path(plan)
+        if drawn is not None:
+            return drawn
     h = plan.step
     nodes = np.arange(first, last + 1, dtype=np.float64) * h
     placed = place(plan, nodes)
@@ -494,6 +502,17 @@ def _trace(plan: AssurPlan, first: int, last: int) -> Path:
     return Path(lo, hi, h, first, angles)
 
 
+def _drawn_path(plan: AssurPlan) -> Path | None:
+    """:func:`_trace` of the one node 0, the drawn pose, placed as a number (a tenth of an
+    array's cost per operation): no lock either way, and the dyads' angles there, ~0, which
+    nothing needs to carry (:attr:`Path.spans`); None if the drawing does not close."""
+    placed = place(plan, np.float64(0.0))
+    if not bool(placed.closed):
+        return None
+    angles = {link: np.array([placed.angles[link]], dtype=np.float64) for link in _dyad_links(plan)}
+    return Path(-math.inf, math.inf, plan.step, 0, angles)
+
+
 def _dyad_links(plan: AssurPlan) -> Iterator[str]:
     """The links whose angles are atan2's (an RRP dyad's slider turns with its body)."""
     for group in plan.groups:
@@ -509,6 +528,8 @@ def _unwrap_from(raw: Array, zero: int) -> Array:
     it nearest the one before (node steps turn a link far less than half a turn, so the
     turns add up from the raw angles' differences)."""
     out = raw.copy()
+    if out.size == 1:   # one node: nothing to carry
+        return out
     for side in (out[zero:], out[zero::-1]):  # views: written through
         finite = np.isfinite(side)
         n = side.size if finite.all() else int(np.argmin(finite))
