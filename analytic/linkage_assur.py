@@ -336,8 +336,9 @@ class Placement:
     closed: NDArray[np.bool_]
 
 
-def place(plan: AssurPlan, value: Array) -> Placement:
-    """Place every group at driver values ``value`` (N,); angles raw (atan2) for dyad links,
+def place(plan: AssurPlan, value: Array | np.float64) -> Placement:
+    """Place every group at driver values ``value`` (N,) or one value (a number: a tenth of
+    the cost per operation); angles raw (atan2) for dyad links,
     exact for cranks (relative to their body's raw angle)."""
     frames: dict[str, Frame] = {GROUND: GROUND_FRAME}
     angles: dict[str, Array] = {GROUND: np.zeros(())}   # adds to one pose or to many
