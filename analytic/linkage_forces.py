@@ -391,18 +391,10 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
         x = linalg.solve(entries, -b)
     terms = coulomb_terms(pose)
     converged = np.ones(x.shape[0], dtype=bool)
-    reversing = np.full(x.shape[0], "", dtype=object if terms else "<U1")
+    reversing = np.zeros(x.shape[0], dtype="<U1")   # "" at every pose
     gain: Callable[[], Array] | None = None
     if terms:
-        x, converged = solve_with_friction(pose, entries, b, x, terms)
-        friction = [t for t in terms if t.friction]
-        if friction:
-            gain = partial(friction_loop_gain, pose, entries, x.copy(), friction)
-        for t in terms:
-            stops = t.sense == 0.0
-            reversing[stops] = np.where(reversing[stops] == "", t.joint.name,
-                                        reversing[stops] + ", " + t.joint.name)
-    reversing = reversing.astype(str)
+        x, converged, reversing, gain = _with_nonlinear_terms(pose, entries, b, x, terms)
     undirected = undirected_springs(pose)
     undecided = None
     extra: dict[str, Array] = {}
@@ -413,8 +405,9 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
             x, undecided = compatible_forces(pose, k, b)
     if linkage.elastic_links:
         extra = axial_forces(pose, entries.dense(), x)
-    withheld = singular | ~converged | (reversing != "") | (undirected != "") \
-        | linkage.drawn_at_change_point   # reactions not unique, or no branch
+    withheld = singular | (undirected != "") | linkage.drawn_at_change_point   # not unique, no branch
+    if terms:
+        withheld |= ~converged | (reversing != "")
     if undecided is not None:
         withheld |= undecided
     x[withheld] = np.nan
@@ -425,6 +418,24 @@ def solve_linkage(linkage: Linkage, values: Array | None = None,
     return LinkageResults(pose, pose_quantities(pose) | force_quantities(pose, x, terms) | extra,
                           exact.all, singular, converged, reversing, stable, undirected, gain,
                           undecided)
+
+
+def _with_nonlinear_terms(pose: LinkagePose, entries: Batched, b: Array, x: Array,
+                          terms: list[CoulombTerm]) -> tuple[Array, NDArray[np.bool_],
+                                                             NDArray[np.str_],
+                                                             Callable[[], Array] | None]:
+    """The unknowns with the Coulomb terms and gears' radial parts (:func:`solve_with_friction`
+    from the linear solution x), whether Newton converged, the joints whose friction reverses
+    at each pose ("" where none), and the friction loop's gain when first asked for."""
+    x, converged = solve_with_friction(pose, entries, b, x, terms)
+    friction = [t for t in terms if t.friction]
+    gain = partial(friction_loop_gain, pose, entries, x.copy(), friction) if friction else None
+    reversing = np.full(x.shape[0], "", dtype=object)
+    for t in terms:
+        stops = t.sense == 0.0
+        reversing[stops] = np.where(reversing[stops] == "", t.joint.name,
+                                    reversing[stops] + ", " + t.joint.name)
+    return x, converged, reversing.astype(str), gain
 
 
 def _at_rest(linkage: Linkage, velocities: Array | None, accelerations: Array | None) -> bool:

@@ -89,7 +89,7 @@ class Revolute(JointKind):
 
     def react_all(self, k: Batched, layout: ForceLayout, joints: Sequence[Joint],
                   frames: Sequence[JointFrame]) -> None:
-        points = np.stack([frame.point for frame in frames])
+        points = np.array([frame.point for frame in frames])   # np.stack's copy, in a fifth
         layout.force_pairs(k, [j.links for j in joints], [layout.joint_columns(j) for j in joints],
                            unit_axes(points.shape[1]), points)
 
