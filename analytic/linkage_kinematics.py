@@ -78,6 +78,15 @@ class LinkagePose:
     qdot: Array
     qddot: Array
     locked_at: Array
+    #: The points :meth:`point` keeps, by link and drawn point; the links' rotations computed
+    #: so far (:meth:`turn`); the frames :meth:`frame` keeps, by joint. Each pose's own (not
+    #: passed on by ``dataclasses.replace``), and plain fields: a cached property's lock
+    #: costs more than a pose's point.
+    points_asked: dict[tuple[str, tuple[float, ...]], tuple[Array, Array, Array]] = field(
+        default_factory=dict, init=False, repr=False, compare=False)
+    turns: dict[int, Turn] = field(default_factory=dict, init=False, repr=False, compare=False)
+    frames_asked: dict[str, JointFrame] = field(default_factory=dict, init=False, repr=False,
+                                                compare=False)
 
     def head(self, n: int) -> LinkagePose:
         """The first ``n`` poses."""
@@ -109,11 +118,6 @@ class LinkagePose:
             found = self.points_asked[key] = self._carried(key) or _read_only(
                 self._point(link, drawn))
         return found
-
-    @cached_property
-    def points_asked(self) -> dict[tuple[str, tuple[float, ...]], tuple[Array, Array, Array]]:
-        """The points :meth:`point` keeps, by link and drawn point."""
-        return {}
 
     def _carried(self, key: tuple[str, tuple[float, ...]]) -> tuple[Array, Array, Array] | None:
         """A point its link carries, at a few poses at rest: every carried point is placed
@@ -204,11 +208,6 @@ class LinkagePose:
             self.qdot.any() or self.qddot.any()
             or np.signbit(self.qdot).any() or np.signbit(self.qddot).any()))
 
-    @cached_property
-    def turns(self) -> dict[int, Turn]:
-        """The links' rotations computed so far (:meth:`turn`)."""
-        return {}
-
     def angle(self, link: str) -> tuple[Array, Array, Array]:
         """φ, ω, α of ``link`` (rotation from the drawn pose)."""
         return (self.link_state(link, self.q)[1], self.link_state(link, self.qdot)[1],
@@ -223,11 +222,6 @@ class LinkagePose:
         if found is None:
             found = self.frames_asked[joint.name] = joint.kind.frame(self, joint)
         return found
-
-    @cached_property
-    def frames_asked(self) -> dict[str, JointFrame]:
-        """The frames :meth:`frame` keeps, by joint."""
-        return {}
 
     def joint_coordinate(self, joint: Joint) -> tuple[Array, Array, Array]:
         """q, q̇, q̈ of a joint: relative rotation (rad) or displacement along the axis (m)."""
