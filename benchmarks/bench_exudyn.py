@@ -26,8 +26,10 @@ are listed with the reason.
 
 Times per case, median (min, max) of the repeats, in ms: Exudyn's build and static solve;
 ``mechcheck.solve(case, "analytic")`` on a Linkage built just before the call (nothing it
-caches per Linkage is there yet: "first") and repeated on the same one ("repeat"); the
-ratios mechcheck/Exudyn; last, the median over the cases.
+caches per Linkage is there yet: "first"; what the engine keeps by content rather than per
+Linkage, a mechanism's walked path and a matrix's entry places, is there from the calls
+before, as in any process that solves one mechanism again) and repeated on the same one
+("repeat"); the ratios mechcheck/Exudyn; last, the median over the cases.
 """
 
 from __future__ import annotations
