@@ -200,9 +200,11 @@ def assur_plan(linkage: Linkage) -> AssurPlan | None:
     the kinds of the joints anchoring its links. Only joints next to what was just
     placed can start a new dyad, so each is looked at again only then (a heap of candidates
     in file order): the plan of a chain of n loops costs O(n log n), not O(n²)."""
+    # The kinds are single instances (``JointKind.__reduce__``): compared by identity, not
+    # through their __eq__, which also takes a kind's name.
     if (len(linkage.drivers) != 1 or linkage.dof != 1 or linkage.redundant
-            or any(j.kind not in (REVOLUTE, PRISMATIC) for j in linkage.joints)
-            or linkage.joint(linkage.drivers[0].joint).kind is not REVOLUTE):
+            or linkage.joint(linkage.drivers[0].joint).kind is not REVOLUTE
+            or any(j.kind is not REVOLUTE and j.kind is not PRISMATIC for j in linkage.joints)):
         return None
     search = _Search(linkage)
     groups: list[Group] = []
