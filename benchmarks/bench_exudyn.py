@@ -28,8 +28,9 @@ Times per case, median (min, max) of the repeats, in ms: Exudyn's build and stat
 ``mechcheck.solve(case, "analytic")`` on a Linkage built just before the call (nothing it
 caches per Linkage is there yet: "first"; what the engine keeps by content rather than per
 Linkage, a mechanism's walked path and a matrix's entry places, is there from the calls
-before, as in any process that solves one mechanism again) and repeated on the same one
-("repeat"); the ratios mechcheck/Exudyn; last, the median over the cases.
+before, as in any process that solves one mechanism again) and called again on the same
+one ("repeat"), the three timed in turn (:func:`interleaved`); the ratios mechcheck/Exudyn;
+last, the median over the cases.
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ import sys
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -228,31 +230,34 @@ def exudyn_effort(exu: ModuleType, items: ModuleType, case: Case, values: Mappin
     return model.efforts()[case.linkage.drivers[0].joint]
 
 
-def timed(fn: Callable[[], object], repeats: int) -> list[float]:
-    out = []
-    clock = CLOCK[0]
-    for _ in range(repeats):
-        start = clock()
-        fn()
-        out.append(clock() - start)
-    return out
-
-
 def fresh(case: Case) -> Case:
     """The same Case on a Linkage built anew: none of its per-Linkage caches filled."""
     return Case(name=case.name, geometry=replace(case.linkage),
                 tolerance=case.tolerance, source=case.source)
 
 
-def first_calls(case: Case, repeats: int) -> list[float]:
-    out = []
+def clocked(fn: Callable[[], object]) -> float:
     clock = CLOCK[0]
+    start = clock()
+    fn()
+    return clock() - start
+
+
+def interleaved(exudyn_run: Callable[[], object], case: Case,
+                repeats: int) -> tuple[list[float], list[float], list[float]]:
+    """Exudyn's build and solve, mechcheck's first call on a new Linkage (built and checked
+    outside the timer) and its next call on the same one, timed in turn ``repeats`` times:
+    a burst of other work on a shared machine lengthens all three alike, so their ratios
+    hold where their times do not. Exudyn runs once untimed just before its timed run, so
+    that it is timed as warm as mechcheck's next call."""
+    exudyn, first, repeat = [], [], []
     for _ in range(repeats):
-        new = fresh(case)   # built (and checked) outside the timer
-        start = clock()
-        mechcheck.solve(new, "analytic")
-        out.append(clock() - start)
-    return out
+        exudyn_run()
+        exudyn.append(clocked(exudyn_run))
+        solve = partial(mechcheck.solve, fresh(case), "analytic")
+        first.append(clocked(solve))
+        repeat.append(clocked(solve))
+    return exudyn, first, repeat
 
 
 def spread(times: list[float]) -> str:
@@ -273,10 +278,10 @@ def measure(exu: ModuleType, items: ModuleType, case: Case, repeats: int) -> Row
         return reason
     joint = case.linkage.drivers[0].joint
     effort = exudyn_effort(exu, items, case, solution.values)
+    exudyn, first, repeat = interleaved(
+        lambda: exudyn_effort(exu, items, case, solution.values), case, repeats)
     return Row(case.name, joint_kinds(case.linkage), solution.values[f"Q_{joint}"], effort,
-               exudyn=timed(lambda: exudyn_effort(exu, items, case, solution.values), repeats),
-               first=first_calls(case, repeats),
-               repeat=timed(lambda: mechcheck.solve(case, "analytic"), repeats))
+               exudyn=exudyn, first=first, repeat=repeat)
 
 
 def relative(a: float, b: float) -> float:
