@@ -45,11 +45,13 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mechcheck.analytic import _fast as fast
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linalg import DENSE_COLUMNS
 from mechcheck.analytic.linkage import Driver, LinearSpring, Linkage, TorsionSpring
@@ -533,8 +535,10 @@ class Equations:
             return self._kept[2]
         m = self.model.moving.size
         x, v, known = self.model.coordinates(t, y[:m], y[m:2 * m])
-        kin = self.tracker.solve(x, v)
-        found = self.evaluate(t, kin, known)
+        found = self._compiled(t, x, v, known)
+        if found is None:
+            kin = self.tracker.solve(x, v)
+            found = self.evaluate(t, kin, known)
         self.evaluations += 1
         self._kept = (t, key, found)
         return found
@@ -548,6 +552,38 @@ class Equations:
         out[2 * m] = found.work_rate
         out[2 * m + 1] = found.dissipation_rate
         return out
+
+    @cached_property
+    def plan(self) -> fast.MotionPlan | None:
+        """These equations as the compiled kernel takes them (None: the numpy path runs
+        every state)."""
+        tracker = self.tracker
+        settings = fast.Settings(CLOSURE_RTOL * tracker.linkage.scale, RCOND, JUMP,
+                                 CHORD_ITERATIONS, NEWTON_ITERATIONS)
+        return fast.motion_plan(tracker.rows, terms(tracker.linkage),
+                                (tracker.row_scales, tracker.col_scales), self.model.moving,
+                                settings)
+
+    def _compiled(self, t: float, x: Array, v: Array, known: Array) -> Evaluation | None:
+        """The state at x, v closed from the last one and its equations of motion, as
+        :meth:`Tracker.solve` and :meth:`evaluate` give them, by the compiled kernel
+        (:mod:`._fast`); None where the numpy path takes them: no kernel, Coulomb friction
+        in this phase, a last state solved by its SVD, or a state off the kernel's plain
+        road (a branch to pass through half-way states, an ill-conditioned Jacobian)."""
+        near = self.tracker.last
+        solver = near.solver
+        if self.plan is None or self.senses or solver is None or solver.apply is None:
+            return None
+        inverse = solver.inverse if isinstance(solver, _Inverted) else solver.solve(np.eye(near.q.size))
+        found = fast.step(self.plan, (near.x, near.xdot, near.q, near.rates, near.bias, inverse),
+                          x, v, known, self.model.applied(t))
+        if found is None:
+            return None
+        kin = Kinematics(x, v, found.q, found.rates, found.qdot, found.bias,
+                         _Inverted(found.jacobian, found.inverse), (found.cos, found.sin))
+        self.tracker.last = kin
+        self.tracker.visited.append(kin)
+        return Evaluation(kin, found.acceleration, found.efforts, found.work, found.dissipated)
 
     def evaluate(self, t: float, kin: Kinematics, known: Array) -> Evaluation:
         """The equations of motion at one state: M = Sᵀ𝕄S, and the efforts the
@@ -606,6 +642,15 @@ class Equations:
         pose = _pose(linkage, kin, (kin.bias + kin.rates[:, 0] * acceleration
                                     + kin.rates @ known)[None, :])
         return effort_with_friction(pose, self.model.frictional, self.senses)
+
+
+class _Inverted(Solver):
+    """The :class:`Solver` of a state the compiled kernel closed: its scaled Jacobian's
+    inverse, found there and its condition checked as :func:`_dense_inverse` does."""
+
+    def __init__(self, jac: Array, inverse: Array) -> None:
+        self.jac, self.inverse, self.pseudo = jac, inverse, None
+        self.apply = lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64)
 
 
 def effort_with_friction(pose: LinkagePose, frictional: tuple[tuple[str, float], ...],
