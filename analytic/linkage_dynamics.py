@@ -554,9 +554,9 @@ class Equations:
         return out
 
     @cached_property
-    def plan(self) -> fast.MotionPlan | None:
-        """These equations as the compiled kernel takes them (None: the numpy path runs
-        every state)."""
+    def kernel(self) -> fast.Kernel | None:
+        """These equations as the compiled kernel takes them, and the kernel (None: the
+        numpy path runs every state)."""
         tracker = self.tracker
         settings = fast.Settings(CLOSURE_RTOL * tracker.linkage.scale, RCOND, JUMP,
                                  CHORD_ITERATIONS, NEWTON_ITERATIONS)
@@ -572,10 +572,10 @@ class Equations:
         road (a branch to pass through half-way states, an ill-conditioned Jacobian)."""
         near = self.tracker.last
         solver = near.solver
-        if self.plan is None or self.senses or solver is None or solver.apply is None:
+        if self.kernel is None or self.senses or solver is None or solver.apply is None:
             return None
         inverse = solver.inverse if isinstance(solver, _Inverted) else solver.solve(np.eye(near.q.size))
-        found = fast.step(self.plan, (near.x, near.xdot, near.q, near.rates, near.bias, inverse),
+        found = fast.step(self.kernel, (near.x, near.xdot, near.q, near.rates, near.bias, inverse),
                           x, v, known, self.model.applied(t))
         if found is None:
             return None

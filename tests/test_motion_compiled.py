@@ -39,7 +39,7 @@ def equations(case: Case, *, compiled: bool) -> tuple[dynamics.Equations, np.nda
         if not compiled:
             m.setattr(motion, "kernel", lambda name: None)
         found, y = dynamics._start(case, dynamics.model_of(case))
-        assert (found.plan is not None) == compiled
+        assert (found.kernel is not None) == compiled
     return found, y
 
 
@@ -113,6 +113,6 @@ def test_the_environment_switches_the_kernel_off(monkeypatch: pytest.MonkeyPatch
     monkeypatch.setenv("MECHCHECK_PURE_PYTHON", "1")
     try:
         found, _ = dynamics._start(case, dynamics.model_of(case))
-        assert found.plan is None
+        assert found.kernel is None
     finally:
         _fast.kernel.cache_clear()

@@ -13,7 +13,7 @@ products may add in another order); where it cannot take a case or a state, it s
 """
 
 from mechcheck.analytic._fast.compiled import kernel
-from mechcheck.analytic._fast.motion import Settings, Step, motion_plan, step
+from mechcheck.analytic._fast.motion import Kernel, Settings, Step, motion_plan, step
 from mechcheck.analytic._fast.plans import MotionPlan
 
-__all__ = ["MotionPlan", "Settings", "Step", "kernel", "motion_plan", "step"]
+__all__ = ["Kernel", "MotionPlan", "Settings", "Step", "kernel", "motion_plan", "step"]

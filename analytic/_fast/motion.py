@@ -4,7 +4,8 @@ written in the primitives (:mod:`.motion_rows`); else None, and the numpy path r
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -48,29 +49,42 @@ class Step(NamedTuple):
     dissipated: float
 
 
+class Kernel(NamedTuple):
+    """A linkage's :class:`.MotionPlan` and the kernel compiled for it
+    (:func:`.motion_kernel.compiled_step`)."""
+
+    plan: MotionPlan
+    run: Callable[..., tuple[Any, ...]]
+
+
 def motion_plan(rows: Rows, terms: Terms, scales: tuple[Array, Array], moving: Array,
-                settings: Settings) -> MotionPlan | None:
-    """The kernel's plan of a linkage's equations of motion; None where it does not run
-    them: without numba, where a kind writes its own rows (a gear mesh), or where the
-    Jacobian is not square or is solved sparse (:data:`.linalg.DENSE_COLUMNS`)."""
+                settings: Settings) -> Kernel | None:
+    """The kernel of a linkage's equations of motion; None where it does not run them:
+    without numba, where a kind writes its own rows (a gear mesh), or where the Jacobian
+    is not square or is solved sparse (:data:`.linalg.DENSE_COLUMNS`)."""
+    compiled = kernel(KERNEL)
     coordinates = terms.coordinates
-    if kernel(KERNEL) is None or rows.general or rows.count != rows.size \
+    if compiled is None or rows.general or rows.count != rows.size \
             or rows.size > DENSE_COLUMNS or (coordinates is not None and coordinates.general):
         return None
-    floats = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
-    return MotionPlan(rows_plan(rows), floats(scales[0]), floats(scales[1]),
+    plan = MotionPlan(rows_plan(rows), _floats(scales[0]), _floats(scales[1]),
                       np.ascontiguousarray(moving, dtype=np.int64), terms_plan(terms), *settings)
+    return Kernel(plan, compiled.compiled_step(plan))
 
 
-def step(plan: MotionPlan, near: tuple[Array, ...], x: Array, xdot: Array, known: Array,
+def step(kernel: Kernel, near: tuple[Array, ...], x: Array, xdot: Array, known: Array,
          applied: Array) -> Step | None:
     """The right-hand side at x, ẋ from the last state ``near`` (its x, ẋ, q, S, q̈₀ and
     scaled Jacobian's inverse); None where the numpy path must take it (see
     :mod:`.motion_kernel`)."""
-    compiled = kernel(KERNEL)
-    assert compiled is not None    # a plan exists only where the kernel does
+    arrays = [_floats(a) for a in (*near, x, xdot, known, applied)]  # the compiled types
     try:
-        *found, ok = compiled.step(plan, *near, x, xdot, known, applied)
+        *found, ok = kernel.run(kernel.plan, *arrays)
     except np.linalg.LinAlgError:     # a singular Jacobian or mass matrix
         return None
     return Step(*found) if ok else None
+
+
+def _floats(a: Array) -> Array:
+    """``a`` as C-ordered float64 (itself where it is: the numpy path's arrays are)."""
+    return np.ascontiguousarray(a, dtype=np.float64)
