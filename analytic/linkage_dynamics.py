@@ -423,11 +423,16 @@ class Model:
     def applied(self, t: float) -> Array:
         """The efforts applied on the moving coordinates at t (a free joint's is 0)."""
         out = np.zeros(self.moving.size)
-        for k, i in enumerate(self.moving):
-            effort = self.drivers[i].effort if i < len(self.drivers) else None
-            if effort is not None:
-                out[k] = float(effort.at(t))
+        for k, times, values in self._effort_tables:
+            out[k] = np.interp(t, times, values)      # Effort.at, its rows made arrays once
         return out
+
+    @cached_property
+    def _effort_tables(self) -> tuple[tuple[int, Array, Array], ...]:
+        """Each moving coordinate with an effort: its place, the effort's times and values."""
+        drivers = [self.drivers[i] if i < len(self.drivers) else None for i in self.moving]
+        return tuple((k, np.array(d.effort.times), np.array(d.effort.values))
+                     for k, d in enumerate(drivers) if d is not None and d.effort is not None)
 
     def coordinates(self, t: float, x: Array, v: Array) -> tuple[Array, Array, Array]:
         """Every independent coordinate, its rate and its known acceleration at t (moving
