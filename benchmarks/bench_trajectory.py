@@ -12,7 +12,10 @@ Usage:  python benchmarks/bench_trajectory.py [--repeats 5] [--calls 2000]
    its error against the published angles (so both sides are seen to do the same work).
 3. ``mechcheck.analytic.trajectory.simulate`` on ``compare/cases/trajectories/andrews.toml``:
    its time over ``Trajectory.steps`` (the right-hand-side evaluations it reports), µs per
-   evaluation, and its ratio to 2 (the target: within 3×).
+   evaluation, and its ratio to 2 (the target: within 3×); and its first run in the
+   process, which also loads the compiled right-hand side from numba's cache (or compiles
+   it, the first time after an install or a change of ``analytic/_fast/``). With numba
+   absent or ``MECHCHECK_PURE_PYTHON=1``, the numpy path's figures.
 
 Medians over the repeats, with min and max.
 """
@@ -32,6 +35,8 @@ from bench_linkage import spread
 from scipy.integrate import solve_ivp
 
 import mechcheck
+from mechcheck.analytic._fast import kernel
+from mechcheck.analytic._fast.motion import KERNEL
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.trajectory import simulate
 from mechcheck.casefile import load_cases
@@ -63,17 +68,14 @@ def hand_run(method: str, rtol: float) -> tuple[float, int, float]:
     return elapsed, int(solution.nfev), float(error)
 
 
-def engine_runs(case: Case, repeats: int) -> list[tuple[float, int, dict[str, object]]] | None:
-    """The reference's runs: (seconds, evaluations, settings); None while it is a stub."""
-    out = []
-    for _ in range(repeats + 1):   # the first warms the caches up
-        start = time.perf_counter()
-        try:
-            (run,) = simulate(case)
-        except NotImplementedError:
-            return None
-        out.append((time.perf_counter() - start, run.steps, dict(run.settings)))
-    return out[1:]
+def engine_run(case: Case) -> tuple[float, int, dict[str, object]] | None:
+    """One run of the reference: (seconds, evaluations, settings); None while it is a stub."""
+    start = time.perf_counter()
+    try:
+        (run,) = simulate(case)
+    except NotImplementedError:
+        return None
+    return time.perf_counter() - start, run.steps, dict(run.settings)
 
 
 def main() -> None:
@@ -89,15 +91,19 @@ def main() -> None:
     print(f"1. hand right-hand side alone: {spread(hand_rhs, scale=1e6)} µs per call")
 
     (case,) = load_cases(CASE)
-    engine = engine_runs(case, args.repeats)
-    settings = engine[0][2] if engine else {}
+    warm = engine_run(case)     # the first in the process: it warms the caches up
+    settings = warm[2] if warm else {}
     method, rtol = str(settings.get("method", "DOP853")), float(str(settings.get("rtol", 1e-12)))
-    hand = [hand_run(method, rtol) for _ in range(args.repeats)]
+    # each repeat runs both, one after the other, so that a ratio compares runs made under
+    # the same load of a shared machine
+    pairs = [(engine_run(case), hand_run(method, rtol)) for _ in range(args.repeats)]
+    hand = [h for _, h in pairs]
     hand_per_eval = [1e6 * t / n for t, n, _ in hand]
     print(f"2. hand equations, solve_ivp {method} rtol {rtol:g}: {hand[0][1]} evaluations, "
           f"{spread(hand_per_eval)} µs per evaluation (whole run {spread([t for t, _, _ in hand])} s; "
           f"angles within {hand[0][2]:.2g} of the published state)")
-    if engine is None:
+    engine = [e for e, _ in pairs if e is not None]
+    if warm is None:
         print("3. mechcheck's analytic trajectory reference: not available yet "
               "(mechcheck.analytic.trajectory.simulate is a stub)")
         return
@@ -107,6 +113,9 @@ def main() -> None:
           f"{spread(engine_per_eval)} µs per evaluation (whole run "
           f"{spread([t for t, _, _ in engine])} s); over the hand equations': "
           f"{spread(ratios, fmt='.2f')} (target ≤ 3)")
+    path = "compiled (numba)" if kernel(KERNEL) is not None else "numpy (no numba, or switched off)"
+    print(f"   right-hand side: {path}; first run in this process {warm[0]:.3g} s, "
+          f"{warm[0] - float(np.median([t for t, _, _ in engine])):.3g} s over a later one")
 
 
 if __name__ == "__main__":
