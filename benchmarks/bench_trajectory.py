@@ -2,7 +2,7 @@
 squeezing mechanism, against the test set's equations written by hand in numpy
 (``reference_andrews.py``), timed in the same run.
 
-Usage:  python benchmarks/bench_trajectory.py [--repeats 5] [--calls 2000]
+Usage:  python benchmarks/bench_trajectory.py [--repeats 5] [--calls 2000] [--cpu]
 
 1. The hand right-hand side alone: one call at the published state at 0.03 s (a 13 × 13
    solve for q̈ and λ), µs per call.
@@ -17,7 +17,8 @@ Usage:  python benchmarks/bench_trajectory.py [--repeats 5] [--calls 2000]
    it, the first time after an install or a change of ``analytic/_fast/``). With numba
    absent or ``MECHCHECK_PURE_PYTHON=1``, the numpy path's figures.
 
-Medians over the repeats, with min and max.
+Medians over the repeats, with min and max; ``--cpu``: in the process's CPU time instead of
+the wall clock (a machine shared with other work).
 """
 
 from __future__ import annotations
@@ -42,6 +43,8 @@ from mechcheck.analytic.trajectory import simulate
 from mechcheck.casefile import load_cases
 
 CASE = Path(mechcheck.__file__).parent / "cases" / "trajectories" / "andrews.toml"
+#: The clock every figure is read on (``--cpu``: time.process_time).
+clock = time.perf_counter
 
 
 def per_call(fn: Callable[[], object], calls: int, repeats: int) -> list[float]:
@@ -49,10 +52,10 @@ def per_call(fn: Callable[[], object], calls: int, repeats: int) -> list[float]:
     fn()    # warm-up
     out = []
     for _ in range(repeats):
-        start = time.perf_counter()
+        start = clock()
         for _ in range(calls):
             fn()
-        out.append((time.perf_counter() - start) / calls)
+        out.append((clock() - start) / calls)
     return out
 
 
@@ -60,31 +63,34 @@ def hand_run(method: str, rtol: float) -> tuple[float, int, float]:
     """The hand equations integrated to 0.03 s: seconds, evaluations, worst relative error of
     the angles against the published state."""
     start_state = np.concatenate([andrews.Q0, np.zeros(7)])
-    start = time.perf_counter()
+    start = clock()
     solution = solve_ivp(andrews.rhs, (0.0, andrews.T_END), start_state, method=method,
                          rtol=rtol, atol=rtol)
-    elapsed = time.perf_counter() - start
+    elapsed = clock() - start
     error = np.max(np.abs(solution.y[:7, -1] - andrews.Q_END) / np.abs(andrews.Q_END))
     return elapsed, int(solution.nfev), float(error)
 
 
 def engine_run(case: Case) -> tuple[float, int, dict[str, object]] | None:
     """One run of the reference: (seconds, evaluations, settings); None while it is a stub."""
-    start = time.perf_counter()
+    start = clock()
     try:
         (run,) = simulate(case)
     except NotImplementedError:
         return None
-    return time.perf_counter() - start, run.steps, dict(run.settings)
+    return clock() - start, run.steps, dict(run.settings)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--calls", type=int, default=2000)
+    parser.add_argument("--cpu", action="store_true", help="time in the process's CPU time")
     args = parser.parse_args()
+    global clock
+    clock = time.process_time if args.cpu else time.perf_counter
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"numpy {np.__version__}, {args.repeats} repeats")
+          f"numpy {np.__version__}, {args.repeats} repeats, {'CPU time' if args.cpu else 'wall clock'}")
 
     state = np.concatenate([andrews.Q_END, andrews.QD_END])
     hand_rhs = per_call(lambda: andrews.rhs(andrews.T_END, state), args.calls, args.repeats)
