@@ -30,21 +30,11 @@ from numba import njit, typeof, types
 
 @njit(cache=True)
 def times(a, v):  # type: ignore[no-untyped-def]
-    """a·v, a a matrix (rows × columns), v a vector."""
+    """a·v, a a matrix (rows × columns; its transpose aᵀ as ``a.T``), v a vector."""
     out = np.zeros(a.shape[0])
     for i in range(a.shape[0]):
         for k in range(a.shape[1]):
             out[i] += a[i, k] * v[k]
-    return out
-
-
-@njit(cache=True)
-def transposed_times(a, v):  # type: ignore[no-untyped-def]
-    """aᵀ·v, a a matrix (rows × columns), v a vector (rows)."""
-    out = np.zeros(a.shape[1])
-    for i in range(a.shape[0]):
-        for k in range(a.shape[1]):
-            out[k] += a[i, k] * v[i]
     return out
 
 
@@ -302,8 +292,8 @@ def coordinate_forces(terms, q, qdot):  # type: ignore[no-untyped-def]
     gradient = jacobian(rows, rx, ry, px, py, wx, wy)
     table = terms.coordinate_terms
     out = np.empty((2, q.size))
-    out[0] = transposed_times(gradient, table[:, 0] * phi - table[:, 1])
-    out[1] = transposed_times(gradient, table[:, 2] * times(gradient, qdot))
+    out[0] = times(gradient.T, table[:, 0] * phi - table[:, 1])
+    out[1] = times(gradient.T, table[:, 2] * times(gradient, qdot))
     return out
 
 
@@ -360,8 +350,8 @@ def evaluate(plan, q, rates, qdot, bias, cos, sin, xdot, known, applied):  # typ
             weighted[3 * k + 2, c] = (-my * v0 + mx * v1) + turning * v2
     mass_all = np.empty((d, d))
     for k in range(d):
-        mass_all[:, k] = transposed_times(rates, np.ascontiguousarray(weighted[:, k]))
-    h = transposed_times(rates, weighted[:, d] - total)
+        mass_all[:, k] = times(rates.T, np.ascontiguousarray(weighted[:, k]))
+    h = times(rates.T, weighted[:, d] - total)
     m = moving.size
     mass, net, held = np.empty((m, m)), np.empty(m), np.empty((m, d))
     for a in range(m):
@@ -372,7 +362,7 @@ def evaluate(plan, q, rates, qdot, bias, cos, sin, xdot, known, applied):  # typ
     # a singular mass matrix raises LinAlgError: the seam's "not here"
     found = np.linalg.solve(mass, net) if m else np.zeros(0)
     acceleration = known.copy()
-    efforts = h + transposed_times(held, found)
+    efforts = h + times(held.T, found)
     for a in range(m):
         acceleration[moving[a]] = found[a]
         efforts[moving[a]] = applied[a]
