@@ -45,11 +45,13 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mechcheck.analytic._fast import motion as fast
 from mechcheck.analytic.case import Case
 from mechcheck.analytic.linalg import DENSE_COLUMNS
 from mechcheck.analytic.linkage import Driver, LinearSpring, Linkage, TorsionSpring
@@ -421,11 +423,16 @@ class Model:
     def applied(self, t: float) -> Array:
         """The efforts applied on the moving coordinates at t (a free joint's is 0)."""
         out = np.zeros(self.moving.size)
-        for k, i in enumerate(self.moving):
-            effort = self.drivers[i].effort if i < len(self.drivers) else None
-            if effort is not None:
-                out[k] = float(effort.at(t))
+        for k, times, values in self._effort_tables:
+            out[k] = np.interp(t, times, values)      # Effort.at, its rows made arrays once
         return out
+
+    @cached_property
+    def _effort_tables(self) -> tuple[tuple[int, Array, Array], ...]:
+        """Each moving coordinate with an effort: its place, the effort's times and values."""
+        drivers = [self.drivers[i] if i < len(self.drivers) else None for i in self.moving]
+        return tuple((k, np.array(d.effort.times), np.array(d.effort.values))
+                     for k, d in enumerate(drivers) if d is not None and d.effort is not None)
 
     def coordinates(self, t: float, x: Array, v: Array) -> tuple[Array, Array, Array]:
         """Every independent coordinate, its rate and its known acceleration at t (moving
@@ -533,8 +540,10 @@ class Equations:
             return self._kept[2]
         m = self.model.moving.size
         x, v, known = self.model.coordinates(t, y[:m], y[m:2 * m])
-        kin = self.tracker.solve(x, v)
-        found = self.evaluate(t, kin, known)
+        found = self._compiled(t, x, v, known)
+        if found is None:
+            kin = self.tracker.solve(x, v)
+            found = self.evaluate(t, kin, known)
         self.evaluations += 1
         self._kept = (t, key, found)
         return found
@@ -548,6 +557,38 @@ class Equations:
         out[2 * m] = found.work_rate
         out[2 * m + 1] = found.dissipation_rate
         return out
+
+    @cached_property
+    def kernel(self) -> fast.Kernel | None:
+        """These equations as the compiled kernel takes them, and the kernel (None: the
+        numpy path runs every state)."""
+        tracker = self.tracker
+        settings = fast.Settings(CLOSURE_RTOL * tracker.linkage.scale, RCOND, JUMP,
+                                 CHORD_ITERATIONS, NEWTON_ITERATIONS)
+        return fast.motion_plan(tracker.rows, terms(tracker.linkage),
+                                (tracker.row_scales, tracker.col_scales), self.model.moving,
+                                settings)
+
+    def _compiled(self, t: float, x: Array, v: Array, known: Array) -> Evaluation | None:
+        """The state at x, v closed from the last one and its equations of motion, as
+        :meth:`Tracker.solve` and :meth:`evaluate` give them, by the compiled kernel
+        (:mod:`._fast`); None where the numpy path takes them: no kernel, Coulomb friction
+        in this phase, a last state solved by its SVD, or a state off the kernel's plain
+        road (a branch to pass through half-way states, an ill-conditioned Jacobian)."""
+        near = self.tracker.last
+        solver = near.solver
+        if self.kernel is None or self.senses or solver is None or solver.apply is None:
+            return None
+        inverse = solver.inverse if isinstance(solver, _Inverted) else solver.solve(np.eye(near.q.size))
+        found = fast.step(self.kernel, (near.x, near.xdot, near.q, near.rates, near.bias, inverse),
+                          x, v, known, self.model.applied(t))
+        if found is None:
+            return None
+        kin = Kinematics(x, v, found.q, found.rates, found.qdot, found.bias,
+                         _Inverted(found.jacobian, found.inverse), (found.cos, found.sin))
+        self.tracker.last = kin
+        self.tracker.visited.append(kin)
+        return Evaluation(kin, found.acceleration, found.efforts, found.work, found.dissipated)
 
     def evaluate(self, t: float, kin: Kinematics, known: Array) -> Evaluation:
         """The equations of motion at one state: M = Sᵀ𝕄S, and the efforts the
@@ -606,6 +647,15 @@ class Equations:
         pose = _pose(linkage, kin, (kin.bias + kin.rates[:, 0] * acceleration
                                     + kin.rates @ known)[None, :])
         return effort_with_friction(pose, self.model.frictional, self.senses)
+
+
+class _Inverted(Solver):
+    """The :class:`Solver` of a state the compiled kernel closed: its scaled Jacobian's
+    inverse, found there and its condition checked as :func:`_dense_inverse` does."""
+
+    def __init__(self, jac: Array, inverse: Array) -> None:
+        self.jac, self.inverse, self.pseudo = jac, inverse, None
+        self.apply = lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64)
 
 
 def effort_with_friction(pose: LinkagePose, frictional: tuple[tuple[str, float], ...],

@@ -174,22 +174,61 @@ def terms(linkage: Linkage) -> Terms:
 
 def _terms(linkage: Linkage) -> Terms:
     n = len(linkage.moving_links)
-    number = linkage.link_number
+    named, table = _coordinate_table(linkage)
+    return Terms(n, *_bodies(linkage), np.array(linkage.gravity, dtype=float),
+                 *_point_loads(linkage), *_linear_springs(linkage), MEETING * linkage.scale,
+                 coordinate_rows(linkage, named) if named else None,
+                 table[:, 0].copy(), table[:, 1].copy(), table[:, 2].copy())
+
+
+def _link(linkage: Linkage, name: str) -> int:
+    """The link's number (the ground: the count of moving links)."""
+    return linkage.link_number.get(name, len(linkage.moving_links))
+
+
+def _bodies(linkage: Linkage) -> tuple[Array, Array, Array, Array]:
+    """Each moving link's masses as one rigid body: its mass, centre (x, y, in the link)
+    and inertia about the centre."""
+    n = len(linkage.moving_links)
     mass, first, second = np.zeros(n), np.zeros((n, 2)), np.zeros(n)
-    for m in linkage.masses:     # one rigid body per link: Σm, Σm·c, Σ(I + m|c|²)
-        k = number[m.link]
+    for m in linkage.masses:     # Σm, Σm·c, Σ(I + m|c|²)
+        k = linkage.link_number[m.link]
         mass[k] += m.mass
         first[k] += m.mass * np.array(m.com)
         second[k] += m.inertia + m.mass * float(np.dot(m.com, m.com))
     has = mass > 0.0
     com = np.where(has[:, None], first / np.where(has, mass, 1.0)[:, None], 0.0)
     inertia = second - mass * (com * com).sum(axis=1)
+    return mass, com[:, 0].copy(), com[:, 1].copy(), inertia
 
-    def link(name: str) -> int:
-        return number.get(name, n)
 
+def _point_loads(linkage: Linkage) -> tuple[Array, Array, Array, Array, Array, Array]:
+    """The point loads: links, points (x, y), forces, couples, where they add up."""
     loads = linkage.loads
+    links = [_link(linkage, ld.link) for ld in loads]
+    return (np.array(links, dtype=np.intp),
+            np.array([ld.at[0] for ld in loads]), np.array([ld.at[1] for ld in loads]),
+            np.array([ld.force for ld in loads], dtype=float).reshape(-1, 2),
+            np.array([ld.torque for ld in loads], dtype=float), _flat_index(links))
+
+
+def _linear_springs(linkage: Linkage) -> tuple[Array, Array, Array, Array, Array, Array, Array,
+                                                Array, Array, Array]:
+    """The linear springs: links and points of their a and b ends, stiffness, free length,
+    damping, where they add up, and every end (a ends, then b ends) with its point."""
     linear = [s for s in linkage.springs if isinstance(s, LinearSpring)]
+    a = [_link(linkage, s.ends[0][0]) for s in linear]
+    b = [_link(linkage, s.ends[1][0]) for s in linear]
+    points = [np.array([s.ends[e][1] for s in linear], dtype=float).reshape(-1, 2) for e in (0, 1)]
+    return (np.array(a, dtype=np.intp), np.array(b, dtype=np.intp), points[0], points[1],
+            np.array([s.stiffness for s in linear]), np.array([s.free_length for s in linear]),
+            np.array([s.damping for s in linear]), _flat_index(a + b),
+            np.array(a + b, dtype=np.intp), np.concatenate(points).reshape(-1, 2))
+
+
+def _coordinate_table(linkage: Linkage) -> tuple[tuple[str, ...], Array]:
+    """The joints whose coordinate carries a torsion spring, a damper or viscous friction,
+    and (k, k·q0, c) of each."""
     joints: dict[str, list[float]] = {}
     for s in linkage.springs:
         if isinstance(s, TorsionSpring):
@@ -201,26 +240,7 @@ def _terms(linkage: Linkage) -> Terms:
         for name, c in linkage.friction.viscous.items():
             joints.setdefault(name, [0.0, 0.0, 0.0])[2] += c
     named = tuple(joints)
-    table = np.array([joints[j] for j in named]).reshape(-1, 3)
-    return Terms(
-        n, mass, com[:, 0].copy(), com[:, 1].copy(), inertia, np.array(linkage.gravity, dtype=float),
-        np.array([link(ld.link) for ld in loads], dtype=np.intp),
-        np.array([ld.at[0] for ld in loads]), np.array([ld.at[1] for ld in loads]),
-        np.array([ld.force for ld in loads], dtype=float).reshape(-1, 2),
-        np.array([ld.torque for ld in loads], dtype=float),
-        _flat_index([link(ld.link) for ld in loads]),
-        np.array([link(s.ends[0][0]) for s in linear], dtype=np.intp),
-        np.array([link(s.ends[1][0]) for s in linear], dtype=np.intp),
-        np.array([s.ends[0][1] for s in linear], dtype=float).reshape(-1, 2),
-        np.array([s.ends[1][1] for s in linear], dtype=float).reshape(-1, 2),
-        np.array([s.stiffness for s in linear]), np.array([s.free_length for s in linear]),
-        np.array([s.damping for s in linear]),
-        _flat_index([link(s.ends[0][0]) for s in linear] + [link(s.ends[1][0]) for s in linear]),
-        np.array([link(s.ends[e][0]) for e in (0, 1) for s in linear], dtype=np.intp),
-        np.array([s.ends[e][1] for e in (0, 1) for s in linear], dtype=float).reshape(-1, 2),
-        MEETING * linkage.scale,
-        coordinate_rows(linkage, named) if named else None,
-        table[:, 0].copy(), table[:, 1].copy(), table[:, 2].copy())
+    return named, np.array([joints[j] for j in named]).reshape(-1, 3)
 
 
 def _flat_index(*links: list[int]) -> Array:

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 try:  # private, and only inside the fence: a numpy without it gives None, the public path
     from numpy.linalg import _umath_linalg
 except ImportError:  # pragma: no cover - numpy 2 has it
-    _umath_linalg = None
+    _umath_linalg = None  # type: ignore[assignment]
 
 Array = NDArray[np.float64]
 
