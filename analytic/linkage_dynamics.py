@@ -68,6 +68,7 @@ from mechcheck.analytic.linkage_kinematics import (
     unit_scales,
 )
 from mechcheck.analytic.linkage_loads import known_vector, spring_axis
+from mechcheck.analytic.motion_bridge import SIGMA, Bridge
 from mechcheck.analytic.motion_rows import Rows, RowState, joint_rows
 from mechcheck.analytic.motion_terms import terms
 from mechcheck.analytic.rigid import Array, force_layout
@@ -101,6 +102,9 @@ MAX_PHASES = 10_000
 #: is below this fraction of the acceleration's size.
 SECANT_RTOL = 1e-14
 SECANT_ITERATIONS = 50
+#: Rounds of inverse iteration for a Jacobian's smallest singular value: three give it
+#: within a few per cent, enough to tell a nearly singular pose (motion_bridge.SIGMA).
+INVERSE_ITERATIONS = 3
 
 
 class DynamicsError(Exception):
@@ -193,6 +197,11 @@ class Tracker:
     def __post_init__(self) -> None:
         self.rows: Rows = joint_rows(self.linkage)
         self.row_scales, self.col_scales = unit_scales(self.linkage)
+        # One coordinate: its rates interpolated along the branch where the Jacobian is
+        # nearly singular (motion_bridge.py); while its nodes are solved, never.
+        self.bridge = Bridge(self._node_rates, float(coordinate_units(self.linkage)[0])) \
+            if len(self.linkage.drivers) == 1 else None
+        self._on_nodes = False
 
     def solve(self, x: Array, xdot: Array, start: Kinematics | None = None, *,
               keep: bool = True) -> Kinematics:
@@ -242,7 +251,38 @@ class Tracker:
         # closure / σ_min along the direction the constraints hardly hold, which would be
         # noise in the right-hand side; after it, by rounding / σ_min.
         q = q - cols * solver.solve(phi)
-        return self._rates(q, x, xdot, solver, state, near, cols)
+        bridged = self._bridged(q, x, xdot, solver, state)
+        return bridged or self._rates(q, x, xdot, solver, state, near, cols)
+
+    def _bridged(self, q: Array, x: Array, xdot: Array, solver: Solver,
+                 state: RowState) -> Kinematics | None:
+        """The state with its rates S and bias B·ẋ² from the branch's interpolation
+        (:class:`.motion_bridge.Bridge`), where the Jacobian is nearly singular; else None."""
+        if self.bridge is None or self._on_nodes or solver.smallest_singular_value() >= SIGMA:
+            return None
+        found = self.bridge.rates(float(x[0]))
+        if found is None:
+            return None
+        rates, unit_bias = found
+        return Kinematics(x.copy(), xdot.copy(), q, rates[:, None], rates * xdot[0],
+                          unit_bias * (xdot[0] * xdot[0]), solver, (state.cos, state.sin))
+
+    def _node_rates(self, x: float) -> tuple[Array, Array] | None:
+        """S and the bias at unit rate B, solved at coordinate x (closed from the nearest
+        visited state); None where the Jacobian is nearly singular there too, or the
+        positions do not close."""
+        at = np.array([x])
+        self._on_nodes = True
+        try:
+            kin = self._reach(self.nearest(at), at, np.ones(1), HALVINGS)
+        except DynamicsError:
+            return None
+        finally:
+            self._on_nodes = False
+        assert kin.solver is not None
+        if kin.solver.smallest_singular_value() < SIGMA:
+            return None
+        return kin.rates[:, 0], kin.bias
 
     def _chord(self, near: Kinematics, q: Array, x: Array, tol: float) -> Array | None:
         """Newton's iteration with ``near``'s Jacobian: the closed q, or None where it does
@@ -327,9 +367,28 @@ class Solver:
     def __init__(self, jac: Array) -> None:
         self.jac = jac
         self.apply: Callable[[Array], Array] | None = None
+        self.transposed: Callable[[Array], Array] | None = None
         if jac.shape[0] == jac.shape[1] and jac.size:
-            self.apply = _dense_inverse(jac) if jac.shape[0] <= DENSE_COLUMNS else _sparse_lu(jac)
+            found = _dense_inverse(jac) if jac.shape[0] <= DENSE_COLUMNS else _sparse_lu(jac)
+            if found is not None:
+                self.apply, self.transposed = found
         self.pseudo = _PseudoInverse(jac) if self.apply is None else None
+        self._smallest: float | None = None
+
+    def smallest_singular_value(self) -> float:
+        """σ_min of the Jacobian: by inverse iteration on JᵀJ through the factors (from a
+        fixed start, :data:`INVERSE_ITERATIONS` rounds: its order of magnitude is what is
+        asked), or the SVD's."""
+        if self._smallest is None:
+            if self.pseudo is not None:
+                self._smallest = self.pseudo.smallest
+            else:
+                assert self.apply is not None and self.transposed is not None
+                v = np.ones(self.jac.shape[0])
+                for _ in range(INVERSE_ITERATIONS):
+                    v = self.transposed(self.apply(v / np.linalg.norm(v)))
+                self._smallest = float(1.0 / math.sqrt(np.linalg.norm(v)))
+        return self._smallest
 
     def solve(self, rhs: Array) -> Array:
         """The solution nearest zero."""
@@ -346,9 +405,12 @@ class Solver:
         return self.pseudo.corrected(guess, rhs)
 
 
-def _dense_inverse(jac: Array) -> Callable[[Array], Array] | None:
-    """y = J⁻¹·rhs by J's inverse, where its 1-norm condition number (exact, from the
-    inverse) is below 1/RCOND; else None."""
+Solves = tuple[Callable[[Array], Array], Callable[[Array], Array]]
+
+
+def _dense_inverse(jac: Array) -> Solves | None:
+    """y = J⁻¹·rhs and y = J⁻ᵀ·rhs by J's inverse, where its 1-norm condition number
+    (exact, from the inverse) is below 1/RCOND; else None."""
     try:
         inverse = np.linalg.inv(jac)
     except np.linalg.LinAlgError:
@@ -356,11 +418,12 @@ def _dense_inverse(jac: Array) -> Callable[[Array], Array] | None:
     condition = np.abs(jac).sum(axis=0).max() * np.abs(inverse).sum(axis=0).max()
     if not condition * RCOND < 1.0:
         return None
-    return lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64)
+    return (lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64),
+            lambda rhs: np.asarray(inverse.T @ rhs, dtype=np.float64))
 
 
-def _sparse_lu(jac: Array) -> Callable[[Array], Array] | None:
-    """y = J⁻¹·rhs by SuperLU, where the factor U's pivots span less than 1/RCOND (a
+def _sparse_lu(jac: Array) -> Solves | None:
+    """y = J⁻¹·rhs and J⁻ᵀ·rhs by SuperLU, where the factor U's pivots span less than 1/RCOND (a
     cheap bound on the condition number's order); else None."""
     from scipy import sparse
     from scipy.sparse.linalg import splu
@@ -372,7 +435,8 @@ def _sparse_lu(jac: Array) -> Callable[[Array], Array] | None:
     pivots = np.abs(lu.U.diagonal())
     if not pivots.min() > RCOND * pivots.max():
         return None
-    return lambda rhs: np.asarray(lu.solve(rhs), dtype=np.float64)
+    return (lambda rhs: np.asarray(lu.solve(rhs), dtype=np.float64),
+            lambda rhs: np.asarray(lu.solve(rhs, trans="T"), dtype=np.float64))
 
 
 class _PseudoInverse:
@@ -382,6 +446,7 @@ class _PseudoInverse:
     def __init__(self, jac: Array) -> None:
         u, sigma, vt = np.linalg.svd(jac, full_matrices=False)
         kept = sigma > RCOND * sigma[0] if sigma.size else sigma > 0.0
+        self.smallest = float(sigma[-1]) if sigma.size and jac.shape[0] == jac.shape[1] else 0.0
         self.u, self.vt = u[:, kept], vt[kept]
         self.inverse_sigma = 1.0 / sigma[kept]
         self.jac = jac
@@ -442,11 +507,16 @@ class Model:
         return xs, vs, acc
 
     def units(self) -> Array:
-        """Each coordinate's unit as a length's share: 1 for an angle (rad), the linkage's
-        size for a slide (m); the coordinates' absolute tolerances are RTOL times these."""
-        size = self.linkage.scale
-        return np.array([size / self.linkage.joint(d.joint).kind.length(size)
-                         for d in self.linkage.drivers])
+        """Each coordinate's unit (:func:`coordinate_units`); the coordinates' absolute
+        tolerances are RTOL times these."""
+        return coordinate_units(self.linkage)
+
+
+def coordinate_units(linkage: Linkage) -> Array:
+    """Each driver's coordinate's unit as a length's share: 1 for an angle (rad), the
+    linkage's size for a slide (m)."""
+    size = linkage.scale
+    return np.array([size / linkage.joint(d.joint).kind.length(size) for d in linkage.drivers])
 
 
 def model_of(case: Case) -> Model:
