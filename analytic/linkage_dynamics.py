@@ -45,7 +45,7 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -258,7 +258,7 @@ class Tracker:
                  state: RowState) -> Kinematics | None:
         """The state with its rates S and bias B·ẋ² from the branch's interpolation
         (:class:`.motion_bridge.Bridge`), where the Jacobian is nearly singular; else None."""
-        if self.bridge is None or self._on_nodes or solver.smallest_singular_value() >= SIGMA:
+        if self.bridge is None or self._on_nodes or not solver.below(SIGMA):
             return None
         found = self.bridge.rates(float(x[0]))
         if found is None:
@@ -280,7 +280,7 @@ class Tracker:
         finally:
             self._on_nodes = False
         assert kin.solver is not None
-        if kin.solver.smallest_singular_value() < SIGMA:
+        if kin.solver.below(SIGMA):
             return None
         return kin.rates[:, 0], kin.bias
 
@@ -366,27 +366,34 @@ class Solver:
 
     def __init__(self, jac: Array) -> None:
         self.jac = jac
-        self.apply: Callable[[Array], Array] | None = None
-        self.transposed: Callable[[Array], Array] | None = None
+        self.factors: _Factors | None = None
         if jac.shape[0] == jac.shape[1] and jac.size:
-            found = _dense_inverse(jac) if jac.shape[0] <= DENSE_COLUMNS else _sparse_lu(jac)
-            if found is not None:
-                self.apply, self.transposed = found
+            self.factors = _dense_inverse(jac) if jac.shape[0] <= DENSE_COLUMNS \
+                else _sparse_lu(jac)
+        self.apply = None if self.factors is None else self.factors.apply
         self.pseudo = _PseudoInverse(jac) if self.apply is None else None
         self._smallest: float | None = None
+
+    def below(self, limit: float) -> bool:
+        """Whether the Jacobian's smallest singular value is below ``limit``: no where a
+        cheap lower bound (1/‖J⁻¹‖_F, from the inverse) is above it, else by
+        :meth:`smallest_singular_value`."""
+        if self.factors is not None and self.factors.floor >= limit:
+            return False
+        return self.smallest_singular_value() < limit
 
     def smallest_singular_value(self) -> float:
         """σ_min of the Jacobian: by inverse iteration on JᵀJ through the factors (from a
         fixed start, :data:`INVERSE_ITERATIONS` rounds: its order of magnitude is what is
         asked), or the SVD's."""
         if self._smallest is None:
-            if self.pseudo is not None:
+            if self.factors is None:
+                assert self.pseudo is not None
                 self._smallest = self.pseudo.smallest
             else:
-                assert self.apply is not None and self.transposed is not None
                 v = np.ones(self.jac.shape[0])
                 for _ in range(INVERSE_ITERATIONS):
-                    v = self.transposed(self.apply(v / np.linalg.norm(v)))
+                    v = self.factors.transposed(self.factors.apply(v / np.linalg.norm(v)))
                 self._smallest = float(1.0 / math.sqrt(np.linalg.norm(v)))
         return self._smallest
 
@@ -405,10 +412,16 @@ class Solver:
         return self.pseudo.corrected(guess, rhs)
 
 
-Solves = tuple[Callable[[Array], Array], Callable[[Array], Array]]
+class _Factors(NamedTuple):
+    """J⁻¹·rhs and J⁻ᵀ·rhs of a regular Jacobian, and a lower bound on its smallest
+    singular value (0 where none comes cheap)."""
+
+    apply: Callable[[Array], Array]
+    transposed: Callable[[Array], Array]
+    floor: float
 
 
-def _dense_inverse(jac: Array) -> Solves | None:
+def _dense_inverse(jac: Array) -> _Factors | None:
     """y = J⁻¹·rhs and y = J⁻ᵀ·rhs by J's inverse, where its 1-norm condition number
     (exact, from the inverse) is below 1/RCOND; else None."""
     try:
@@ -418,11 +431,12 @@ def _dense_inverse(jac: Array) -> Solves | None:
     condition = np.abs(jac).sum(axis=0).max() * np.abs(inverse).sum(axis=0).max()
     if not condition * RCOND < 1.0:
         return None
-    return (lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64),
-            lambda rhs: np.asarray(inverse.T @ rhs, dtype=np.float64))
+    return _Factors(lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64),
+                    lambda rhs: np.asarray(inverse.T @ rhs, dtype=np.float64),
+                    float(1.0 / np.linalg.norm(inverse)))
 
 
-def _sparse_lu(jac: Array) -> Solves | None:
+def _sparse_lu(jac: Array) -> _Factors | None:
     """y = J⁻¹·rhs and J⁻ᵀ·rhs by SuperLU, where the factor U's pivots span less than 1/RCOND (a
     cheap bound on the condition number's order); else None."""
     from scipy import sparse
@@ -435,8 +449,8 @@ def _sparse_lu(jac: Array) -> Solves | None:
     pivots = np.abs(lu.U.diagonal())
     if not pivots.min() > RCOND * pivots.max():
         return None
-    return (lambda rhs: np.asarray(lu.solve(rhs), dtype=np.float64),
-            lambda rhs: np.asarray(lu.solve(rhs, trans="T"), dtype=np.float64))
+    return _Factors(lambda rhs: np.asarray(lu.solve(rhs), dtype=np.float64),
+                    lambda rhs: np.asarray(lu.solve(rhs, trans="T"), dtype=np.float64), 0.0)
 
 
 class _PseudoInverse:
