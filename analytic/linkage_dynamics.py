@@ -182,10 +182,12 @@ class Kinematics:
 @dataclass
 class Tracker:
     """Positions followed continuously along a motion: each state is closed by Newton's
-    method from the last one through the first-order predictor q + S·Δx, and its rates
-    are solved as corrections of the last ones (the part the constraints do not decide at a
-    change point stays the last one's). Every state it solves is kept (``visited``), so that
-    the output times start from a pose close to them."""
+    method from the last one through the second-order predictor, and its rates are solved
+    as corrections of the last ones (the part the constraints do not decide at a change
+    point stays the last one's), or, near a change point of a linkage of one coordinate,
+    interpolated along the branch (:class:`.motion_bridge.Bridge`). Every state it solves is
+    kept (``visited``) without its factors (a long phase would otherwise hold one Jacobian's
+    per evaluation), so that the output times start from a pose close to them."""
 
     linkage: Linkage
     last: Kinematics
@@ -211,7 +213,7 @@ class Tracker:
         found = self._reach(near, x, xdot, HALVINGS)
         if keep:
             self.last = found
-            self.visited.append(found)
+            self.visited.append(replace(found, solver=None))
         return found
 
     def _reach(self, near: Kinematics, x: Array, xdot: Array, depth: int) -> Kinematics:

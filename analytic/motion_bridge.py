@@ -20,9 +20,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
-from scipy.interpolate import BarycentricInterpolator
 
 from mechcheck.analytic.rigid import Array
 
@@ -51,7 +51,7 @@ class Bridge:
     exact: NodeRates
     unit: float
     _nodes: dict[int, tuple[Array, Array] | None] = field(default_factory=dict)
-    _polynomials: dict[tuple[int, ...], BarycentricInterpolator] = field(default_factory=dict)
+    _polynomials: dict[tuple[int, ...], Callable[[float], Any]] = field(default_factory=dict)
 
     def rates(self, x: float) -> tuple[Array, Array] | None:
         """S and B at coordinate x from the polynomial through the nearest usable nodes on
@@ -63,7 +63,9 @@ class Bridge:
             return None
         key = tuple(left[::-1] + right)
         if key not in self._polynomials:
-            values = [np.concatenate(self._node(i)) for i in key]  # type: ignore[arg-type]
+            from scipy.interpolate import BarycentricInterpolator
+
+            values = [np.concatenate(node) for i in key if (node := self._node(i)) is not None]
             self._polynomials[key] = BarycentricInterpolator(
                 np.array(key, dtype=float) * STEP * self.unit, np.array(values))
         found = np.asarray(self._polynomials[key](x), dtype=np.float64)
