@@ -20,9 +20,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
+from numpy.polynomial.chebyshev import chebfit, chebval
 
 from mechcheck.analytic.rigid import Array
 
@@ -51,7 +51,7 @@ class Bridge:
     exact: NodeRates
     unit: float
     _nodes: dict[int, tuple[Array, Array] | None] = field(default_factory=dict)
-    _polynomials: dict[tuple[int, ...], Callable[[float], Any]] = field(default_factory=dict)
+    _polynomials: dict[tuple[int, ...], Callable[[float], Array]] = field(default_factory=dict)
 
     def rates(self, x: float) -> tuple[Array, Array] | None:
         """S and B at coordinate x from the polynomial through the nearest usable nodes on
@@ -63,14 +63,22 @@ class Bridge:
             return None
         key = tuple(left[::-1] + right)
         if key not in self._polynomials:
-            from scipy.interpolate import BarycentricInterpolator
-
-            values = [np.concatenate(node) for i in key if (node := self._node(i)) is not None]
-            self._polynomials[key] = BarycentricInterpolator(
-                np.array(key, dtype=float) * STEP * self.unit, np.array(values))
-        found = np.asarray(self._polynomials[key](x), dtype=np.float64)
+            self._polynomials[key] = self._polynomial(key)
+        found = self._polynomials[key](x)
         half = found.size // 2
         return found[:half], found[half:]
+
+    def _polynomial(self, key: tuple[int, ...]) -> Callable[[float], Array]:
+        """The polynomial through the nodes ``key`` (every column of S and B at once), in
+        Chebyshev form over the nodes' span: of degree one below their count, it passes
+        through each."""
+        xs = np.array(key, dtype=float) * STEP * self.unit
+        values = np.array([np.concatenate(node) for i in key
+                           if (node := self._node(i)) is not None])
+        low, high = xs[0], xs[-1]
+        coefficients = chebfit((2.0 * xs - low - high) / (high - low), values, len(key) - 1)
+        return lambda x: np.asarray(chebval((2.0 * x - low - high) / (high - low),
+                                            coefficients), dtype=np.float64)
 
     def _usable(self, start: int, way: int) -> list[int] | None:
         """The first :data:`NODES` grid indices from ``start`` toward ``way`` whose nodes
