@@ -16,7 +16,11 @@ once, :mod:`.motion_rows`) give
   J q̈₀ = −J̇ q̇, so that q̈ = S ẍ + q̈₀. Both are solved as corrections of the last state's:
   where the Jacobian is nearly singular (a change point, condition number above
   1/:data:`RCOND`) the part the constraints no longer decide stays the last state's
-  (:class:`Solver`: the inverse or sparse LU factors, else the SVD).
+  (:class:`Solver`: the inverse or sparse LU factors, else the SVD). On a linkage of one
+  coordinate, S and q̈₀ = B·ẋ² are taken where the Jacobian's smallest singular value is
+  below :data:`.motion_bridge.SIGMA` from the polynomial along the branch through poses on
+  either side (:class:`.motion_bridge.Bridge`): solved there, their rounding would grow
+  like 1/σ³ and stall the integrator.
 
 With 𝕄 the links' block-diagonal mass matrix and F the forces on them in the links' own
 coordinates (:mod:`.motion_terms`), the efforts the coordinates need are
@@ -254,7 +258,9 @@ class Tracker:
         # noise in the right-hand side; after it, by rounding / σ_min.
         q = q - cols * solver.solve(phi)
         bridged = self._bridged(q, x, xdot, solver, state)
-        return bridged or self._rates(q, x, xdot, solver, state, near, cols)
+        if bridged is not None:
+            return bridged
+        return self._rates(q, x, xdot, solver, state, near, cols)
 
     def _bridged(self, q: Array, x: Array, xdot: Array, solver: Solver,
                  state: RowState) -> Kinematics | None:

@@ -3,7 +3,8 @@ forms written here, and the energy balance as an identity on random linkages.
 
 Every expected value is derived in this file: the exam's block between springs (seed 002,
 exam Q2) with and without Coulomb friction, the compound pendulum's exact period, a released
-parallelogram's first acceleration, and the IFToMM N-four-bar's conserved energy."""
+parallelogram's first acceleration, and the IFToMM N-four-bar's conserved energy and its
+rates near the poses where its bars lie flat."""
 
 from __future__ import annotations
 
