@@ -16,7 +16,11 @@ once, :mod:`.motion_rows`) give
   J q̈₀ = −J̇ q̇, so that q̈ = S ẍ + q̈₀. Both are solved as corrections of the last state's:
   where the Jacobian is nearly singular (a change point, condition number above
   1/:data:`RCOND`) the part the constraints no longer decide stays the last state's
-  (:class:`Solver`: the inverse or sparse LU factors, else the SVD).
+  (:class:`Solver`: the inverse or sparse LU factors, else the SVD). On a linkage of one
+  coordinate, S and q̈₀ = B·ẋ² are taken where the Jacobian's smallest singular value is
+  below :data:`.motion_bridge.SIGMA` from the polynomial along the branch through poses on
+  either side (:class:`.motion_bridge.Bridge`): solved there, their rounding would grow
+  like 1/σ³ and stall the integrator.
 
 With 𝕄 the links' block-diagonal mass matrix and F the forces on them in the links' own
 coordinates (:mod:`.motion_terms`), the efforts the coordinates need are
@@ -46,7 +50,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -70,6 +74,7 @@ from mechcheck.analytic.linkage_kinematics import (
     unit_scales,
 )
 from mechcheck.analytic.linkage_loads import known_vector, spring_axis
+from mechcheck.analytic.motion_bridge import SIGMA, Bridge
 from mechcheck.analytic.motion_rows import Rows, RowState, joint_rows
 from mechcheck.analytic.motion_terms import terms
 from mechcheck.analytic.rigid import Array, force_layout
@@ -103,6 +108,9 @@ MAX_PHASES = 10_000
 #: is below this fraction of the acceleration's size.
 SECANT_RTOL = 1e-14
 SECANT_ITERATIONS = 50
+#: Rounds of inverse iteration for a Jacobian's smallest singular value: three give it
+#: within a few per cent, enough to tell a nearly singular pose (motion_bridge.SIGMA).
+INVERSE_ITERATIONS = 3
 
 
 class DynamicsError(Exception):
@@ -180,10 +188,12 @@ class Kinematics:
 @dataclass
 class Tracker:
     """Positions followed continuously along a motion: each state is closed by Newton's
-    method from the last one through the first-order predictor q + S·Δx, and its rates
-    are solved as corrections of the last ones (the part the constraints do not decide at a
-    change point stays the last one's). Every state it solves is kept (``visited``), so that
-    the output times start from a pose close to them."""
+    method from the last one through the second-order predictor, and its rates are solved
+    as corrections of the last ones (the part the constraints do not decide at a change
+    point stays the last one's), or, near a change point of a linkage of one coordinate,
+    interpolated along the branch (:class:`.motion_bridge.Bridge`). Every state it solves is
+    kept (``visited``) without its factors (a long phase would otherwise hold one Jacobian's
+    per evaluation), so that the output times start from a pose close to them."""
 
     linkage: Linkage
     last: Kinematics
@@ -195,6 +205,11 @@ class Tracker:
     def __post_init__(self) -> None:
         self.rows: Rows = joint_rows(self.linkage)
         self.row_scales, self.col_scales = unit_scales(self.linkage)
+        # One coordinate: its rates interpolated along the branch where the Jacobian is
+        # nearly singular (motion_bridge.py); while its nodes are solved, never.
+        self.bridge = Bridge(self._node_rates, float(coordinate_units(self.linkage)[0])) \
+            if len(self.linkage.drivers) == 1 else None
+        self._on_nodes = False
 
     def solve(self, x: Array, xdot: Array, start: Kinematics | None = None, *,
               keep: bool = True) -> Kinematics:
@@ -204,7 +219,7 @@ class Tracker:
         found = self._reach(near, x, xdot, HALVINGS)
         if keep:
             self.last = found
-            self.visited.append(found)
+            self.visited.append(replace(found, solver=None))
         return found
 
     def _reach(self, near: Kinematics, x: Array, xdot: Array, depth: int) -> Kinematics:
@@ -244,7 +259,40 @@ class Tracker:
         # closure / σ_min along the direction the constraints hardly hold, which would be
         # noise in the right-hand side; after it, by rounding / σ_min.
         q = q - cols * solver.solve(phi)
+        bridged = self._bridged(q, x, xdot, solver, state)
+        if bridged is not None:
+            return bridged
         return self._rates(q, x, xdot, solver, state, near, cols)
+
+    def _bridged(self, q: Array, x: Array, xdot: Array, solver: Solver,
+                 state: RowState) -> Kinematics | None:
+        """The state with its rates S and bias B·ẋ² from the branch's interpolation
+        (:class:`.motion_bridge.Bridge`), where the Jacobian is nearly singular; else None."""
+        if self.bridge is None or self._on_nodes or not solver.below(SIGMA):
+            return None
+        found = self.bridge.rates(float(x[0]))
+        if found is None:
+            return None
+        rates, unit_bias = found
+        return Kinematics(x.copy(), xdot.copy(), q, rates[:, None], rates * xdot[0],
+                          unit_bias * (xdot[0] * xdot[0]), solver, (state.cos, state.sin))
+
+    def _node_rates(self, x: float) -> tuple[Array, Array] | None:
+        """S and the bias at unit rate B, solved at coordinate x (closed from the nearest
+        visited state); None where the Jacobian is nearly singular there too, or the
+        positions do not close."""
+        at = np.array([x])
+        self._on_nodes = True
+        try:
+            kin = self._reach(self.nearest(at), at, np.ones(1), HALVINGS)
+        except DynamicsError:
+            return None
+        finally:
+            self._on_nodes = False
+        assert kin.solver is not None
+        if kin.solver.below(SIGMA):
+            return None
+        return kin.rates[:, 0], kin.bias
 
     def _chord(self, near: Kinematics, q: Array, x: Array, tol: float) -> Array | None:
         """Newton's iteration with ``near``'s Jacobian: the closed q, or None where it does
@@ -328,10 +376,36 @@ class Solver:
 
     def __init__(self, jac: Array) -> None:
         self.jac = jac
-        self.apply: Callable[[Array], Array] | None = None
+        self.factors: _Factors | None = None
         if jac.shape[0] == jac.shape[1] and jac.size:
-            self.apply = _dense_inverse(jac) if jac.shape[0] <= DENSE_COLUMNS else _sparse_lu(jac)
+            self.factors = _dense_inverse(jac) if jac.shape[0] <= DENSE_COLUMNS \
+                else _sparse_lu(jac)
+        self.apply = None if self.factors is None else self.factors.apply
         self.pseudo = _PseudoInverse(jac) if self.apply is None else None
+        self._smallest: float | None = None
+
+    def below(self, limit: float) -> bool:
+        """Whether the Jacobian's smallest singular value is below ``limit``: no where a
+        cheap lower bound (1/‖J⁻¹‖_F, from the inverse) is above it, else by
+        :meth:`smallest_singular_value`."""
+        if self.factors is not None and self.factors.floor >= limit:
+            return False
+        return self.smallest_singular_value() < limit
+
+    def smallest_singular_value(self) -> float:
+        """σ_min of the Jacobian: by inverse iteration on JᵀJ through the factors (from a
+        fixed start, :data:`INVERSE_ITERATIONS` rounds: its order of magnitude is what is
+        asked), or the SVD's."""
+        if self._smallest is None:
+            if self.factors is None:
+                assert self.pseudo is not None
+                self._smallest = self.pseudo.smallest
+            else:
+                v = np.ones(self.jac.shape[0])
+                for _ in range(INVERSE_ITERATIONS):
+                    v = self.factors.transposed(self.factors.apply(v / np.linalg.norm(v)))
+                self._smallest = float(1.0 / math.sqrt(np.linalg.norm(v)))
+        return self._smallest
 
     def solve(self, rhs: Array) -> Array:
         """The solution nearest zero."""
@@ -348,9 +422,18 @@ class Solver:
         return self.pseudo.corrected(guess, rhs)
 
 
-def _dense_inverse(jac: Array) -> Callable[[Array], Array] | None:
-    """y = J⁻¹·rhs by J's inverse, where its 1-norm condition number (exact, from the
-    inverse) is below 1/RCOND; else None."""
+class _Factors(NamedTuple):
+    """J⁻¹·rhs and J⁻ᵀ·rhs of a regular Jacobian, and a lower bound on its smallest
+    singular value (0 where none comes cheap)."""
+
+    apply: Callable[[Array], Array]
+    transposed: Callable[[Array], Array]
+    floor: float
+
+
+def _dense_inverse(jac: Array) -> _Factors | None:
+    """y = J⁻¹·rhs and y = J⁻ᵀ·rhs by J's inverse, where its 1-norm condition number
+    (exact, from the inverse) is below 1/RCOND; else None."""
     try:
         inverse = np.linalg.inv(jac)
     except np.linalg.LinAlgError:
@@ -358,11 +441,13 @@ def _dense_inverse(jac: Array) -> Callable[[Array], Array] | None:
     condition = np.abs(jac).sum(axis=0).max() * np.abs(inverse).sum(axis=0).max()
     if not condition * RCOND < 1.0:
         return None
-    return lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64)
+    return _Factors(lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64),
+                    lambda rhs: np.asarray(inverse.T @ rhs, dtype=np.float64),
+                    float(1.0 / np.linalg.norm(inverse)))
 
 
-def _sparse_lu(jac: Array) -> Callable[[Array], Array] | None:
-    """y = J⁻¹·rhs by SuperLU, where the factor U's pivots span less than 1/RCOND (a
+def _sparse_lu(jac: Array) -> _Factors | None:
+    """y = J⁻¹·rhs and J⁻ᵀ·rhs by SuperLU, where the factor U's pivots span less than 1/RCOND (a
     cheap bound on the condition number's order); else None."""
     from scipy import sparse
     from scipy.sparse.linalg import splu
@@ -374,7 +459,8 @@ def _sparse_lu(jac: Array) -> Callable[[Array], Array] | None:
     pivots = np.abs(lu.U.diagonal())
     if not pivots.min() > RCOND * pivots.max():
         return None
-    return lambda rhs: np.asarray(lu.solve(rhs), dtype=np.float64)
+    return _Factors(lambda rhs: np.asarray(lu.solve(rhs), dtype=np.float64),
+                    lambda rhs: np.asarray(lu.solve(rhs, trans="T"), dtype=np.float64), 0.0)
 
 
 class _PseudoInverse:
@@ -384,6 +470,7 @@ class _PseudoInverse:
     def __init__(self, jac: Array) -> None:
         u, sigma, vt = np.linalg.svd(jac, full_matrices=False)
         kept = sigma > RCOND * sigma[0] if sigma.size else sigma > 0.0
+        self.smallest = float(sigma[-1]) if sigma.size and jac.shape[0] == jac.shape[1] else 0.0
         self.u, self.vt = u[:, kept], vt[kept]
         self.inverse_sigma = 1.0 / sigma[kept]
         self.jac = jac
@@ -449,11 +536,16 @@ class Model:
         return xs, vs, acc
 
     def units(self) -> Array:
-        """Each coordinate's unit as a length's share: 1 for an angle (rad), the linkage's
-        size for a slide (m); the coordinates' absolute tolerances are RTOL times these."""
-        size = self.linkage.scale
-        return np.array([size / self.linkage.joint(d.joint).kind.length(size)
-                         for d in self.linkage.drivers])
+        """Each coordinate's unit (:func:`coordinate_units`); the coordinates' absolute
+        tolerances are RTOL times these."""
+        return coordinate_units(self.linkage)
+
+
+def coordinate_units(linkage: Linkage) -> Array:
+    """Each driver's coordinate's unit as a length's share: 1 for an angle (rad), the
+    linkage's size for a slide (m)."""
+    size = linkage.scale
+    return np.array([size / linkage.joint(d.joint).kind.length(size) for d in linkage.drivers])
 
 
 def model_of(case: Case) -> Model:
@@ -564,7 +656,8 @@ class Equations:
         numpy path runs every state)."""
         tracker = self.tracker
         settings = fast.Settings(CLOSURE_RTOL * tracker.linkage.scale, RCOND, JUMP,
-                                 CHORD_ITERATIONS, NEWTON_ITERATIONS)
+                                 CHORD_ITERATIONS, NEWTON_ITERATIONS,
+                                 0.0 if tracker.bridge is None else SIGMA)
         return fast.motion_plan(tracker.rows, terms(tracker.linkage),
                                 (tracker.row_scales, tracker.col_scales), self.model.moving,
                                 settings)
@@ -587,7 +680,7 @@ class Equations:
         kin = Kinematics(x, v, found.q, found.rates, found.qdot, found.bias,
                          _Inverted(found.jacobian, found.inverse), (found.cos, found.sin))
         self.tracker.last = kin
-        self.tracker.visited.append(kin)
+        self.tracker.visited.append(replace(kin, solver=None))   # kept without its factors
         return Evaluation(kin, found.acceleration, found.efforts, found.work, found.dissipated)
 
     def evaluate(self, t: float, kin: Kinematics, known: Array) -> Evaluation:

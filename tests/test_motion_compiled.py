@@ -23,7 +23,7 @@ from mechcheck.casefile import load_cases, parse_cases
 from mechcheck.tolerance import rule
 
 from .strategies import linkage_tables
-from .test_trajectory_engine import trajectory_table
+from .test_trajectory_engine import n_four_bar, trajectory_table
 
 pytest.importorskip("numba")
 
@@ -104,6 +104,23 @@ def test_a_run_of_andrews_squeezer_is_the_same_either_way() -> None:
     assert fast.steps == slow.steps
     scale = case.linkage.scale
     np.testing.assert_allclose(fast.coordinates, slow.coordinates, rtol=0, atol=RTOL * scale)
+
+
+def test_the_kernel_hands_nearly_singular_states_to_the_numpy_path(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where the Jacobian's smallest singular value may be below the bridge's floor, the
+    numpy path takes the state (it interpolates the rates along the branch there,
+    analytic/motion_bridge.py): with the floor raised above every state's, the kernel takes
+    none of a row of parallelograms' states, and the evaluations are the numpy path's."""
+    case = n_four_bar(2, 0.8, 9)
+    monkeypatch.setattr(dynamics, "SIGMA", 1e3)
+    fast, y = equations(case, compiled=True)
+    slow, _ = equations(case, compiled=False)
+    for k in range(3):
+        a, b = fast.at(1e-4 * k, y), slow.at(1e-4 * k, y)
+        assert not isinstance(a.kinematics.solver, dynamics._Inverted)
+        assert_same(a, b, f"state {k}")
+        y = y + 1e-4 * fast.rhs(1e-4 * k, y)
 
 
 def test_the_environment_switches_the_kernel_off(monkeypatch: pytest.MonkeyPatch) -> None:

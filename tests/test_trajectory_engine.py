@@ -3,7 +3,8 @@ forms written here, and the energy balance as an identity on random linkages.
 
 Every expected value is derived in this file: the exam's block between springs (seed 002,
 exam Q2) with and without Coulomb friction, the compound pendulum's exact period, a released
-parallelogram's first acceleration, and the IFToMM N-four-bar's conserved energy."""
+parallelogram's first acceleration, and the IFToMM N-four-bar's conserved energy and its
+rates near the poses where its bars lie flat."""
 
 from __future__ import annotations
 
@@ -20,6 +21,8 @@ from scipy.special import ellipk
 from mechcheck.analytic.case import Case, Simulation
 from mechcheck.analytic.joint_kinds import REVOLUTE
 from mechcheck.analytic.linkage import Driver, Effort, Joint, Link, Linkage, LinkMass
+from mechcheck.analytic.linkage_dynamics import _start, model_of
+from mechcheck.analytic.motion_bridge import SIGMA
 from mechcheck.analytic.trajectory import Trajectory, simulate
 from mechcheck.analytic.values import CaseError
 from mechcheck.casefile import parse_cases
@@ -37,6 +40,11 @@ DRIFT_TOL = 1e-8
 #: error (rtol 1e-12 per step, a few hundred steps) and the rounding of the terms; 1e-8 of the
 #: largest term leaves room for a draw near a toggle, where the steps are many.
 IDENTITY_TOL = 1e-8
+#: The rates and the accelerations' bias (both of size 1 to 4 on the chain below) near a flat
+#: pose: solved there, the rounding of the positions comes through the Jacobian's small
+#: singular value (about 1e-9 just above motion_bridge.SIGMA); interpolated, the nodes' own
+#: error times the polynomial's growth between them (about 5e-9).
+BRANCH_RATES_TOL = 1e-7
 
 
 def _trajectory(case: Case) -> Trajectory:
@@ -219,6 +227,44 @@ def test_the_n_four_bar_passes_its_first_horizontal_pose_on_the_parallelogram() 
         assert np.abs(q[f"phi_{name}"] - q["phi_rocker0"]).max() <= 1e-9
     assert np.abs(q["phi_coupler0"]).max() <= 1e-9
     assert run.diagnostics["energy_residual"] <= DRIFT_TOL
+
+
+def parallelogram_rates(linkage: Linkage, phi: float) -> tuple[np.ndarray, np.ndarray]:
+    """∂q/∂θ and ∂²q/∂θ² of a row of parallelograms at rocker angle φ from the drawing (θ
+    the first rocker's): a link's coordinates are the displacement t and turn φ with
+    p = t + R(φ)·p_drawn, so a rocker pinned at P = (i, 0) has t = P − R(φ)·P, turning with
+    θ, and a coupler translates with the rockers' tips, t = R(φ)·(0, 1) − (0, 1)."""
+    c, s = math.cos(phi), math.sin(phi)
+    first, second = [], []
+    for name in linkage.moving_links:
+        if name.startswith("rocker"):
+            i = float(name.removeprefix("rocker"))
+            first += [s * i, -c * i, 1.0]          # −R'(φ)·(i, 0)
+            second += [c * i, s * i, 0.0]          # −R''(φ)·(i, 0) = R(φ)·(i, 0)
+        else:
+            first += [-c, -s, 0.0]                 # R'(φ)·(0, 1)
+            second += [s, -c, 0.0]                 # R''(φ)·(0, 1)
+    return np.array(first), np.array(second)
+
+
+@pytest.mark.parametrize("from_flat", [0.05, 1e-3, 1e-6, 0.0, -1e-4])
+def test_the_rates_near_a_flat_pose_are_the_parallelograms(from_flat: float) -> None:
+    """Within a few hundredths of a radian of the pose where every bar lies flat (the
+    constraint Jacobian nearly singular, its rates interpolated along the branch), the
+    reference's rates ∂q/∂θ and its accelerations' bias at unit rate are the parallelogram
+    chain's, written by hand."""
+    case = n_four_bar(4, 1.0, 2)
+    model = model_of(case)
+    equations, _ = _start(case, model)
+    tracker = equations.tracker
+    target = -math.pi / 2 + from_flat
+    for x in np.linspace(0.0, target, 40):
+        kin = tracker.solve(np.array([x]), np.array([1.0]))
+    assert kin.solver is not None
+    first, second = parallelogram_rates(model.linkage, target)
+    assert np.abs(kin.rates[:, 0] - first).max() <= BRANCH_RATES_TOL
+    assert np.abs(kin.bias - second).max() <= BRANCH_RATES_TOL
+    assert (kin.solver.smallest_singular_value() < SIGMA) == (abs(from_flat) < 0.01)
 
 
 # -- the energy identity on random linkages --------------------------------------------------

@@ -331,20 +331,10 @@ def assert_follows_the_pendulum(case: Case, passes: int) -> None:
 
 
 @pytest.mark.slow
-def test_n_four_bar_reference_passes_its_first_six_horizontal_poses() -> None:
-    """The first 6 s, through the first six horizontal passes (the seventh comes at
-    6.62 s): what the reference reaches of the whole run's target (docs/limitations.md,
-    The N four-bar's horizontal passes)."""
-    case = trajectory_case("n-four-bar")
-    assert case.simulation is not None
-    short = dataclasses.replace(case.simulation, end=6.0, outputs=tuple(np.linspace(0.0, 6.0, 241)))
-    assert_follows_the_pendulum(dataclasses.replace(case, simulation=short), 6)
-
-
-@pytest.mark.skip(reason="the reference does not yet pass the horizontal poses at a bounded "
-                  "cost: docs/limitations.md, The N four-bar's horizontal passes")
 def test_n_four_bar_reference_passes_every_horizontal_pose() -> None:
-    """The whole run, 10 s, through all ten horizontal passes."""
+    """The whole run, 10 s, through all ten horizontal (redundant) passes: the crank on the
+    exact pendulum, every bar turning with it, every coupler translating, energy drift
+    below 1e-8 (about 12 s of one core)."""
     assert_follows_the_pendulum(trajectory_case("n-four-bar"), 10)
 
 

@@ -27,6 +27,10 @@ class Settings(NamedTuple):
     jump: float
     chord_iterations: int
     newton_iterations: int
+    #: Below this bound on the scaled Jacobian's smallest singular value (1/‖J⁻¹‖_F) the
+    #: numpy path takes the state: it interpolates the rates along the branch there
+    #: (:mod:`.motion_bridge`); 0 where it never does.
+    sigma_floor: float
 
 
 class Step(NamedTuple):

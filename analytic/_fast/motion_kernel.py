@@ -202,6 +202,9 @@ def close(plan, near_x, near_xdot, near_q, near_rates, near_bias, near_inverse, 
         q = q - cols * times(inv, phi)
     if not (closed and regular):
         return q, jac, inv, near_rates, near_q, near_bias, cos, sin, False
+    if plan.sigma_floor > 0.0 and 1.0 / np.sqrt((inv * inv).sum()) < plan.sigma_floor:
+        # nearly singular: the numpy path decides, and may take the rates from the bridge
+        return q, jac, inv, near_rates, near_q, near_bias, cos, sin, False
     # one more step (Tracker.close: the position to rounding / σ_min, not closure / σ_min)
     q = q - cols * times(inv, phi)
     m, d = rows.row_count, x.size

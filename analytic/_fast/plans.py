@@ -68,8 +68,8 @@ class MotionPlan(NamedTuple):
     independent coordinates last), their scales (rows' and columns', to lengths), the
     coordinates that move by the equations of motion, the masses and forces; and the
     tracker's settings (:mod:`.linkage_dynamics`: the closure tolerance in m, RCOND, JUMP,
-    CHORD_ITERATIONS, NEWTON_ITERATIONS), handed over rather than compiled in, so that a
-    cached kernel never keeps an old value."""
+    CHORD_ITERATIONS, NEWTON_ITERATIONS, the singular-value floor of the bridge), handed
+    over rather than compiled in, so that a cached kernel never keeps an old value."""
 
     rows: RowsPlan
     row_scales: Array
@@ -81,6 +81,7 @@ class MotionPlan(NamedTuple):
     jump: float
     chord_iterations: int
     newton_iterations: int
+    sigma_floor: float
 
 
 def rows_plan(rows: Rows) -> RowsPlan:
