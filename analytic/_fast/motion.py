@@ -10,27 +10,13 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from mechcheck.analytic._fast.compiled import kernel
-from mechcheck.analytic._fast.plans import MotionPlan, rows_plan, terms_plan
+from mechcheck.analytic._fast.plans import MotionPlan, Settings, rows_plan, terms_plan
 from mechcheck.analytic.linalg import DENSE_COLUMNS
 from mechcheck.analytic.motion_rows import Rows
 from mechcheck.analytic.motion_terms import Terms
 
 Array = np.ndarray
 KERNEL = "mechcheck.analytic._fast.motion_kernel"
-
-
-class Settings(NamedTuple):
-    """The tracker's settings the kernel follows (:mod:`.linkage_dynamics`)."""
-
-    tolerance: float
-    rcond: float
-    jump: float
-    chord_iterations: int
-    newton_iterations: int
-    #: Below this bound on the scaled Jacobian's smallest singular value (1/‖J⁻¹‖_F) the
-    #: numpy path takes the state: it interpolates the rates along the branch there
-    #: (:mod:`.motion_bridge`); 0 where it never does.
-    sigma_floor: float
 
 
 class Step(NamedTuple):
@@ -72,7 +58,7 @@ def motion_plan(rows: Rows, terms: Terms, scales: tuple[Array, Array], moving: A
             or rows.size > DENSE_COLUMNS or (coordinates is not None and coordinates.general):
         return None
     plan = MotionPlan(rows_plan(rows), _floats(scales[0]), _floats(scales[1]),
-                      np.ascontiguousarray(moving, dtype=np.int64), terms_plan(terms), *settings)
+                      np.ascontiguousarray(moving, dtype=np.int64), terms_plan(terms), settings)
     return Kernel(plan, compiled.compiled_step(plan))
 
 

@@ -154,9 +154,9 @@ def chord(plan, near_inverse, q, x):  # type: ignore[no-untyped-def]
     """Newton's iteration with the last state's inverse (:meth:`.Tracker._chord`): the
     closed q and whether it closed."""
     size = math.inf
-    for _ in range(plan.chord_iterations):
+    for _ in range(plan.settings.chord_iterations):
         phi, worst = closure(plan, q, x)[:2]
-        if worst <= plan.tolerance:
+        if worst <= plan.settings.tolerance:
             return q, True
         if worst >= size:
             return q, False
@@ -189,20 +189,20 @@ def close(plan, near_x, near_xdot, near_q, near_rates, near_bias, near_inverse, 
     q, closed = chord(plan, near_inverse, start, x)
     if not closed:
         q = start
-    for _ in range(plan.newton_iterations + 1):
+    for _ in range(plan.settings.newton_iterations + 1):
         phi, worst, cos, sin, rx, ry, px, py, wx, wy = closure(plan, q, x)
         jac = jacobian(rows, rx, ry, px, py, wx, wy)
         for r in range(rows.row_count):
             for k in range(rows.size):
                 jac[r, k] = jac[r, k] * scales[r] * cols[k]
-        inv, regular = inverse(jac, plan.rcond)
-        closed = worst <= plan.tolerance
+        inv, regular = inverse(jac, plan.settings.rcond)
+        closed = worst <= plan.settings.tolerance
         if closed or not regular:
             break
         q = q - cols * times(inv, phi)
     if not (closed and regular):
         return q, jac, inv, near_rates, near_q, near_bias, cos, sin, False
-    if plan.sigma_floor > 0.0 and 1.0 / np.sqrt((inv * inv).sum()) < plan.sigma_floor:
+    if plan.settings.sigma_floor > 0.0 and 1.0 / np.sqrt((inv * inv).sum()) < plan.settings.sigma_floor:
         # nearly singular: the numpy path decides, and may take the rates from the bridge
         return q, jac, inv, near_rates, near_q, near_bias, cos, sin, False
     # one more step (Tracker.close: the position to rounding / σ_min, not closure / σ_min)
@@ -221,7 +221,7 @@ def close(plan, near_x, near_xdot, near_q, near_rates, near_bias, near_inverse, 
             a, b = near_rates[i, k] / cols[i], rates[i, k] / cols[i]
             size = max(size, abs(a), abs(b))
             change = max(change, abs(b - a))
-    return q, jac, inv, rates, qdot, bias, cos, sin, not (size > 0.0 and change > plan.jump * size)
+    return q, jac, inv, rates, qdot, bias, cos, sin, not (size > 0.0 and change > plan.settings.jump * size)
 
 
 # -- the equations of motion (motion_terms.Terms, Equations.evaluate) --------------------------

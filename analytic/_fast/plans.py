@@ -63,25 +63,34 @@ class TermsPlan(NamedTuple):
     coordinate_terms: Array
 
 
+class Settings(NamedTuple):
+    """The tracker's settings the kernel follows (:mod:`.linkage_dynamics`: the closure
+    tolerance in m, RCOND, JUMP, CHORD_ITERATIONS, NEWTON_ITERATIONS), handed over rather
+    than compiled in, so that a cached kernel never keeps an old value."""
+
+    tolerance: float
+    rcond: float
+    jump: float
+    chord_iterations: int
+    newton_iterations: int
+    #: Below this bound on the scaled Jacobian's smallest singular value (1/‖J⁻¹‖_F) the
+    #: numpy path takes the state: it interpolates the rates along the branch there
+    #: (:mod:`.motion_bridge`); 0 where it never does.
+    sigma_floor: float
+
+
 class MotionPlan(NamedTuple):
     """A trajectory's equations of motion: the constraint rows (the driver rows of the
     independent coordinates last), their scales (rows' and columns', to lengths), the
     coordinates that move by the equations of motion, the masses and forces; and the
-    tracker's settings (:mod:`.linkage_dynamics`: the closure tolerance in m, RCOND, JUMP,
-    CHORD_ITERATIONS, NEWTON_ITERATIONS, the singular-value floor of the bridge), handed
-    over rather than compiled in, so that a cached kernel never keeps an old value."""
+    tracker's :class:`Settings`."""
 
     rows: RowsPlan
     row_scales: Array
     col_scales: Array
     moving: Array
     terms: TermsPlan
-    tolerance: float
-    rcond: float
-    jump: float
-    chord_iterations: int
-    newton_iterations: int
-    sigma_floor: float
+    settings: Settings
 
 
 def rows_plan(rows: Rows) -> RowsPlan:
