@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mechcheck.analytic import linalg
+from mechcheck.analytic import linalg, motion_rows
 from mechcheck.analytic.linalg import Batched, Dropped
 from mechcheck.analytic.rigid import (
     Array,
@@ -299,9 +299,7 @@ def constraint_system(linkage: Linkage, q: Array, targets: Array, *,
     rows = layout.rows if drivers else layout.joint_rows
     entries = Batched(rows, layout.size, n) if jacobian else Dropped(rows, layout.size, n)
     c = Constraints(layout, q, np.zeros((n, rows)), entries)
-    starts = joint_rows(linkage)
-    for kind, joints in joints_by_kind(linkage):
-        kind.constrain_all(c, joints, [starts[j.name] for j in joints])
+    _write_joints(c)
     row = layout.joint_rows
     for k, driver in enumerate(linkage.drivers if drivers else ()):
         joint = linkage.joint(driver.joint)
@@ -309,6 +307,21 @@ def constraint_system(linkage: Linkage, q: Array, targets: Array, *,
         c.phi[:, row] -= targets[:, k]
         row += 1
     return c.phi, c.jac
+
+
+def _write_joints(c: Constraints) -> None:
+    """Every joint's rows: the row plan's pins (:meth:`.motion_rows.Rows.pins`) all at
+    once, kind by kind, the other rows by their kinds' ``constrain``, joint by joint."""
+    linkage = c.linkage
+    starts = joint_rows(linkage)
+    plan = motion_rows.joint_rows(linkage)
+    for kind, joints in joints_by_kind(linkage):
+        pins = plan.pins(tuple(starts[j.name] for j in joints if j.kind.rows == 2))
+        c.coincide_all(pins)
+        pinned = {pin[0] for pin in pins}
+        for joint in joints:
+            if starts[joint.name] not in pinned:
+                kind.constrain(c, joint, starts[joint.name])
 
 
 def quadratic_terms(linkage: Linkage, q: Array, qdot: Array) -> Array:

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mechcheck.analytic.linalg import Batched
-from mechcheck.analytic.rigid import Array, Constraints, Layout, Motion, kept
+from mechcheck.analytic.rigid import Array, Constraints, Layout, Motion, Pin, kept
 from mechcheck.analytic.values import GROUND
 
 if TYPE_CHECKING:
@@ -162,6 +162,19 @@ class Rows:
         if self.general:
             self._by_the_joints(state)
         return state
+
+    def pins(self, starts: tuple[int, ...]) -> tuple[Pin, ...]:
+        """The coincidences (:data:`.rigid.Pin`) that start at these rows, in their order:
+        the rows :meth:`.Constraints.coincide_all` writes at once."""
+        found = dict(zip(self.co_row.tolist(), zip(self.co_a.tolist(), self.co_b.tolist(),
+                                                   strict=True), strict=True))
+        return tuple(self._pin(row, *found[row]) for row in starts if row in found)
+
+    def _pin(self, row: int, a: int, b: int) -> Pin:
+        names = (*self.linkage.moving_links, GROUND)
+        pl = self.point_links
+        return (row, names[pl[a]], names[pl[b]],
+                (float(self.drawn_x[a]), float(self.drawn_y[a])))
 
     def _axes(self, cos: Array, sin: Array) -> tuple[Array, Array]:
         """Each ``along`` row's direction w = R(φ_i)·w0 now."""

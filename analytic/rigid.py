@@ -252,7 +252,11 @@ class Constraints:
     def coincide(self, row: int, joint: Joint) -> None:
         """Two rows p_i(P0) − p_j(P0) = 0: the joint's links hold its point together."""
         i, j = joint.links
-        p0 = self.linkage.points[joint.at]
+        self._coincide((row, i, j, self.linkage.points[joint.at]))
+
+    def _coincide(self, pin: Pin) -> None:
+        """:meth:`coincide` of one :data:`Pin`."""
+        row, i, j, p0 = pin
         pi, dpi = self.point(i, p0)
         pj, dpj = self.point(j, p0)
         self.phi[:, row:row + 2] = pi - pj
@@ -265,20 +269,23 @@ class Constraints:
                 self.jac.add(row + c, kj + c, -1.0)
                 self.jac.add(row + c, kj + 2, -dpj[:, c])
 
-    def coincide_all(self, rows: Sequence[int], joints: Sequence[Joint]) -> None:
-        """:meth:`coincide` of several joints, joint j's rows from ``rows[j]``: at a few poses
-        every point from the carried ones, its two rows and its entries written at once (the
-        same numbers, the entries in the same order)."""
+    def coincide_all(self, pins: Sequence[Pin]) -> None:
+        """:meth:`coincide` of several pins (the row plan's coincidences,
+        :meth:`.motion_rows.Rows.pins`): at a few poses every point from the carried ones,
+        their rows and entries written at once (the same numbers, the entries in the same
+        order)."""
         n = self.q.shape[0]
-        if not 0 < n <= FEW_POSES:   # no pose (an empty sweep part) or many: joint by joint
-            for row, joint in zip(rows, joints, strict=True):
-                self.coincide(row, joint)
+        if not pins:
             return
-        plan = _pins_plan(self.linkage, tuple(rows), tuple(joints))
+        if not 0 < n <= FEW_POSES:   # no pose (an empty sweep part) or many: pin by pin
+            for pin in pins:
+                self._coincide(pin)
+            return
+        plan = _pins_plan(self.linkage, tuple(pins))
         positions, across, _ = self._carried
         sides = []
         for side, (places, grounded, drawn) in enumerate(plan.sides):   # links[0], links[1]
-            p = np.empty((n, len(joints), 2))
+            p = np.empty((n, len(pins), 2))
             p[:, places] = positions[:, plan.carried[side, places]]
             p[:, grounded] = drawn  # the ground's point, as drawn
             sides.append(p)
@@ -324,42 +331,46 @@ class Constraints:
         self.put(row, i, -w, dot(perp(w), d) - dot(w, dpi))
 
 
+#: Two rows holding a point together: the first row, links[0], links[1] and the point as
+#: drawn (what a kind declares with ``RowPlan.coincide``).
+Pin = tuple[int, str, str, tuple[float, float]]
+
+
 @dataclass(frozen=True)
 class _PinsPlan:
-    """Where :meth:`Constraints.coincide_all` reads and writes, for one set of joints."""
+    """Where :meth:`Constraints.coincide_all` reads and writes, for one set of pins."""
 
-    #: Per side (links[0], links[1]): the joints whose link moves, the others (the ground),
+    #: Per side (links[0], links[1]): the pins whose link moves, the others (the ground),
     #: and the ground's drawn points (k, 2).
     sides: tuple[tuple[NDArray[np.intp], NDArray[np.intp], Array], ...]
-    #: (2, joints): each joint's point's place among the carried points, on each side
+    #: (2, pins): each pin's point's place among the carried points, on each side
     #: (0 on the ground).
     carried: NDArray[np.intp]
     x_rows: NDArray[np.intp]
     linkage: Linkage
-    rows: tuple[int, ...]
-    joints: tuple[Joint, ...]
+    pins: tuple[Pin, ...]
 
     @cached_property
     def entries(self) -> tuple[list[int], list[int], NDArray[np.intp]]:
         """J's entries: rows, columns, and where each value comes from (derived when a
         Jacobian is first asked for: the drawing's closure needs only Φ)."""
-        return _pins_entries(self.linkage, self.rows, self.joints, self.carried)
+        return _pins_entries(self.linkage, self.pins, self.carried)
 
 
-def _pins_plan(linkage: Linkage, rows: tuple[int, ...], joints: tuple[Joint, ...]) -> _PinsPlan:
-    """The :class:`_PinsPlan` of these joints and rows, kept with the linkage."""
-    return kept(linkage, f"pins plan {rows}", lambda: _make_pins_plan(linkage, rows, joints))
+def _pins_plan(linkage: Linkage, pins: tuple[Pin, ...]) -> _PinsPlan:
+    """The :class:`_PinsPlan` of these pins, kept with the linkage."""
+    rows = tuple(pin[0] for pin in pins)
+    return kept(linkage, f"pins plan {rows}", lambda: _make_pins_plan(linkage, pins))
 
 
-def _make_pins_plan(linkage: Linkage, rows: tuple[int, ...],
-                    joints: tuple[Joint, ...]) -> _PinsPlan:
+def _make_pins_plan(linkage: Linkage, pins: tuple[Pin, ...]) -> _PinsPlan:
     index = carried_points(linkage).index
     sides = []
-    carried = np.zeros((2, len(joints)), dtype=np.intp)
+    carried = np.zeros((2, len(pins)), dtype=np.intp)
     for side in (0, 1):
         places, grounded, drawn = [], [], []
-        for j, joint in enumerate(joints):
-            link, p0 = joint.links[side], linkage.points[joint.at]
+        for j, pin in enumerate(pins):
+            link, p0 = (pin[1], pin[2])[side], pin[3]
             if link == GROUND:
                 grounded.append(j)
                 drawn.append(p0)
@@ -368,19 +379,19 @@ def _make_pins_plan(linkage: Linkage, rows: tuple[int, ...],
                 carried[side, j] = index[link, p0]
         sides.append((np.array(places, dtype=np.intp), np.array(grounded, dtype=np.intp),
                       np.array(drawn, dtype=float).reshape(-1, 2)))
-    return _PinsPlan((sides[0], sides[1]), carried, np.array(rows, dtype=np.intp), linkage, rows,
-                     joints)
+    x_rows = np.array([pin[0] for pin in pins], dtype=np.intp)
+    return _PinsPlan((sides[0], sides[1]), carried, x_rows, linkage, pins)
 
 
-def _pins_entries(linkage: Linkage, rows: tuple[int, ...], joints: tuple[Joint, ...],
+def _pins_entries(linkage: Linkage, pins: tuple[Pin, ...],
                   carried: NDArray[np.intp]) -> tuple[list[int], list[int], NDArray[np.intp]]:
     """:attr:`_PinsPlan.entries`."""
     count = len(carried_points(linkage).index)
     entry_rows: list[int] = []
     entry_cols: list[int] = []
     sources: list[int] = []
-    for j, (row, joint) in enumerate(zip(rows, joints, strict=True)):
-        ki, kj = (link_column(linkage, link) for link in joint.links)
+    for j, (row, first, second, _) in enumerate(pins):
+        ki, kj = link_column(linkage, first), link_column(linkage, second)
         for c in range(2):
             # As coincide(): +1 and ∂p_i/∂φ_i, then −1 and −∂p_j/∂φ_j (the sources' rows:
             # 0 is 1, 1 is −1, 2 + 2·place + c is ∂p/∂φ, and the negatives follow).

@@ -134,13 +134,6 @@ class JointKind(ABC):
     def constrain(self, c: Constraints, joint: Joint, row: int) -> None:
         """Write its :attr:`rows` rows of Φ and J, starting at ``row``."""
 
-    def constrain_all(self, c: Constraints, joints: Sequence[Joint], rows: Sequence[int]) -> None:
-        """:meth:`constrain` of each of the linkage's joints of this kind, joint j's rows from
-        ``rows[j]`` (a kind may write them together: one pose pays each array operation's
-        fixed cost)."""
-        for joint, row in zip(joints, rows, strict=True):
-            self.constrain(c, joint, row)
-
     @abstractmethod
     def accelerate(self, m: Motion, joint: Joint, out: Array, row: int) -> None:
         """Write the J̇·q̇ terms of its rows into ``out`` (N, m), starting at ``row``."""

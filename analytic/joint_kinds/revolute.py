@@ -46,9 +46,6 @@ class Revolute(JointKind):
     def constrain(self, c: Constraints, joint: Joint, row: int) -> None:
         c.coincide(row, joint)
 
-    def constrain_all(self, c: Constraints, joints: Sequence[Joint], rows: Sequence[int]) -> None:
-        c.coincide_all(rows, joints)
-
     def accelerate(self, m: Motion, joint: Joint, out: Array, row: int) -> None:
         i, j = joint.links
         p0 = np.array(m.linkage.points[joint.at])
