@@ -33,6 +33,7 @@ from mechcheck.analytic.rigid import (
     Constraints,
     Layout,
     Motion,
+    Pin,
     Turn,
     carried_points,
     carried_rotations,
@@ -310,18 +311,31 @@ def constraint_system(linkage: Linkage, q: Array, targets: Array, *,
 
 
 def _write_joints(c: Constraints) -> None:
-    """Every joint's rows: the row plan's pins (:meth:`.motion_rows.Rows.pins`) all at
-    once, kind by kind, the other rows by their kinds' ``constrain``, joint by joint."""
-    linkage = c.linkage
-    starts = joint_rows(linkage)
-    plan = motion_rows.joint_rows(linkage)
-    for kind, joints in joints_by_kind(linkage):
-        pins = plan.pins(tuple(starts[j.name] for j in joints if j.kind.rows == 2))
+    """Every joint's rows, kind by kind: the pins all at once, the others by their kinds'
+    ``constrain``, joint by joint (:func:`_joint_writers`)."""
+    for pins, others in _joint_writers(c.linkage):
         c.coincide_all(pins)
-        pinned = {pin[0] for pin in pins}
-        for joint in joints:
-            if starts[joint.name] not in pinned:
-                kind.constrain(c, joint, starts[joint.name])
+        for joint, row in others:
+            joint.kind.constrain(c, joint, row)
+
+
+def _joint_writers(linkage: Linkage) -> tuple[tuple[tuple[Pin, ...],
+                                                     tuple[tuple[Joint, int], ...]], ...]:
+    """Per kind (:func:`~.rigid.joints_by_kind`): the joints whose rows their kind's plan
+    declares as one coincidence (:meth:`.motion_rows.RowPlan.pins`), and the others with their
+    first rows; kept (:func:`~.rigid.kept`)."""
+    def split() -> tuple[tuple[tuple[Pin, ...], tuple[tuple[Joint, int], ...]], ...]:
+        starts = joint_rows(linkage)
+        plan = motion_rows.row_plan(linkage)[0]
+        groups = []
+        for _, joints in joints_by_kind(linkage):
+            # a coincidence is two rows: a kind with more writes them all itself
+            pins = plan.pins(tuple(starts[j.name] for j in joints if j.kind.rows == 2))
+            pinned = {pin[0] for pin in pins}
+            others = tuple((j, starts[j.name]) for j in joints if starts[j.name] not in pinned)
+            groups.append((pins, others))
+        return tuple(groups)
+    return kept(linkage, "joint writers", split)
 
 
 def quadratic_terms(linkage: Linkage, q: Array, qdot: Array) -> Array:

@@ -10,7 +10,8 @@ locked (``angle_lock``), a point's offset along a direction fixed in a link (``a
 A :class:`RowPlan` collects them once per linkage; :class:`Rows` holds them as arrays and
 evaluates Φ, J = ∂Φ/∂q and J̇·q̇ of every row of a primitive with a few numpy operations.
 A kind with no such form (a gear mesh) leaves its rows to its own ``constrain`` and
-``accelerate``, one joint at a time.
+``accelerate``, one joint at a time. The same declarations (:func:`row_plan`) tell the
+statics which rows are pins (:meth:`RowPlan.pins`), written at once for many poses.
 
 Each moving link k has coordinates (t_x, t_y, φ) at columns 3k … 3k + 2; the ground is
 link n (the count of moving links) here, its columns cut off the Jacobian.
@@ -74,6 +75,16 @@ class RowPlan:
         a0 = self.linkage.points[joint.at]
         self.aligned.append((row, self.point(i, a0), self.point(j, a0), self.link(i),
                              float(w0[0]), float(w0[1])))
+
+    def pins(self, starts: tuple[int, ...]) -> tuple[Pin, ...]:
+        """The coincidences (:data:`.rigid.Pin`) that start at these rows, in their order:
+        the rows :meth:`.Constraints.coincide_all` writes at once."""
+        found = {row: (a, b) for row, a, b in self.coincident}
+        return tuple(self._pin(row, *found[row]) for row in starts if row in found)
+
+    def _pin(self, row: int, a: int, b: int) -> Pin:
+        names = (*self.linkage.moving_links, GROUND)
+        return row, names[self.point_links[a]], names[self.point_links[b]], self.point_drawn[a]
 
     def by_the_joint(self, joint: Joint, row: int, *, drive: bool = False) -> None:
         """The joint's rows from its kind's own ``constrain`` (``drive``: ``drive``) and
@@ -163,19 +174,6 @@ class Rows:
             self._by_the_joints(state)
         return state
 
-    def pins(self, starts: tuple[int, ...]) -> tuple[Pin, ...]:
-        """The coincidences (:data:`.rigid.Pin`) that start at these rows, in their order:
-        the rows :meth:`.Constraints.coincide_all` writes at once."""
-        found = dict(zip(self.co_row.tolist(), zip(self.co_a.tolist(), self.co_b.tolist(),
-                                                   strict=True), strict=True))
-        return tuple(self._pin(row, *found[row]) for row in starts if row in found)
-
-    def _pin(self, row: int, a: int, b: int) -> Pin:
-        names = (*self.linkage.moving_links, GROUND)
-        pl = self.point_links
-        return (row, names[pl[a]], names[pl[b]],
-                (float(self.drawn_x[a]), float(self.drawn_y[a])))
-
     def _axes(self, cos: Array, sin: Array) -> tuple[Array, Array]:
         """Each ``along`` row's direction w = R(φ_i)·w0 now."""
         c, s = cos[self.al_link], sin[self.al_link]
@@ -244,7 +242,13 @@ _GROUND_COORDINATES = np.zeros(3)
 def joint_rows(linkage: Linkage) -> Rows:
     """Every joint's rows, then one row per driver on its joint (the order of
     :func:`.linkage_kinematics.constraint_system`), kept with the linkage."""
-    def make() -> Rows:
+    return kept(linkage, "motion rows", lambda: _rows_of(*row_plan(linkage)))
+
+
+def row_plan(linkage: Linkage) -> tuple[RowPlan, int]:
+    """The kinds' declarations of :func:`joint_rows` and their count of rows, kept with the
+    linkage: the statics read its pins (:meth:`RowPlan.pins`)."""
+    def make() -> tuple[RowPlan, int]:
         plan = RowPlan(linkage)
         row = 0
         for joint in linkage.joints:
@@ -254,8 +258,8 @@ def joint_rows(linkage: Linkage) -> Rows:
             joint = linkage.joint(driver.joint)
             joint.kind.plan_drive(plan, joint, row)
             row += 1
-        return _rows_of(plan, row)
-    return kept(linkage, "motion rows", make)
+        return plan, row
+    return kept(linkage, "row plan", make)
 
 
 def coordinate_rows(linkage: Linkage, joints: tuple[str, ...]) -> Rows:

@@ -271,7 +271,7 @@ class Constraints:
 
     def coincide_all(self, pins: Sequence[Pin]) -> None:
         """:meth:`coincide` of several pins (the row plan's coincidences,
-        :meth:`.motion_rows.Rows.pins`): at a few poses every point from the carried ones,
+        :meth:`.motion_rows.RowPlan.pins`): at a few poses every point from the carried ones,
         their rows and entries written at once (the same numbers, the entries in the same
         order)."""
         n = self.q.shape[0]

@@ -17,12 +17,14 @@ import pytest
 
 import mechcheck
 from mechcheck.analytic.case import Case
+from mechcheck.analytic.linalg import FEW_POSES, Batched
 from mechcheck.analytic.linkage import JointFriction, Linkage
 from mechcheck.analytic.linkage_dynamics import origin_velocities
 from mechcheck.analytic.linkage_kinematics import LinkagePose, constraint_system, quadratic_terms
 from mechcheck.analytic.linkage_loads import known_vector
 from mechcheck.analytic.motion_rows import joint_rows
 from mechcheck.analytic.motion_terms import terms
+from mechcheck.analytic.rigid import Constraints, Layout, joint_rows as starts_of
 from mechcheck.casefile import load_cases
 
 CASES = Path(mechcheck.__file__).parent / "cases"
@@ -68,6 +70,25 @@ def test_rows_are_the_joints_own(name: str) -> None:
                                    atol=ROUNDING * max(1.0, np.abs(gamma).max()))
         residual_only = rows.at(q, jacobian=False)
         np.testing.assert_array_equal(residual_only.phi, state.phi)
+
+
+@pytest.mark.parametrize("name", sorted(linkages()))
+@pytest.mark.parametrize("poses", [3, FEW_POSES + 1])
+def test_pins_at_once_are_the_kinds_own_rows(name: str, poses: int) -> None:
+    """The statics write the rows a kind declares as one ``coincide`` (its ``plan``) for
+    every pin at once: the same numbers as each joint's kind writes with its own
+    ``constrain``, joint by joint, at a few poses (the carried points) and at many."""
+    case = linkages()[name]
+    linkage = case.linkage
+    q = np.array([random_state(case, seed)[0] for seed in range(poses)])
+    phi, jac = constraint_system(linkage, q, np.zeros((poses, 0)), drivers=False)
+    layout = Layout(linkage)
+    own = Constraints(layout, q, np.zeros((poses, layout.joint_rows)),
+                      Batched(layout.joint_rows, layout.size, poses))
+    for joint, row in zip(linkage.joints, starts_of(linkage).values(), strict=True):
+        joint.kind.constrain(own, joint, row)
+    np.testing.assert_array_equal(phi, own.phi)
+    np.testing.assert_array_equal(jac.dense(), own.jac.dense())
 
 
 def damped(linkage: Linkage) -> Linkage:
