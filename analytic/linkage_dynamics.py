@@ -441,6 +441,11 @@ def _dense_inverse(jac: Array) -> _Factors | None:
     condition = np.abs(jac).sum(axis=0).max() * np.abs(inverse).sum(axis=0).max()
     if not condition * RCOND < 1.0:
         return None
+    return _inverse_factors(np.asarray(inverse, dtype=np.float64))
+
+
+def _inverse_factors(inverse: Array) -> _Factors:
+    """J⁻¹·rhs and J⁻ᵀ·rhs through J's inverse, and 1/‖J⁻¹‖_F, a lower bound on σ_min."""
     return _Factors(lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64),
                     lambda rhs: np.asarray(inverse.T @ rhs, dtype=np.float64),
                     float(1.0 / np.linalg.norm(inverse)))
@@ -747,8 +752,9 @@ class _Inverted(Solver):
     inverse, found there and its condition checked as :func:`_dense_inverse` does."""
 
     def __init__(self, jac: Array, inverse: Array) -> None:
-        self.jac, self.inverse, self.pseudo = jac, inverse, None
-        self.apply = lambda rhs: np.asarray(inverse @ rhs, dtype=np.float64)
+        self.jac, self.inverse, self.pseudo, self._smallest = jac, inverse, None, None
+        self.factors = _inverse_factors(inverse)
+        self.apply = self.factors.apply
 
 
 def effort_with_friction(pose: LinkagePose, frictional: tuple[tuple[str, float], ...],
