@@ -836,40 +836,6 @@ def potential_energy(pose: LinkagePose) -> Array:
     return out
 
 
-def load_power(pose: LinkagePose) -> float:
-    """The power of the point loads (forces and couples) at one pose, W."""
-    out = 0.0
-    for load in pose.linkage.loads:
-        v = pose.point(load.link, load.at)[1][0]
-        omega = float(pose.angle(load.link)[1][0])
-        out += load.force[0] * float(v[0]) + load.force[1] * float(v[1]) + load.torque * omega
-    return out
-
-
-def damping_power(pose: LinkagePose) -> float:
-    """What dampers and viscous joint friction dissipate at one pose, W: c·L̇² of each
-    damped spring, c·q̇² of each damped torsion spring and viscous joint."""
-    linkage = pose.linkage
-    out = 0.0
-    for spring in linkage.springs:
-        if not spring.damping:
-            continue
-        if isinstance(spring, LinearSpring):
-            (la, pa), (lb, pb) = spring.ends
-            a, va, _ = pose.point(la, pa)
-            bb, vb, _ = pose.point(lb, pb)
-            unit = spring_axis(linkage, bb - a)[1]
-            rate = float((unit * (vb - va)).sum())
-        else:
-            rate = float(pose.joint_coordinate(linkage.joint(spring.joint))[1][0])
-        out += spring.damping * rate * rate
-    if linkage.friction is not None:
-        for name, c in linkage.friction.viscous.items():
-            rate = float(pose.joint_coordinate(linkage.joint(name))[1][0])
-            out += c * rate * rate
-    return out
-
-
 # -- the run -------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)

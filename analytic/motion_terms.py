@@ -57,10 +57,6 @@ class Terms:
     load_force: Array
     load_torque: Array
     load_index: Array
-    spring_a: Array
-    spring_b: Array
-    spring_xa: Array
-    spring_xb: Array
     spring_stiffness: Array
     spring_length: Array
     spring_damping: Array
@@ -105,7 +101,7 @@ class Terms:
         inertial[0::3], inertial[1::3] = spin * rx, spin * ry
         loads = self._loads(cos, sin) if self.load_links.size else np.zeros(size)
         dissipative = np.zeros(size)
-        if self.spring_a.size:
+        if self.spring_stiffness.size:
             elastic, damping = self._springs(q, qdot, cos, sin)
             conservative += elastic
             dissipative += damping
@@ -135,7 +131,7 @@ class Terms:
         c, s = cos[links], sin[links]
         rx = c * drawn[:, 0] - s * drawn[:, 1]
         ry = s * drawn[:, 0] + c * drawn[:, 1]
-        k = self.spring_a.size
+        k = self.spring_stiffness.size
         at = 3 * links
         qe, qde = np.append(q, _GROUND), np.append(qdot, _GROUND)
         omega = qde[at + 2]
@@ -212,16 +208,14 @@ def _point_loads(linkage: Linkage) -> tuple[Array, Array, Array, Array, Array, A
             np.array([ld.torque for ld in loads], dtype=float), _flat_index(links))
 
 
-def _linear_springs(linkage: Linkage) -> tuple[Array, Array, Array, Array, Array, Array, Array,
-                                                Array, Array, Array]:
-    """The linear springs: links and points of their a and b ends, stiffness, free length,
-    damping, where they add up, and every end (a ends, then b ends) with its point."""
+def _linear_springs(linkage: Linkage) -> tuple[Array, Array, Array, Array, Array, Array]:
+    """The linear springs: stiffness, free length, damping, where their ends add up, and
+    every end (a ends, then b ends): its link and its point."""
     linear = [s for s in linkage.springs if isinstance(s, LinearSpring)]
     a = [_link(linkage, s.ends[0][0]) for s in linear]
     b = [_link(linkage, s.ends[1][0]) for s in linear]
     points = [np.array([s.ends[e][1] for s in linear], dtype=float).reshape(-1, 2) for e in (0, 1)]
-    return (np.array(a, dtype=np.intp), np.array(b, dtype=np.intp), points[0], points[1],
-            np.array([s.stiffness for s in linear]), np.array([s.free_length for s in linear]),
+    return (np.array([s.stiffness for s in linear]), np.array([s.free_length for s in linear]),
             np.array([s.damping for s in linear]), _flat_index(a + b),
             np.array(a + b, dtype=np.intp), np.concatenate(points).reshape(-1, 2))
 
