@@ -20,10 +20,11 @@ Examples
 --------
 A crank O→A, 1 long at 90°, assembles A from a sketch that put it at (0.1, 0.9):
 
+>>> from mechcheck.analytic.joint_kinds import REVOLUTE
 >>> from mechcheck.analytic.linkage import Joint, Link, Linkage
 >>> shape = Linkage(points={"O": (0.0, 0.0), "A": (0.1, 0.9)},
 ...                 links=(Link("ground", ("O",)), Link("crank", ("O", "A"))),
-...                 joints=(Joint("O", "revolute", ("ground", "crank"), "O"),))
+...                 joints=(Joint("O", REVOLUTE, ("ground", "crank"), "O"),))
 >>> a = assembled(shape, (Dimension(("O", "A"), length=1.0),
 ...                       Dimension(("O", "A"), angle=math.pi / 2)))["A"]
 >>> round(a[0], 12) + 0.0, round(a[1], 12)
