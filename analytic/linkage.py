@@ -1,4 +1,5 @@
-"""Any planar linkage of revolute, prismatic and pin-in-slot joints, written as drawn (LINKAGES.md).
+"""Any planar linkage of revolute, prismatic, pin-in-slot and gear joints, written as drawn
+(LINKAGES.md).
 
 A :class:`Linkage` is one immutable value: named points at their global positions in the
 **drawn pose**, links that carry them, joints between links, the drivers that move it,
