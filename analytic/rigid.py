@@ -191,16 +191,14 @@ class Layout:
 
 
 @dataclass
-class Constraints:
-    """Φ (N, m) and J = ∂Φ/∂q (entries) being written, row by row, at coordinates q (N, 3n)."""
+class AtCoordinates:
+    """The links at coordinates q (N, 3n), each link's rotation computed once."""
 
     layout: Layout
     q: Array
-    phi: Array
-    jac: Batched
     #: Each link's rotation (:func:`turn_of`), by its column, computed once (every joint on
     #: the link turns its points by it).
-    turns: dict[int, Turn] = field(default_factory=dict)
+    turns: dict[int, Turn] = field(default_factory=dict, kw_only=True)
 
     @property
     def linkage(self) -> Linkage:
@@ -212,6 +210,14 @@ class Constraints:
         if found is None:
             found = self.turns[k] = turn_of(self.q[:, k + 2])
         return found
+
+
+@dataclass
+class Constraints(AtCoordinates):
+    """Φ (N, m) and J = ∂Φ/∂q (entries) being written, row by row, at coordinates q (N, 3n)."""
+
+    phi: Array
+    jac: Batched
 
     def angle(self, link: str) -> Array:
         k = self.layout.index(link)
@@ -404,25 +410,10 @@ def _pins_entries(linkage: Linkage, pins: tuple[Pin, ...],
 
 
 @dataclass
-class Motion:
+class Motion(AtCoordinates):
     """The links' motion at coordinates q and rates q̇ (N, 3n), for the J̇·q̇ terms."""
 
-    layout: Layout
-    q: Array
     qdot: Array
-    #: Each link's rotation, by its column (as :attr:`Constraints.turns`).
-    turns: dict[int, Turn] = field(default_factory=dict)
-
-    @property
-    def linkage(self) -> Linkage:
-        return self.layout.linkage
-
-    def turn(self, k: int) -> Turn:
-        """The rotation (:func:`turn_of`) of the link whose t_x is column ``k`` of q."""
-        found = self.turns.get(k)
-        if found is None:
-            found = self.turns[k] = turn_of(self.q[:, k + 2])
-        return found
 
     def spin(self, link: str) -> Array:
         k = self.layout.index(link)

@@ -19,9 +19,18 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 from scipy.special import ellipk
 
 from mechcheck.analytic.case import Case, Simulation
-from mechcheck.analytic.joint_kinds import REVOLUTE
-from mechcheck.analytic.linkage import Driver, Effort, Joint, Link, Linkage, LinkMass
-from mechcheck.analytic.linkage_dynamics import _start, model_of
+from mechcheck.analytic.joint_kinds import PRISMATIC, REVOLUTE
+from mechcheck.analytic.linkage import (
+    Driver,
+    Effort,
+    Joint,
+    JointFriction,
+    Link,
+    Linkage,
+    LinkMass,
+    PointLoad,
+)
+from mechcheck.analytic.linkage_dynamics import STALL_EVALUATIONS, _start, model_of
 from mechcheck.analytic.motion_bridge import SIGMA
 from mechcheck.analytic.trajectory import Trajectory, simulate
 from mechcheck.analytic.values import CaseError
@@ -265,6 +274,46 @@ def test_the_rates_near_a_flat_pose_are_the_parallelograms(from_flat: float) -> 
     assert np.abs(kin.rates[:, 0] - first).max() <= BRANCH_RATES_TOL
     assert np.abs(kin.bias - second).max() <= BRANCH_RATES_TOL
     assert (kin.solver.smallest_singular_value() < SIGMA) == (abs(from_flat) < 0.01)
+
+
+def almost_massless_six_bar(inertia: float = 1e-38) -> Case:
+    """A Watt-type six-bar with a slider whose one mass is a point at the crank's pivot
+    (3.37 kg at O2, inertia 1e-38 kg·m²), pushed by 4.16 N·m: its one coordinate carries
+    almost no inertia, so its acceleration is ~1e38 rad/s² and the integrator's step
+    collapses (a draw of the random linkages below, on which a run once went on for ever)."""
+    points = {"O2": (0.0, 0.0), "A": (-0.211407, -0.005851), "B": (-0.184125, 0.450814),
+              "C": (-0.184125, 0.450914), "D": (0.10683, 0.596634), "O6": (0.10683, 0.091606)}
+    linkage = Linkage(
+        points=points,
+        links=(Link("ground", ("O2", "O6")), Link("crank", ("O2", "A")),
+               Link("coupler", ("A", "B", "C")), Link("slider", ("B",)),
+               Link("link5", ("C", "D")), Link("output", ("O6", "D"))),
+        joints=(Joint("O2", REVOLUTE, ("ground", "crank"), "O2"),
+                Joint("A", REVOLUTE, ("crank", "coupler"), "A"),
+                Joint("B", REVOLUTE, ("coupler", "slider"), "B"),
+                Joint("slide", PRISMATIC, ("ground", "slider"), "B", (0.067553, -0.997716)),
+                Joint("C", REVOLUTE, ("coupler", "link5"), "C"),
+                Joint("D", REVOLUTE, ("link5", "output"), "D"),
+                Joint("O6", REVOLUTE, ("ground", "output"), "O6")),
+        drivers=(Driver("O2", -0.245658, velocity=-12.404258, effort=Effort((0.0,), (4.162472,))),),
+        masses=(LinkMass("crank", 3.371638, (0.0, 0.0), inertia),),
+        loads=(PointLoad("slider", (0.0, 0.39129), (0.0, -89.940133), 7.573183),
+               PointLoad("crank", (0.8043, 0.0), (0.0, -131.340057), 1.5),
+               PointLoad("slider", (1e-10, 1e-11), (-36.276342, 0.0), 0.398004)),
+        gravity=(-2.0, 1.5), free_motion=True,
+        friction=JointFriction(viscous={"O2": 0.2}))
+    return Case("almost-massless", linkage, simulation=Simulation(0.02, (0.0, 0.01, 0.02)))
+
+
+def test_a_run_whose_step_collapses_ends_saying_why() -> None:
+    """M ẍ = Q with M ≈ 3.4 kg · (4e-32 m)² + 1e-38 kg·m² ≈ 1e-38: ẍ ~ 4e38 rad/s², which no
+    step resolves. The run ends at its first check of pace with the reason and what to
+    change, its rows NaN; with 0.01 kg·m² at the crank the same linkage runs to its end."""
+    (stalled,) = simulate(almost_massless_six_bar())
+    assert stalled.status != "ok"
+    assert "step has collapsed" in stalled.message and "[[case.masses]]" in stalled.message
+    assert stalled.steps <= STALL_EVALUATIONS + 1
+    assert _trajectory(almost_massless_six_bar(0.01)).status == "ok"
 
 
 # -- the energy identity on random linkages --------------------------------------------------
