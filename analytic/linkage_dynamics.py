@@ -667,11 +667,12 @@ class Equations:
         advanced = t - since
         if advanced * MAX_EVALUATIONS < (self.span - t) * done:
             raise DynamicsError(
-                f"the integrator's step has collapsed at {t:.9g} s: its last {done} right-hand "
-                f"sides advanced the time by {advanced:.3g} s, a pace that needs more than "
-                f"{MAX_EVALUATIONS:,} more to reach {self.span:g} s. The equations of motion "
-                "are too stiff to integrate here, as where a moving coordinate carries almost "
-                "no mass or inertia (give its links [[case.masses]] away from their pivots)")
+                f"the integrator's steps have shrunk to {advanced / done:.3g} s at {t:.9g} s: "
+                f"at this pace it needs more than {MAX_EVALUATIONS:,} more right-hand sides "
+                f"to reach {self.span:g} s. The equations of motion are too stiff to "
+                "integrate here, as where a moving coordinate carries almost no mass or "
+                "inertia (give its links [[case.masses]] away from their pivots); a long, "
+                "smooth run stops here too (shorten its end)")
         self._mark = (t, self.evaluations)
 
     def rhs(self, t: float, y: Array) -> Array:
